@@ -1,0 +1,5 @@
+"""``python -m striatal``."""
+
+from striatal.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,74 @@
+"""The ``striatal`` command: a thin layer that parses, calls the library and prints.
+
+Subcommands are the modules of this package that define ``COMMAND``; each has
+``HELP``, ``ORDER``, ``add_arguments(parser)`` and ``run(args) -> int``. Any
+:class:`~striatal.errors.StriatalError` becomes one line on stderr and exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+from collections.abc import Sequence
+from types import ModuleType
+from typing import NoReturn
+
+from striatal.errors import StriatalError
+
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse that reports a usage error as one line on stderr and exits 2."""
+
+    def error(self, message: str) -> NoReturn:
+        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        raise SystemExit(EXIT_USAGE)
+
+
+def _commands() -> list[ModuleType]:
+    mods = []
+    for info in pkgutil.iter_modules(__path__):
+        mod = importlib.import_module(f"{__name__}.{info.name}")
+        if hasattr(mod, "COMMAND"):
+            mods.append(mod)
+    return sorted(mods, key=lambda m: (getattr(m, "ORDER", 100), m.COMMAND))
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from striatal import __version__
+
+    parser = OneLineParser(
+        prog="striatal",
+        description="The chapter's basal-ganglia switching REINFORCE learner on the cart-pole.",
+    )
+    parser.add_argument("--version", action="version", version=f"striatal {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
+    sub.required = True
+    for mod in _commands():
+        p = sub.add_parser(
+            mod.COMMAND,
+            help=mod.HELP,
+            description=getattr(mod, "DESCRIPTION", mod.HELP),
+            formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        )
+        mod.add_arguments(p)
+        p.set_defaults(_run=mod.run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``striatal`` and ``python -m striatal``; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args._run(args))
+    except StriatalError as exc:
+        sys.stderr.write(f"striatal {args.command}: error: {exc}\n")
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        sys.stderr.write(f"striatal {args.command}: interrupted\n")
+        return EXIT_INTERRUPTED

@@ -1,0 +1,138 @@
+"""Argument groups shared by several commands, and their conversion to parameter sets."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+from striatal.errors import ParameterError
+from striatal.params import (
+    CHAPTER_FINAL_THETA_C,
+    CHAPTER_FINAL_W,
+    CHAPTER_INITIAL_THETA_C,
+    CHAPTER_INITIAL_W,
+    CHAPTER_THETA0,
+    Controller,
+    Plant,
+    Simulation,
+)
+
+
+def add_plant_arguments(parser: argparse.ArgumentParser) -> None:
+    g = parser.add_argument_group("plant (section 2.1)")
+    g.add_argument("--cart-mass", type=float, default=1.0, help="M [kg]")
+    g.add_argument("--pole-mass", type=float, default=0.1, help="m [kg] (point mass)")
+    g.add_argument("--length", type=float, default=1.0, help="l [m]")
+    g.add_argument("--gravity", type=float, default=9.8, help="g [m/s^2]")
+
+
+def plant_from(args: argparse.Namespace) -> Plant:
+    return Plant(
+        cart_mass=args.cart_mass,
+        pole_mass=args.pole_mass,
+        length=args.length,
+        gravity=args.gravity,
+    )
+
+
+def add_controller_arguments(parser: argparse.ArgumentParser, *, gains_required: bool) -> None:
+    """--gains/--theta-c/--chapter-final/--chapter-initial and the readings of the chapter."""
+    g = parser.add_argument_group("controller (sections 2.2-2.3, 4)")
+    if gains_required:
+        choice = g.add_mutually_exclusive_group()
+        choice.add_argument(
+            "--gains",
+            type=float,
+            nargs=6,
+            metavar=("W1", "W2", "W3", "W4", "W5", "W6"),
+            help="the six gains of eqs 22-23 (W1 > 0)",
+        )
+        choice.add_argument(
+            "--chapter-final",
+            action="store_true",
+            help=f"the chapter's learned W {list(CHAPTER_FINAL_W)} and theta_c = "
+            f"{CHAPTER_FINAL_THETA_C} (default when no gains are given)",
+        )
+        choice.add_argument(
+            "--chapter-initial",
+            action="store_true",
+            help=f"the chapter's W(0) {list(CHAPTER_INITIAL_W)} and theta_c = "
+            f"{CHAPTER_INITIAL_THETA_C}",
+        )
+        g.add_argument(
+            "--theta-c",
+            type=float,
+            default=None,
+            help="switching threshold [rad], balancing while |theta| < theta_c (eq 21); "
+            "default: the one of the chosen gain set",
+        )
+    g.add_argument(
+        "--balance-sign",
+        choices=("corrected", "chapter"),
+        default="corrected",
+        help="sign of the theta terms of the balancing law (NOTES section 1): 'corrected' "
+        "stabilises; 'chapter' is eq 20 as printed and makes the upright unstable",
+    )
+    g.add_argument(
+        "--switch",
+        choices=("hard", "soft"),
+        default="hard",
+        help="hard switch at |theta| < theta_c (section 2.3) or the cerebellar soft switch "
+        "with lateral inhibition (section 4, NOTES section 4)",
+    )
+    g.add_argument(
+        "--inhibition",
+        type=float,
+        default=50.0,
+        metavar="GAMMA",
+        help="strength of lateral inhibition of the soft switch [1/rad]",
+    )
+
+
+def gains_from(args: argparse.Namespace) -> tuple[tuple[float, ...], float]:
+    """(gains, theta_c) from --gains/--chapter-final/--chapter-initial/--theta-c."""
+    if getattr(args, "gains", None) is not None:
+        if args.theta_c is None:
+            raise ParameterError("--gains needs --theta-c as well")
+        return tuple(args.gains), args.theta_c
+    if getattr(args, "chapter_initial", False):
+        return (
+            CHAPTER_INITIAL_W,
+            args.theta_c if args.theta_c is not None else CHAPTER_INITIAL_THETA_C,
+        )
+    theta_c = args.theta_c if args.theta_c is not None else CHAPTER_FINAL_THETA_C
+    return CHAPTER_FINAL_W, theta_c
+
+
+def controller_from(
+    args: argparse.Namespace, gains: tuple[float, ...], theta_c: float
+) -> Controller:
+    return Controller(
+        gains=gains,
+        theta_c=theta_c,
+        balance_sign=args.balance_sign,
+        switch=args.switch,
+        inhibition=args.inhibition,
+    )
+
+
+def add_simulation_arguments(parser: argparse.ArgumentParser, *, duration: float = 60.0) -> None:
+    g = parser.add_argument_group("run")
+    g.add_argument("--theta0", type=float, default=CHAPTER_THETA0, help="initial angle [rad]")
+    g.add_argument("--x0", type=float, default=0.0, help="initial cart position [m]")
+    g.add_argument("--duration", type=float, default=duration, help="T_f [s]")
+    g.add_argument(
+        "--dt", type=float, default=0.01, help="control and RK4 step [s], u held over it"
+    )
+
+
+def simulation_from(args: argparse.Namespace) -> Simulation:
+    return Simulation(theta0=args.theta0, x0=args.x0, duration=args.duration, dt=args.dt)
+
+
+def json_ready(obj: Any) -> Any:
+    """Floats that JSON can hold (non-finite become None)."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj

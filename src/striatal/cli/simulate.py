@@ -1,0 +1,97 @@
+"""``striatal simulate``: one run of the switching controller with the mean policy."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from striatal.cli import options
+from striatal.files import dumps_json, write_csv, write_json
+from striatal.kernel import TRAJ_COLUMNS
+from striatal.rollout import Trajectory, simulate
+
+COMMAND = "simulate"
+ORDER = 10
+HELP = "simulate the cart-pole under the switching controller (mean policy)"
+DESCRIPTION = (
+    "Simulate the point-mass cart-pole (eqs 7-14) under the energy swing-up (eq 23) and the "
+    "balancing law (eq 22), hard- or soft-switched at theta_c, with the mean policy (no "
+    "exploration noise). Reports the chapter's success test at T_f."
+)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    options.add_controller_arguments(parser, gains_required=True)
+    options.add_simulation_arguments(parser)
+    options.add_plant_arguments(parser)
+    parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    parser.add_argument(
+        "--out", type=Path, default=None, help="write trajectory.csv and summary.json here"
+    )
+
+
+def summary(traj: Trajectory, settings: dict[str, object]) -> dict[str, object]:
+    """The JSON summary of a run (``--json`` and summary.json)."""
+    o = traj.outcome
+    return {
+        "success": o.success,
+        "final_state": list(o.final_state),
+        "switch_times": traj.switch_times,
+        "max_abs_x": o.max_abs_x,
+        "max_abs_force": o.max_abs_force,
+        "fault": o.fault,
+        "ended_at": o.ended_at,
+        "settings": settings,
+    }
+
+
+def settings_of(args: argparse.Namespace, traj: Trajectory) -> dict[str, object]:
+    return {
+        "controller": traj.controller.to_dict(),
+        "plant": {
+            "cart_mass": traj.plant.cart_mass,
+            "pole_mass": traj.plant.pole_mass,
+            "length": traj.plant.length,
+            "gravity": traj.plant.gravity,
+        },
+        "theta0": traj.sim.theta0,
+        "x0": traj.sim.x0,
+        "duration": traj.sim.duration,
+        "dt": traj.sim.dt,
+        "integrator": "rk4, u held over each step",
+        "policy": "mean (no exploration noise)",
+        "success_test": "|theta|<0.05, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.005 at T_f",
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    plant = options.plant_from(args)
+    gains, theta_c = options.gains_from(args)
+    controller = options.controller_from(args, gains, theta_c)
+    sim = options.simulation_from(args)
+    traj = simulate(plant, controller, sim)
+    result = summary(traj, settings_of(args, traj))
+    if args.out is not None:
+        write_csv(args.out / "trajectory.csv", TRAJ_COLUMNS, traj.data.tolist())
+        write_json(args.out / "summary.json", result)
+    if args.json:
+        sys.stdout.write(dumps_json(result))
+    else:
+        o = traj.outcome
+        x, xd, th, thd = o.final_state
+        verdict = "yes" if o.success else "no"
+        print(f"success: {verdict}  (chapter's test at T_f = {traj.sim.duration:g} s)")
+        print(
+            f"final state: x={x:.3g} m  x_dot={xd:.3g} m/s  "
+            f"theta={th:.3g} rad  theta_dot={thd:.3g} rad/s"
+        )
+        sw = ", ".join(f"{t:.2f}" for t in traj.switch_times[:8])
+        more = " ..." if len(traj.switch_times) > 8 else ""
+        print(f"switch times [s]: {sw or 'none'}{more}")
+        print(f"max |x| = {o.max_abs_x:.3g} m   max |force| = {o.max_abs_force:.3g} N")
+        if o.fault:
+            print(f"numerical fault: the state blew up at t = {o.ended_at:.2f} s")
+        if args.out is not None:
+            print(f"wrote {args.out / 'trajectory.csv'} and {args.out / 'summary.json'}")
+    return 0

@@ -1,0 +1,106 @@
+"""Atomic, data-only file I/O: JSON and CSV, never pickle or eval.
+
+Every writer goes through a temporary file in the destination folder and an
+``os.replace``, so a reader never sees a half-written file, even after SIGKILL.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import tempfile
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+from striatal.errors import DataFileError
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
+    """Write ``text`` to ``path`` atomically (temp file + fsync + rename)."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _finite_json(obj: Any) -> Any:
+    """Replace non-finite floats by None so the JSON is standard (RFC 8259)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {str(k): _finite_json(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite_json(v) for v in obj]
+    if hasattr(obj, "item") and callable(obj.item):
+        return _finite_json(obj.item())
+    return obj
+
+
+def dumps_json(obj: Any) -> str:
+    """Standard JSON text (no NaN/Infinity tokens), indented, with a trailing newline."""
+    return json.dumps(_finite_json(obj), indent=2, allow_nan=False) + "\n"
+
+
+def write_json(path: str | os.PathLike[str], obj: Any) -> None:
+    """Atomically write ``obj`` as JSON."""
+    atomic_write_text(path, dumps_json(obj))
+
+
+def read_json(path: str | os.PathLike[str], *, what: str = "file") -> Any:
+    """Read a JSON file or raise DataFileError naming the file and the problem."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise DataFileError(f"{what} {p} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DataFileError(f"{what} {p} cannot be read: {exc}") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise DataFileError(
+            f"{what} {p} is not valid JSON (truncated or corrupted?): {exc}"
+        ) from None
+
+
+def csv_text(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
+    """CSV text with a header line; floats written with repr precision."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(header)
+    for row in rows:
+        writer.writerow([repr(float(v)) if isinstance(v, float) else v for v in row])
+    return buf.getvalue()
+
+
+def write_csv(
+    path: str | os.PathLike[str], header: Sequence[str], rows: Iterable[Sequence[Any]]
+) -> None:
+    """Atomically write a CSV file."""
+    atomic_write_text(path, csv_text(header, rows))
+
+
+def read_csv(path: str | os.PathLike[str], *, what: str = "file") -> list[dict[str, str]]:
+    """Read a CSV file with a header into dicts, or raise DataFileError."""
+    p = Path(path)
+    try:
+        with p.open(encoding="utf-8", newline="") as fh:
+            rows = list(csv.DictReader(fh))
+    except FileNotFoundError:
+        raise DataFileError(f"{what} {p} does not exist") from None
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise DataFileError(f"{what} {p} cannot be read as CSV: {exc}") from None
+    return rows

@@ -1,0 +1,209 @@
+"""Eligibilities against finite differences of ln pi; the kernel against the NumPy reference."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from striatal import kernel
+from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plant, Simulation
+from striatal.policy import eligibilities, log_prob_of, rescaling
+from striatal.reference import reference_trial
+from striatal.rollout import Protocol, run_trial
+
+
+def fd_score(
+    a: float, s: np.ndarray, W: np.ndarray, c: Controller, plant: Plant, h: float = 1e-6
+) -> np.ndarray:
+    g = np.empty(6)
+    for i in range(6):
+        wp, wm = W.copy(), W.copy()
+        wp[i] += h
+        wm[i] -= h
+        g[i] = (log_prob_of(a, s, wp, c, plant) - log_prob_of(a, s, wm, c, plant)) / (2 * h)
+    return g
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.floats(-3, 3), min_size=4, max_size=4),
+    st.floats(-2, 2),
+    st.sampled_from(["corrected", "chapter"]),
+    st.sampled_from(["hard", "soft"]),
+)
+def test_eligibilities_equal_rescaled_finite_difference_score(
+    state: list[float], noise: float, sign: str, switch: str
+) -> None:
+    plant = Plant()
+    c = Controller(CHAPTER_FINAL_W, 0.9, balance_sign=sign, switch=switch, inhibition=3.0)
+    s = np.array(state)
+    W = np.array(c.gains)
+    from striatal.control import mean_action
+    from striatal.policy import sigma
+
+    a = float(mean_action(s, c, plant)) + float(sigma(W[5])) * noise
+    e = eligibilities(a, s, W, c, plant)
+    fd = fd_score(a, s, W, c, plant) * rescaling(W)
+    np.testing.assert_allclose(e, fd, rtol=1e-5, atol=1e-6)
+
+
+def test_chapter_printed_e1_differs_from_the_score(plant: Plant) -> None:
+    """NOTES section 2: the printed e1 is the derivative of neither sign of the mean."""
+    c = Controller()
+    s = np.array([0.1, 0.2, 0.3, 0.4])
+    W = np.array(c.gains)
+    a = 1.0
+    printed = eligibilities(a, s, W, c, plant, chapter_form=True)
+    score = eligibilities(a, s, W, c, plant)
+    assert printed[0] != pytest.approx(score[0])
+    np.testing.assert_allclose(printed[1:], score[1:])
+
+
+def test_kernel_eligibility_trace_equals_reference(plant: Plant) -> None:
+    c = Controller(CHAPTER_INITIAL_W, 0.6)
+    sim = Simulation(duration=40.0)
+    rng = np.random.default_rng(7)
+    noise = rng.standard_normal(sim.n_steps)
+    for chapter_form in (False, True):
+        trace0 = np.array([0.1, -0.2, 0.0, 0.3, 0.0, 0.05])
+        ref = reference_trial(
+            plant, c, sim, Protocol(), noise, 0.995, trace0, chapter_form=chapter_form
+        )
+        trace = trace0.copy()
+        out = np.empty(kernel.N_OUT)
+        p = plant.as_array()
+        kernel.run_trial(
+            sim.initial_state,
+            np.array(c.gains),
+            c.theta_c,
+            c.sign,
+            c.soft,
+            c.inhibition,
+            p,
+            p,
+            False,
+            sim.dt,
+            sim.n_steps,
+            1,
+            noise,
+            np.empty((0, 2)),
+            0.0,
+            0.0,
+            chapter_form,
+            0.995,
+            trace,
+            Protocol().check_step(sim.dt),
+            3.0,
+            np.pi / 6,
+            0.1,
+            np.pi / 9,
+            10.0,
+            -5.0,
+            np.empty((0, 8)),
+            out,
+        )
+        assert out[kernel.OUT_REWARD] == ref[0]
+        assert int(out[kernel.OUT_END_STEP]) == ref[1]
+        np.testing.assert_allclose(
+            out[kernel.OUT_X : kernel.OUT_THETA_DOT + 1], ref[2], rtol=1e-8, atol=1e-9
+        )
+        np.testing.assert_allclose(trace, ref[4], rtol=1e-7, atol=1e-9)
+
+
+def test_same_noise_same_trial(plant: Plant) -> None:
+    c = Controller()
+    sim = Simulation()
+    results = []
+    for _ in range(2):
+        trace = np.zeros(6)
+        o = run_trial(
+            plant,
+            c,
+            sim,
+            protocol=Protocol(),
+            trace=trace,
+            gamma=0.99,
+            rng=np.random.default_rng(11),
+        )
+        results.append((o, trace.copy()))
+    assert results[0][0] == results[1][0]
+    np.testing.assert_array_equal(results[0][1], results[1][1])
+
+
+def test_batch_kernel_equals_scalar_kernel(plant: Plant) -> None:
+    sim = Simulation(duration=35.0)
+    B = 5
+    rng = np.random.default_rng(5)
+    Ws = np.tile(np.array(CHAPTER_INITIAL_W), (B, 1)) + rng.normal(0, 0.05, (B, 6))
+    Ws[:, 0] = np.abs(Ws[:, 0])
+    tcs = np.full(B, 0.7)
+    noise = rng.standard_normal((B, sim.n_steps))
+    traces = np.zeros((B, 6))
+    outs = np.empty((B, kernel.N_OUT))
+    p = plant.as_array()
+    states = np.tile(sim.initial_state, (B, 1))
+    kernel.run_trials_batch(
+        states,
+        Ws,
+        tcs,
+        1.0,
+        False,
+        50.0,
+        p,
+        p,
+        False,
+        sim.dt,
+        sim.n_steps,
+        1,
+        noise,
+        False,
+        0.99,
+        traces,
+        3000,
+        3.0,
+        np.pi / 6,
+        0.1,
+        np.pi / 9,
+        10.0,
+        -5.0,
+        outs,
+    )
+    for b in range(B):
+        c = Controller(tuple(Ws[b]), 0.7)
+        trace = np.zeros(6)
+        out = np.empty(kernel.N_OUT)
+        kernel.run_trial(
+            states[b],
+            Ws[b],
+            0.7,
+            1.0,
+            False,
+            50.0,
+            p,
+            p,
+            False,
+            sim.dt,
+            sim.n_steps,
+            1,
+            noise[b],
+            np.empty((0, 2)),
+            0.0,
+            0.0,
+            False,
+            0.99,
+            trace,
+            3000,
+            3.0,
+            np.pi / 6,
+            0.1,
+            np.pi / 9,
+            10.0,
+            -5.0,
+            np.empty((0, 8)),
+            out,
+        )
+        np.testing.assert_array_equal(outs[b], out)
+        np.testing.assert_array_equal(traces[b], trace)
+        del c
