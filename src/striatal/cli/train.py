@@ -1,0 +1,308 @@
+"""``striatal train``: the chapter's learner, run until the success test holds."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from collections import deque
+from dataclasses import asdict
+from pathlib import Path
+from types import FrameType
+from typing import Any, TextIO
+
+import numpy as np
+
+from striatal.cli import EXIT_INTERRUPTED, options
+from striatal.errors import DataFileError, ParameterError
+from striatal.files import csv_text, dumps_json, read_json, write_json
+from striatal.learn import (
+    HISTORY_COLUMNS,
+    LearnerConfig,
+    LearnerState,
+    TrainResult,
+    TrialRecord,
+    initial_state,
+    random_initial_gains,
+    train,
+)
+from striatal.params import (
+    CHAPTER_INITIAL_THETA_C,
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+)
+from striatal.rollout import Protocol, simulate
+
+COMMAND = "train"
+ORDER = 20
+HELP = "run the chapter's switching REINFORCE learner"
+DESCRIPTION = (
+    "Learn the six gains and theta_c with the chapter's REINFORCE rule (eqs 1-5, 21-25): "
+    "60-s trials from theta = 3.12 at rest, a Gaussian policy, eligibility traces and the "
+    "sparse reward, until the chapter's success test holds or --max-trials. "
+    "--init random draws W(0) uniformly in [-1, 1]^6 (W1 floored at 0.001) from the seed."
+)
+CHECKPOINT = "checkpoint.json"
+CHECKPOINT_VERSION = 1
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    g = parser.add_argument_group("start")
+    start = g.add_mutually_exclusive_group()
+    start.add_argument(
+        "--init",
+        choices=("chapter", "random"),
+        default="chapter",
+        help="chapter: W(0) of the chapter; random: uniform in [-1, 1]^6 drawn from --seed",
+    )
+    start.add_argument(
+        "--init-gains", type=float, nargs=6, metavar=("W1", "W2", "W3", "W4", "W5", "W6")
+    )
+    g.add_argument(
+        "--theta-c0", type=float, default=CHAPTER_INITIAL_THETA_C, help="theta_c(0) [rad]"
+    )
+    g.add_argument("--seed", type=int, default=0, help="seed of the policy noise (and random W(0))")
+    lg = parser.add_argument_group("learning (the chapter leaves these open: NOTES section 7)")
+    d = LearnerConfig()
+    lg.add_argument("--max-trials", type=int, default=d.max_trials)
+    lg.add_argument("--alpha", type=float, default=d.alpha, help="learning rate (eq 4)")
+    lg.add_argument("--gamma", type=float, default=d.gamma, help="trace discount per draw (eq 3)")
+    lg.add_argument("--baseline", type=float, default=d.baseline, help="reward baseline b (eq 1)")
+    lg.add_argument(
+        "--action-every", type=int, default=d.action_every, help="draw a new action every N steps"
+    )
+    lg.add_argument(
+        "--carry-trace", action="store_true", help="do not reset the trace D between trials"
+    )
+    lg.add_argument("--eligibility", choices=("score", "chapter"), default=d.eligibility)
+    lg.add_argument(
+        "--success-on",
+        choices=("noisy", "mean"),
+        default=d.success_on,
+        help="judge the success test on the noisy trial (chapter) or a mean-policy rerun",
+    )
+    lg.add_argument(
+        "--theta-c-rule",
+        choices=("swingup", "trial", "fixed"),
+        default=d.theta_c_rule,
+        help="eq 21's min|theta|: under the swing-up, over the whole trial, or keep theta_c",
+    )
+    lg.add_argument(
+        "--max-step", type=float, default=d.max_step, help="bound on each gain's update per trial"
+    )
+    options.add_controller_arguments(parser, gains_required=False)
+    rg = parser.add_argument_group("trial")
+    rg.add_argument("--dt", type=float, default=0.01, help="control and RK4 step [s]")
+    rg.add_argument("--duration", type=float, default=60.0, help="trial length T_f [s]")
+    options.add_plant_arguments(parser)
+    og = parser.add_argument_group("output")
+    og.add_argument("--out", type=Path, default=None, help="write result.json, history.csv here")
+    og.add_argument("--json", action="store_true", help="print result.json on stdout")
+    og.add_argument(
+        "--checkpoint-every", type=int, default=50, help="checkpoint every N trials (with --out)"
+    )
+    og.add_argument("--resume", action="store_true", help="continue the run checkpointed in --out")
+    og.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _settings(
+    args: argparse.Namespace,
+    config: LearnerConfig,
+    template: Controller,
+    plant: Plant,
+    sim: Simulation,
+    W0: tuple[float, ...],
+) -> dict[str, Any]:
+    return {
+        "learner": "chapter",
+        "init": "gains" if args.init_gains is not None else args.init,
+        "W0": list(W0),
+        "theta_c0": template.theta_c,
+        "seed": args.seed,
+        "config": config.to_dict(),
+        "controller": {
+            "balance_sign": template.balance_sign,
+            "switch": template.switch,
+            "inhibition": template.inhibition,
+        },
+        "plant": asdict(plant),
+        "trial": {"dt": sim.dt, "duration": sim.duration, "theta0": sim.theta0, "x0": sim.x0},
+        "protocol": asdict(Protocol()),
+        "integrator": "rk4, u held over each step",
+        "reward_timing": "update at the reward event only (r_t = 0 elsewhere)",
+    }
+
+
+def _from_settings(s: dict[str, Any]) -> tuple[LearnerConfig, Controller, Plant, Simulation]:
+    try:
+        config = LearnerConfig(**s["config"])
+        template = Controller(gains=s["W0"], theta_c=s["theta_c0"], **s["controller"])
+        plant = Plant(**s["plant"])
+        sim = Simulation(**s["trial"])
+    except (KeyError, TypeError) as exc:
+        raise DataFileError(f"checkpoint settings are incomplete: {exc!r}") from None
+    return config, template, plant, sim
+
+
+def _fresh(args: argparse.Namespace) -> tuple[dict[str, Any], LearnerState]:
+    config = LearnerConfig(
+        alpha=args.alpha,
+        gamma=args.gamma,
+        baseline=args.baseline,
+        action_every=args.action_every,
+        reset_trace=not args.carry_trace,
+        eligibility=args.eligibility,
+        success_on=args.success_on,
+        theta_c_rule=args.theta_c_rule,
+        max_trials=args.max_trials,
+        max_step=args.max_step,
+    )
+    plant = options.plant_from(args)
+    sim = Simulation(duration=args.duration, dt=args.dt)
+    if args.init_gains is not None:
+        W0 = tuple(args.init_gains)
+    elif args.init == "random":
+        W0 = random_initial_gains(np.random.default_rng([args.seed, 1]))
+    else:
+        W0 = CHAPTER_INITIAL_W
+    template = options.controller_from(args, W0, args.theta_c0)
+    if args.checkpoint_every < 1:
+        raise ParameterError(f"--checkpoint-every must be >= 1, got {args.checkpoint_every}")
+    settings = _settings(args, config, template, plant, sim, W0)
+    return settings, initial_state(W0, template.theta_c, args.seed)
+
+
+def _load_checkpoint(out: Path) -> tuple[dict[str, Any], LearnerState]:
+    data = read_json(out / CHECKPOINT, what="checkpoint")
+    if not isinstance(data, dict) or data.get("version") != CHECKPOINT_VERSION:
+        raise DataFileError(f"checkpoint {out / CHECKPOINT} is not a striatal train checkpoint")
+    try:
+        state = LearnerState.from_dict(data["state"])
+        settings = dict(data["settings"])
+    except (KeyError, TypeError, ParameterError) as exc:
+        raise DataFileError(f"checkpoint {out / CHECKPOINT} is corrupted: {exc}") from None
+    return settings, state
+
+
+def _truncate_history(path: Path, n_rows: int) -> None:
+    """Keep the header and the first n_rows rows (those covered by the checkpoint)."""
+    if not path.exists():
+        if n_rows:
+            raise DataFileError(f"history {path} is missing but the checkpoint has {n_rows} trials")
+        path.write_text(csv_text(HISTORY_COLUMNS, []), encoding="utf-8")
+        return
+    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+    if len(lines) < 1 + n_rows or lines[0].strip() != ",".join(HISTORY_COLUMNS):
+        raise DataFileError(f"history {path} has fewer rows than the checkpoint's {n_rows} trials")
+    path.write_text("".join(lines[: 1 + n_rows]), encoding="utf-8")
+
+
+def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.resume:
+        if args.out is None:
+            raise ParameterError("--resume needs --out DIR holding a checkpoint")
+        settings, state = _load_checkpoint(args.out)
+    else:
+        settings, state = _fresh(args)
+    config, template, plant, sim = _from_settings(settings)
+    seed = int(settings["seed"])
+
+    history: TextIO | None = None
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        hpath = args.out / "history.csv"
+        if args.resume:
+            _truncate_history(hpath, state.trials_done)
+        else:
+            hpath.write_text(csv_text(HISTORY_COLUMNS, []), encoding="utf-8")
+        history = hpath.open("a", encoding="utf-8", newline="")
+
+    def checkpoint(s: LearnerState) -> None:
+        if args.out is not None:
+            if history is not None:
+                history.flush()
+            write_json(
+                args.out / CHECKPOINT,
+                {"version": CHECKPOINT_VERSION, "settings": settings, "state": s.to_dict()},
+            )
+
+    from tqdm import tqdm
+
+    bar = tqdm(
+        total=config.max_trials,
+        initial=state.trials_done,
+        unit="trial",
+        disable=args.no_progress or args.json or not sys.stderr.isatty(),
+        file=sys.stderr,
+    )
+    recent: deque[float] = deque(maxlen=50)
+
+    def on_trial(s: LearnerState, rec: TrialRecord) -> None:
+        if history is not None:
+            history.write(csv_text(HISTORY_COLUMNS, [rec.row()]).split("\n", 1)[1])
+        recent.append(rec.reward)
+        bar.update(1)
+        bar.set_postfix(reward=rec.reward, plus10=f"{np.mean([r > 0 for r in recent]):.2f}")
+        if s.trials_done % args.checkpoint_every == 0:
+            checkpoint(s)
+
+    old_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        result = train(plant, template, config, seed, sim=sim, state=state, on_trial=on_trial)
+    finally:
+        signal.signal(signal.SIGTERM, old_term)
+        bar.close()
+    checkpoint(result.state)
+    if history is not None:
+        history.close()
+    payload = _payload(result, settings, plant, template, sim)
+    if args.out is not None:
+        write_json(args.out / "result.json", payload)
+    if args.json:
+        sys.stdout.write(dumps_json(payload))
+    else:
+        _print_human(payload, args.out)
+    return EXIT_INTERRUPTED if result.interrupted else 0
+
+
+def _payload(
+    result: TrainResult,
+    settings: dict[str, Any],
+    plant: Plant,
+    template: Controller,
+    sim: Simulation,
+) -> dict[str, Any]:
+    payload = TrainResult(
+        success=result.success,
+        trials=result.trials,
+        W=result.W,
+        theta_c=result.theta_c,
+        seed=result.seed,
+        wall_seconds=result.wall_seconds,
+        state=result.state,
+        interrupted=result.interrupted,
+        settings=settings,
+    ).to_dict()
+    learned = template.with_gains(result.W, result.theta_c)
+    check = simulate(plant, learned, sim).outcome
+    payload["mean_policy_success"] = check.success
+    payload["mean_policy_final_state"] = list(check.final_state)
+    payload["positive_rewards"] = result.state.n_positive
+    return payload
+
+
+def _print_human(p: dict[str, Any], out: Path | None) -> None:
+    verdict = "success" if p["success"] else "no success"
+    if p["interrupted"]:
+        verdict = "interrupted"
+    print(f"{verdict} after {p['trials']} trials ({p['wall_seconds']:.1f} s)")
+    print("W = " + " ".join(f"{w:.4f}" for w in p["W"]) + f"   theta_c = {p['theta_c']:.4f}")
+    print(f"mean policy passes the success test: {'yes' if p['mean_policy_success'] else 'no'}")
+    if out is not None:
+        print(f"wrote {out / 'result.json'}, {out / 'history.csv'}")
