@@ -13,7 +13,7 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from striatal.cli import EXIT_INTERRUPTED, options
+from striatal.cli import EXIT_INTERRUPTED, learner_options, options
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import csv_text, dumps_json, read_json, write_json
 from striatal.learn import (
@@ -64,34 +64,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--theta-c0", type=float, default=CHAPTER_INITIAL_THETA_C, help="theta_c(0) [rad]"
     )
     g.add_argument("--seed", type=int, default=0, help="seed of the policy noise (and random W(0))")
-    lg = parser.add_argument_group("learning (the chapter leaves these open: NOTES section 7)")
-    d = LearnerConfig()
-    lg.add_argument("--max-trials", type=int, default=d.max_trials)
-    lg.add_argument("--alpha", type=float, default=d.alpha, help="learning rate (eq 4)")
-    lg.add_argument("--gamma", type=float, default=d.gamma, help="trace discount per draw (eq 3)")
-    lg.add_argument("--baseline", type=float, default=d.baseline, help="reward baseline b (eq 1)")
-    lg.add_argument(
-        "--action-every", type=int, default=d.action_every, help="draw a new action every N steps"
-    )
-    lg.add_argument(
-        "--carry-trace", action="store_true", help="do not reset the trace D between trials"
-    )
-    lg.add_argument("--eligibility", choices=("score", "chapter"), default=d.eligibility)
-    lg.add_argument(
-        "--success-on",
-        choices=("noisy", "mean"),
-        default=d.success_on,
-        help="judge the success test on the noisy trial (chapter) or a mean-policy rerun",
-    )
-    lg.add_argument(
-        "--theta-c-rule",
-        choices=("swingup", "trial", "fixed"),
-        default=d.theta_c_rule,
-        help="eq 21's min|theta|: under the swing-up, over the whole trial, or keep theta_c",
-    )
-    lg.add_argument(
-        "--max-step", type=float, default=d.max_step, help="bound on each gain's update per trial"
-    )
+    learner_options.add_learner_arguments(parser)
     options.add_controller_arguments(parser, gains_required=False)
     rg = parser.add_argument_group("trial")
     rg.add_argument("--dt", type=float, default=0.01, help="control and RK4 step [s]")
@@ -147,18 +120,7 @@ def _from_settings(s: dict[str, Any]) -> tuple[LearnerConfig, Controller, Plant,
 
 
 def _fresh(args: argparse.Namespace) -> tuple[dict[str, Any], LearnerState]:
-    config = LearnerConfig(
-        alpha=args.alpha,
-        gamma=args.gamma,
-        baseline=args.baseline,
-        action_every=args.action_every,
-        reset_trace=not args.carry_trace,
-        eligibility=args.eligibility,
-        success_on=args.success_on,
-        theta_c_rule=args.theta_c_rule,
-        max_trials=args.max_trials,
-        max_step=args.max_step,
-    )
+    config = learner_options.learner_config_from(args)
     plant = options.plant_from(args)
     sim = Simulation(duration=args.duration, dt=args.dt)
     if args.init_gains is not None:
