@@ -59,6 +59,17 @@ def write_json(path: str | os.PathLike[str], obj: Any) -> None:
     atomic_write_text(path, dumps_json(obj))
 
 
+def _reject_constant(token: str) -> Any:
+    raise ValueError(f"{token} is not a number in standard JSON (striatal writes null)")
+
+
+def _finite_float(token: str) -> float:
+    v = float(token)
+    if not math.isfinite(v):
+        raise ValueError(f"{token} is out of the range of a float")
+    return v
+
+
 def read_json(path: str | os.PathLike[str], *, what: str = "file") -> Any:
     """Read a JSON file or raise DataFileError naming the file and the problem."""
     p = Path(path)
@@ -69,20 +80,29 @@ def read_json(path: str | os.PathLike[str], *, what: str = "file") -> Any:
     except (OSError, UnicodeDecodeError) as exc:
         raise DataFileError(f"{what} {p} cannot be read: {exc}") from None
     try:
-        return json.loads(text)
+        return json.loads(text, parse_constant=_reject_constant, parse_float=_finite_float)
     except json.JSONDecodeError as exc:
         raise DataFileError(
             f"{what} {p} is not valid JSON (truncated or corrupted?): {exc}"
         ) from None
+    except (ValueError, RecursionError) as exc:
+        raise DataFileError(f"{what} {p} is not a striatal data file: {exc}") from None
+
+
+def _csv_cell(v: Any) -> Any:
+    """A float with repr precision; NaN and +-inf become an empty cell (the CSV null)."""
+    if isinstance(v, float):
+        return repr(float(v)) if math.isfinite(v) else ""
+    return v
 
 
 def csv_text(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
-    """CSV text with a header line; floats written with repr precision."""
+    """CSV text with a header line; floats written with repr precision, non-finite ones empty."""
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(header)
     for row in rows:
-        writer.writerow([repr(float(v)) if isinstance(v, float) else v for v in row])
+        writer.writerow([_csv_cell(v) for v in row])
     return buf.getvalue()
 
 

@@ -24,14 +24,25 @@ CHAPTER_FINAL_THETA_C = 0.9035
 #: Initial pole angle of every trial in the chapter [rad] (theta = 0 is upright).
 CHAPTER_THETA0 = 3.12
 N_GAINS = 6
+#: Most control steps one run may take (duration / dt): 1e7 steps is 28 hours at dt = 0.01 s,
+#: and a recorded trajectory of that length already needs 640 MB.
+MAX_STEPS = 10_000_000
 
 BalanceSign = Literal["corrected", "chapter"]
 SwitchKind = Literal["hard", "soft"]
 
 
+def as_float(name: str, value: object) -> float:
+    """``float(value)``, or ParameterError naming ``name`` if it is not a number."""
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError, OverflowError):
+        raise ParameterError(f"{name} must be a number, got {value!r}") from None
+
+
 def require_finite_positive(name: str, value: float) -> float:
     """Return ``value`` as float, or raise ParameterError if it is not finite and > 0."""
-    v = float(value)
+    v = as_float(name, value)
     if not math.isfinite(v) or v <= 0.0:
         raise ParameterError(f"{name} must be a finite number > 0, got {value!r}")
     return v
@@ -39,7 +50,7 @@ def require_finite_positive(name: str, value: float) -> float:
 
 def require_finite(name: str, value: float) -> float:
     """Return ``value`` as float, or raise ParameterError if it is NaN or infinite."""
-    v = float(value)
+    v = as_float(name, value)
     if not math.isfinite(v):
         raise ParameterError(f"{name} must be a finite number, got {value!r}")
     return v
@@ -53,7 +64,7 @@ def check_gains(gains: object, *, need_positive_w1: bool = True) -> tuple[float,
     """
     try:
         values = tuple(float(w) for w in np.asarray(gains, dtype=float).ravel())
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ParameterError(f"gains must be six numbers W1..W6: {exc}") from None
     if len(values) != N_GAINS:
         raise ParameterError(f"gains must be six numbers W1..W6, got {len(values)}")
@@ -70,7 +81,7 @@ def check_gains(gains: object, *, need_positive_w1: bool = True) -> tuple[float,
 
 def check_theta_c(theta_c: float) -> float:
     """Validate the switching threshold theta_c of eq 21: finite and in (0, pi)."""
-    v = float(theta_c)
+    v = as_float("theta_c", theta_c)
     if not math.isfinite(v) or not 0.0 < v < math.pi:
         raise ParameterError(f"theta_c must be in (0, pi), got {theta_c!r}")
     return v
@@ -78,7 +89,7 @@ def check_theta_c(theta_c: float) -> float:
 
 def check_dt(dt: float) -> float:
     """Validate a control/integration step: finite and in (0, 0.1] seconds."""
-    v = float(dt)
+    v = as_float("dt", dt)
     if not math.isfinite(v) or not 0.0 < v <= 0.1:
         raise ParameterError(f"dt must be in (0, 0.1] seconds, got {dt!r}")
     return v
@@ -192,6 +203,11 @@ class SuccessTest:
     theta_dot: float = 0.005
     x_dot: float = 0.005
 
+    def __post_init__(self) -> None:
+        for name in ("theta", "x", "theta_dot", "x_dot"):
+            bound = require_finite_positive(f"success bound {name}", getattr(self, name))
+            object.__setattr__(self, name, bound)
+
     def passed(self, state: np.ndarray) -> bool:
         """True if ``state`` = [x, x_dot, theta, theta_dot] (theta wrapped) passes every bound."""
         s = np.asarray(state, dtype=float)
@@ -220,6 +236,12 @@ class Simulation:
         object.__setattr__(self, "x0", require_finite("x0", self.x0))
         object.__setattr__(self, "duration", require_finite_positive("duration", self.duration))
         object.__setattr__(self, "dt", check_dt(self.dt))
+        steps = self.duration / self.dt
+        if not steps <= MAX_STEPS:
+            raise ParameterError(
+                f"duration / dt = {steps:.3g} steps is more than {MAX_STEPS:,}: "
+                "shorten the duration or raise dt"
+            )
         if self.n_steps < 1:
             raise ParameterError("duration must be at least one step dt")
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from striatal import kernel
 from striatal.errors import ParameterError
-from striatal.params import Controller, Plant, Simulation
+from striatal.params import Controller, Plant, Simulation, require_finite, require_finite_positive
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,12 @@ class Protocol:
     reward_success: float = 10.0
     reward_failure: float = -5.0
 
+    def __post_init__(self) -> None:
+        for name in ("check_x", "check_theta", "goal_x", "goal_theta"):
+            object.__setattr__(self, name, require_finite_positive(name, getattr(self, name)))
+        for name in ("check_time", "reward_success", "reward_failure"):
+            object.__setattr__(self, name, require_finite(name, getattr(self, name)))
+
     def check_step(self, dt: float) -> int:
         """Step index of the eq-24 check, or -1 when disabled."""
         return -1 if self.check_time < 0 else int(round(self.check_time / dt))
@@ -48,6 +54,13 @@ class SensorNoise:
 
     x_std: float = 0.0
     theta_std: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("x_std", "theta_std"):
+            v = require_finite(name, getattr(self, name))
+            if v < 0.0:
+                raise ParameterError(f"{name} must be >= 0, got {v}")
+            object.__setattr__(self, name, v)
 
     @property
     def active(self) -> bool:
@@ -165,7 +178,7 @@ def _call_kernel(
     gains: np.ndarray | None,
     traj: np.ndarray,
 ) -> np.ndarray:
-    if action_every < 1:
+    if int(action_every) != action_every or action_every < 1:
         raise ParameterError(f"action_every must be a whole number >= 1, got {action_every}")
     model_plant = plant if model is None else model
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)

@@ -16,6 +16,7 @@ from striatal.params import (
     Controller,
     Plant,
     Simulation,
+    check_gains,
 )
 
 
@@ -93,9 +94,10 @@ def add_controller_arguments(parser: argparse.ArgumentParser, *, gains_required:
 def gains_from(args: argparse.Namespace) -> tuple[tuple[float, ...], float]:
     """(gains, theta_c) from --gains/--chapter-final/--chapter-initial/--theta-c."""
     if getattr(args, "gains", None) is not None:
+        gains = check_gains(args.gains)
         if args.theta_c is None:
             raise ParameterError("--gains needs --theta-c as well")
-        return tuple(args.gains), args.theta_c
+        return gains, args.theta_c
     if getattr(args, "chapter_initial", False):
         return (
             CHAPTER_INITIAL_W,
