@@ -38,8 +38,12 @@ from striatal.params import (
 from striatal.rollout import Protocol, TrialOutcome, run_trial
 
 SuccessOn = Literal["noisy", "mean"]
-ThetaCRule = Literal["swingup", "trial", "fixed"]
+ThetaCRule = Literal["swingup", "trial", "fixed", "learned"]
 Eligibility = Literal["score", "chapter"]
+LearnerKind = Literal["chapter", "rpe", "pgpe"]
+RewardKind = Literal["sparse", "shaped"]
+#: The learner variants (:mod:`striatal.learners` for the two beyond the chapter).
+LEARNERS: tuple[str, ...] = ("chapter", "rpe", "pgpe")
 
 #: Floor that keeps W1 > 0 for sqrt(W1 g) (eq 22): the documented guard.
 W1_FLOOR = 1e-3
@@ -87,6 +91,15 @@ class LearnerConfig:
     max_trials : stop after this many trials if the success test never holds.
     max_step : bound on each component of one update alpha (1 - gamma)(r - b) D.
     w1_floor : W1 is kept >= this after every update.
+    learner : "chapter" (this module), or one of :mod:`striatal.learners`: "rpe" (the
+        chapter's per-step rule with a reward baseline that tracks the expected reward)
+        or "pgpe" (exploration in parameter space, once per trial).
+    reward : "sparse" (eqs 24-25) or "shaped" (:func:`striatal.learners.shaped_reward`).
+    rpe_rate : rate beta of the tracked baseline b <- b + beta (r - b) and of the running
+        mean square of the prediction error (learners "rpe", "pgpe").
+    normalise : divide the prediction error r - b by its running root mean square.
+    explore : parameter-exploration std of W1..W5 ("pgpe"); theta_c's is 0.3 times it [rad].
+    sigma_rate : rate of the log-std adaptation of the exploration ("pgpe"; 0: fixed).
     """
 
     alpha: float = 5.0
@@ -100,6 +113,12 @@ class LearnerConfig:
     max_trials: int = 2000
     max_step: float = 1.0
     w1_floor: float = W1_FLOOR
+    learner: LearnerKind = "chapter"
+    reward: RewardKind = "sparse"
+    rpe_rate: float = 0.1
+    normalise: bool = False
+    explore: float = 0.3
+    sigma_rate: float = 0.0
 
     def __post_init__(self) -> None:
         a = require_finite("alpha", self.alpha)
@@ -125,9 +144,34 @@ class LearnerConfig:
             )
         if self.success_on not in ("noisy", "mean"):
             raise ParameterError(f"success_on must be 'noisy' or 'mean', got {self.success_on!r}")
-        if self.theta_c_rule not in ("swingup", "trial", "fixed"):
+        if self.theta_c_rule not in ("swingup", "trial", "fixed", "learned"):
             raise ParameterError(
-                f"theta_c_rule must be 'swingup', 'trial' or 'fixed', got {self.theta_c_rule!r}"
+                "theta_c_rule must be 'swingup', 'trial', 'fixed' or 'learned', "
+                f"got {self.theta_c_rule!r}"
+            )
+        if self.learner not in LEARNERS:
+            raise ParameterError(
+                f"learner must be one of {', '.join(LEARNERS)}, got {self.learner!r}"
+            )
+        if self.reward not in ("sparse", "shaped"):
+            raise ParameterError(f"reward must be 'sparse' or 'shaped', got {self.reward!r}")
+        r = require_finite("rpe_rate", self.rpe_rate)
+        if not 0.0 < r <= 1.0:
+            raise ParameterError(f"rpe_rate must be in (0, 1], got {self.rpe_rate}")
+        e = require_finite("explore", self.explore)
+        if e <= 0.0:
+            raise ParameterError(f"explore must be > 0, got {self.explore}")
+        if require_finite("sigma_rate", self.sigma_rate) < 0.0:
+            raise ParameterError(f"sigma_rate must be >= 0, got {self.sigma_rate}")
+        if self.theta_c_rule == "learned" and self.learner != "pgpe":
+            raise ParameterError(
+                "theta_c_rule 'learned' (theta_c perturbed and updated with the gains) "
+                "needs learner 'pgpe'"
+            )
+        if self.learner == "pgpe" and self.success_on != "mean":
+            raise ParameterError(
+                "learner 'pgpe' acts with the mean policy of perturbed gains: "
+                "its success test is judged on the mean policy (success_on 'mean')"
             )
 
     def to_dict(self) -> dict[str, Any]:
@@ -145,11 +189,15 @@ class LearnerState:
     rng_state: dict[str, Any]
     success: bool = False
     n_positive: int = 0
+    reward_mean: float = 0.0
+    rpe_square: float = 0.0
+    explore: tuple[float, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["W"] = list(self.W)
         d["trace"] = list(self.trace)
+        d["explore"] = list(self.explore)
         return d
 
     @classmethod
@@ -166,12 +214,16 @@ class LearnerState:
                 rng_state=dict(d["rng_state"]),
                 success=bool(d["success"]),
                 n_positive=int(d.get("n_positive", 0)),
+                reward_mean=float(d.get("reward_mean", 0.0)),
+                rpe_square=float(d.get("rpe_square", 0.0)),
+                explore=tuple(float(v) for v in d.get("explore", ())),
             )
         except (KeyError, TypeError, ValueError) as exc:
             raise ParameterError(f"learner state is incomplete or malformed: {exc!r}") from None
         if len(W) != N_GAINS or len(trace) != N_GAINS or state.trials_done < 0:
             raise ParameterError("learner state has the wrong number of gains or trials")
-        if not all(math.isfinite(v) for v in (*W, *trace, state.theta_c)):
+        numbers = (*W, *trace, state.theta_c, state.reward_mean, state.rpe_square, *state.explore)
+        if not all(math.isfinite(v) for v in numbers):
             raise ParameterError("learner state holds a non-finite number")
         check_theta_c(state.theta_c)
         return state
@@ -258,7 +310,7 @@ def random_initial_gains(rng: np.random.Generator) -> tuple[float, ...]:
 
 def theta_c_rule(outcome: TrialOutcome, theta_c: float, rule: ThetaCRule) -> float:
     """Eq 21: theta_c = min|theta| if it is < 1.4, else 0.6 (reading: NOTES section 6)."""
-    if rule == "fixed":
+    if rule in ("fixed", "learned"):
         return theta_c
     m = outcome.min_abs_theta_swingup if rule == "swingup" else outcome.min_abs_theta
     if not math.isfinite(m) or m > THETA_C_RESET_ABOVE:
@@ -296,7 +348,12 @@ def learning_step(
 
     Pure: the same state gives the same result. ``template`` carries the readings
     (balance sign, switch, inhibition); its gains are replaced by the state's.
+    Learners other than "chapter" are in :mod:`striatal.learners`.
     """
+    if config.learner != "chapter":
+        from striatal import learners
+
+        return learners.learning_step(state, plant, template, sim, protocol, config)
     rng = np.random.default_rng()
     rng.bit_generator.state = state.rng_state
     W = np.array(state.W, dtype=float)

@@ -1,55 +1,157 @@
-"""The learner's options, shared by ``train`` and ``sweep``."""
+"""The learner's options, shared by ``train`` and ``sweep``.
+
+Options left unset take the defaults of the chosen ``--learner``
+(:data:`LEARNER_DEFAULTS`); "chapter" keeps the chapter's learner exactly.
+"""
 
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
-from striatal.learn import LearnerConfig
+from striatal.learn import LEARNERS, LearnerConfig
+
+#: Defaults of each learner variant (the measured best settings: docs/ablation.md).
+LEARNER_DEFAULTS: dict[str, LearnerConfig] = {
+    "chapter": LearnerConfig(),
+    "rpe": LearnerConfig(learner="rpe", normalise=True),
+    "pgpe": LearnerConfig(
+        learner="pgpe",
+        alpha=0.3,
+        reward="shaped",
+        normalise=True,
+        explore=0.3,
+        success_on="mean",
+        theta_c_rule="learned",
+    ),
+}
+
+# Option name -> LearnerConfig field, for the options whose default depends on --learner.
+_FIELDS = {
+    "max_trials": "max_trials",
+    "alpha": "alpha",
+    "gamma": "gamma",
+    "baseline": "baseline",
+    "action_every": "action_every",
+    "eligibility": "eligibility",
+    "success_on": "success_on",
+    "theta_c_rule": "theta_c_rule",
+    "max_step": "max_step",
+    "reward": "reward",
+    "rpe_rate": "rpe_rate",
+    "explore": "explore",
+    "sigma_rate": "sigma_rate",
+    "normalise": "normalise",
+}
+
+
+def _default_text(name: str) -> str:
+    values = {k: getattr(c, name) for k, c in LEARNER_DEFAULTS.items()}
+    if len(set(values.values())) == 1:
+        return f"default {values['chapter']}"
+    return "default " + ", ".join(f"{v} ({k})" for k, v in values.items())
 
 
 def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
     """Every LearnerConfig field as an option (the chapter leaves most open: NOTES section 7)."""
     lg = parser.add_argument_group("learning (the chapter leaves these open: NOTES section 7)")
-    d = LearnerConfig()
-    lg.add_argument("--max-trials", type=int, default=d.max_trials)
-    lg.add_argument("--alpha", type=float, default=d.alpha, help="learning rate (eq 4)")
-    lg.add_argument("--gamma", type=float, default=d.gamma, help="trace discount per draw (eq 3)")
-    lg.add_argument("--baseline", type=float, default=d.baseline, help="reward baseline b (eq 1)")
     lg.add_argument(
-        "--action-every", type=int, default=d.action_every, help="draw a new action every N steps"
+        "--learner",
+        choices=LEARNERS,
+        default="chapter",
+        help="chapter: the chapter's rule; rpe: with a reward-prediction-error baseline; "
+        "pgpe: exploration in parameter space once per trial (docs/ablation.md)",
+    )
+    lg.add_argument("--max-trials", type=int, default=None, help=_default_text("max_trials"))
+    lg.add_argument(
+        "--alpha", type=float, default=None, help="learning rate (eq 4); " + _default_text("alpha")
+    )
+    lg.add_argument(
+        "--gamma",
+        type=float,
+        default=None,
+        help="trace discount per draw (eq 3); " + _default_text("gamma"),
+    )
+    lg.add_argument(
+        "--baseline",
+        type=float,
+        default=None,
+        help="reward baseline b (eq 1; chapter learner); " + _default_text("baseline"),
+    )
+    lg.add_argument(
+        "--action-every",
+        type=int,
+        default=None,
+        help="draw a new action every N steps; " + _default_text("action_every"),
     )
     lg.add_argument(
         "--carry-trace", action="store_true", help="do not reset the trace D between trials"
     )
-    lg.add_argument("--eligibility", choices=("score", "chapter"), default=d.eligibility)
+    lg.add_argument("--eligibility", choices=("score", "chapter"), default=None)
     lg.add_argument(
         "--success-on",
         choices=("noisy", "mean"),
-        default=d.success_on,
-        help="judge the success test on the noisy trial (chapter) or a mean-policy rerun",
+        default=None,
+        help="judge the success test on the noisy trial (chapter) or a mean-policy rerun; "
+        + _default_text("success_on"),
     )
     lg.add_argument(
         "--theta-c-rule",
-        choices=("swingup", "trial", "fixed"),
-        default=d.theta_c_rule,
-        help="eq 21's min|theta|: under the swing-up, over the whole trial, or keep theta_c",
+        choices=("swingup", "trial", "fixed", "learned"),
+        default=None,
+        help="eq 21's min|theta| under the swing-up, over the whole trial, keep theta_c, or "
+        "learn it with the gains (pgpe); " + _default_text("theta_c_rule"),
     )
     lg.add_argument(
-        "--max-step", type=float, default=d.max_step, help="bound on each gain's update per trial"
+        "--max-step",
+        type=float,
+        default=None,
+        help="bound on each gain's update per trial; " + _default_text("max_step"),
+    )
+    lg.add_argument(
+        "--reward",
+        choices=("sparse", "shaped"),
+        default=None,
+        help="sparse +10/-5 (eqs 24-25) or a dense score of the trial; " + _default_text("reward"),
+    )
+    lg.add_argument(
+        "--rpe-rate",
+        type=float,
+        default=None,
+        help="rate of the expected-reward baseline (rpe, pgpe); " + _default_text("rpe_rate"),
+    )
+    norm = lg.add_mutually_exclusive_group()
+    norm.add_argument(
+        "--normalise",
+        dest="normalise",
+        action="store_const",
+        const=True,
+        default=None,
+        help="divide the prediction error by its running rms; " + _default_text("normalise"),
+    )
+    norm.add_argument("--no-normalise", dest="normalise", action="store_const", const=False)
+    lg.add_argument(
+        "--explore",
+        type=float,
+        default=None,
+        help="parameter-exploration std of W1..W5 (pgpe); " + _default_text("explore"),
+    )
+    lg.add_argument(
+        "--sigma-rate",
+        type=float,
+        default=None,
+        help="adaptation rate of the exploration std (pgpe); " + _default_text("sigma_rate"),
     )
 
 
 def learner_config_from(args: argparse.Namespace) -> LearnerConfig:
-    """The LearnerConfig the options describe (validated)."""
-    return LearnerConfig(
-        alpha=args.alpha,
-        gamma=args.gamma,
-        baseline=args.baseline,
-        action_every=args.action_every,
-        reset_trace=not args.carry_trace,
-        eligibility=args.eligibility,
-        success_on=args.success_on,
-        theta_c_rule=args.theta_c_rule,
-        max_trials=args.max_trials,
-        max_step=args.max_step,
-    )
+    """The LearnerConfig the options describe (validated): the learner's defaults, overridden."""
+    base = LEARNER_DEFAULTS[args.learner]
+    changes = {
+        field: getattr(args, option)
+        for option, field in _FIELDS.items()
+        if getattr(args, option, None) is not None
+    }
+    if args.carry_trace:
+        changes["reset_trace"] = False
+    return replace(base, **changes)

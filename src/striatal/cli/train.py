@@ -89,7 +89,7 @@ def _settings(
     W0: tuple[float, ...],
 ) -> dict[str, Any]:
     return {
-        "learner": "chapter",
+        "learner": config.learner,
         "init": "gains" if args.init_gains is not None else args.init,
         "W0": list(W0),
         "theta_c0": template.theta_c,

@@ -1,0 +1,192 @@
+"""Learners beyond the chapter ("rpe", "pgpe"): determinism, update rules, guards, options."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from striatal import learners
+from striatal.cli.learner_options import (
+    LEARNER_DEFAULTS,
+    add_learner_arguments,
+    learner_config_from,
+)
+from striatal.errors import ParameterError
+from striatal.learn import LearnerConfig, initial_state, learning_step, train
+from striatal.params import CHAPTER_INITIAL_W, Controller, Plant, Simulation
+from striatal.rollout import Protocol, TrialOutcome, simulate
+
+START = Controller(CHAPTER_INITIAL_W, 0.6)
+RANDOM_START = Controller((0.55, -0.06, 0.39, 0.63, 0.08, 0.03), 0.6)
+RPE = LEARNER_DEFAULTS["rpe"]
+PGPE = LEARNER_DEFAULTS["pgpe"]
+
+
+def history(config: LearnerConfig, seed: int, start: Controller = RANDOM_START) -> list[object]:
+    rows: list[object] = []
+    r = train(Plant(), start, config, seed, on_trial=lambda s, rec: rows.append(rec.row()))
+    return [r.W, r.theta_c, rows]
+
+
+@pytest.mark.parametrize("learner", ["rpe", "pgpe"])
+def test_same_seed_same_history(learner: str) -> None:
+    cfg = replace(LEARNER_DEFAULTS[learner], max_trials=12)
+    assert history(cfg, 3) == history(cfg, 3)
+    assert history(cfg, 3) != history(cfg, 4)
+
+
+@pytest.mark.parametrize("learner", ["rpe", "pgpe"])
+def test_alpha_zero_leaves_gains_unchanged(learner: str) -> None:
+    cfg = replace(LEARNER_DEFAULTS[learner], alpha=0.0, max_trials=20)
+    r = train(Plant(), RANDOM_START, cfg, seed=1)
+    assert RANDOM_START.gains == r.W
+    if learner == "pgpe":
+        assert r.theta_c == RANDOM_START.theta_c
+
+
+def test_tracked_baseline_converges_to_the_mean_reward() -> None:
+    rng = np.random.default_rng(0)
+    b = 0.0
+    for r in rng.normal(3.0, 2.0, size=4000):
+        b = learners.tracked_baseline(b, float(r), 0.01)
+    assert b == pytest.approx(3.0, abs=0.15)
+
+
+def test_prediction_error_factor_normalises_by_running_rms() -> None:
+    f, sq = learners.prediction_error_factor(2.0, 0.0, 0.1, normalise=True)
+    assert (f, sq) == (1.0, 4.0)
+    f, sq = learners.prediction_error_factor(-1.0, 4.0, 0.1, normalise=True)
+    assert sq == pytest.approx(0.9 * 4.0 + 0.1)
+    assert f == pytest.approx(-1.0 / math.sqrt(sq))
+    assert learners.prediction_error_factor(-1.0, 4.0, 0.1, normalise=False)[0] == -1.0
+
+
+def test_pgpe_update_equals_its_formula() -> None:
+    """p <- p + alpha * delta / rms * eps, eps stored as the trace (the eligibility)."""
+    cfg = replace(PGPE, max_step=math.inf)
+    plant, sim, protocol = Plant(), Simulation(), Protocol()
+    s1, rec1 = learning_step(
+        initial_state(RANDOM_START.gains, 0.6, 5), plant, RANDOM_START, sim, protocol, cfg
+    )
+    # the first trial only sets the prediction b to its reward
+    assert RANDOM_START.gains == s1.W and s1.theta_c == 0.6
+    assert s1.reward_mean == rec1.reward
+    s2, rec2 = learning_step(s1, plant, RANDOM_START, sim, protocol, cfg)
+    delta = rec2.reward - s1.reward_mean
+    factor = delta / math.sqrt((1 - cfg.rpe_rate) * s1.rpe_square + cfg.rpe_rate * delta**2)
+    if s1.rpe_square == 0.0:
+        factor = math.copysign(1.0, delta) if delta else 0.0
+    p1 = np.array([*s1.W[:5], s1.theta_c])
+    p2 = np.array([*s2.W[:5], s2.theta_c])
+    np.testing.assert_allclose(p2 - p1, cfg.alpha * factor * np.array(s2.trace), atol=1e-12)
+    assert s2.W[5] == s1.W[5]
+    assert s2.reward_mean == pytest.approx(s1.reward_mean + cfg.rpe_rate * delta)
+
+
+def test_rpe_update_is_the_chapter_rule_with_the_prediction_error() -> None:
+    cfg = replace(RPE, normalise=False, max_step=math.inf)
+    s1, _rec1 = learning_step(
+        initial_state(START.gains, 0.6, 2), Plant(), START, Simulation(), Protocol(), cfg
+    )
+    s2, rec2 = learning_step(s1, Plant(), START, Simulation(), Protocol(), cfg)
+    delta = rec2.reward - s1.reward_mean
+    expected = cfg.alpha * (1 - cfg.gamma) * delta * np.array(s2.trace)
+    np.testing.assert_allclose(np.array(s2.W) - np.array(s1.W), expected, atol=1e-12)
+
+
+def test_three_factor_update_keeps_non_finite_numbers_out() -> None:
+    p = np.array([1.0, 2.0, 3.0])
+    for bad in (np.nan, np.inf):
+        out = learners.three_factor_update(p, np.array([1.0, bad, 0.0]), 1.0, 1.0, math.inf)
+        np.testing.assert_array_equal(out, p)
+    out = learners.three_factor_update(p, np.array([1.0, -1.0, 0.0]), 1e9, 1.0, 0.5)
+    np.testing.assert_array_equal(out, p + np.array([0.5, -0.5, 0.0]))
+
+
+@pytest.mark.parametrize("learner", ["rpe", "pgpe"])
+def test_absurd_rates_stay_finite(learner: str) -> None:
+    cfg = replace(LEARNER_DEFAULTS[learner], alpha=1e6, max_step=math.inf, max_trials=25)
+    r = train(Plant(), RANDOM_START, cfg, seed=0)
+    assert all(math.isfinite(w) for w in (*r.W, r.theta_c)) and r.W[0] > 0
+    assert 0 < r.theta_c < math.pi
+
+
+def test_shaped_reward_ranks_upright_at_rest_above_hanging() -> None:
+    sim, protocol, plant = Simulation(duration=5.0), Protocol(), Plant()
+    n = sim.n_steps + 1
+
+    def score(theta: float) -> float:
+        data = np.zeros((n, 8))
+        data[:, 3] = theta
+        out = TrialOutcome(
+            10.0, 5.0, (0.0, 0.0, theta, 0.0), 0.0, 0.0, False, False, 0, 0.0, 0.0, True
+        )
+        return learners.shaped_reward(data, out, plant, sim, protocol)
+
+    assert score(0.0) == pytest.approx(sum(learners.SHAPED_WEIGHTS))
+    assert 0.0 < score(math.pi) < 2.0
+
+
+def test_invalid_combinations_raise() -> None:
+    for kw in (
+        {"learner": "x"},
+        {"reward": "x"},
+        {"rpe_rate": 0.0},
+        {"explore": 0.0},
+        {"sigma_rate": -1.0},
+        {"theta_c_rule": "learned"},
+        {"learner": "pgpe"},  # success on the noisy trial
+    ):
+        with pytest.raises(ParameterError):
+            LearnerConfig(**kw)  # type: ignore[arg-type]
+
+
+def parse(*argv: str) -> LearnerConfig:
+    parser = argparse.ArgumentParser()
+    add_learner_arguments(parser)
+    return learner_config_from(parser.parse_args(list(argv)))
+
+
+def test_options_keep_the_chapter_learner_and_take_per_learner_defaults() -> None:
+    assert parse() == LearnerConfig()
+    assert parse("--learner", "pgpe") == PGPE
+    assert parse("--learner", "pgpe", "--alpha", "0.1", "--no-normalise") == replace(
+        PGPE, alpha=0.1, normalise=False
+    )
+    assert parse("--carry-trace").reset_trace is False
+
+
+def test_train_pgpe_from_random_gains_learns_gains_that_simulate_confirms() -> None:
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "striatal",
+            "train",
+            "--learner",
+            "pgpe",
+            "--init",
+            "random",
+            "--seed",
+            "2",
+            "--max-trials",
+            "300",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert r.returncode == 0, r.stderr
+    result = json.loads(r.stdout)
+    assert result["success"] and result["mean_policy_success"]
+    assert result["learner"] == "pgpe"
+    learned = START.with_gains(result["W"], result["theta_c"])
+    assert simulate(Plant(), learned, Simulation(), protocol=Protocol()).outcome.success
