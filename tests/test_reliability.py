@@ -228,6 +228,10 @@ def _drop_seed(d: dict[str, Any]) -> None:
     del d["settings"]["seed"]
 
 
+def _text_settings(d: dict[str, Any]) -> None:
+    d["settings"] = "x"
+
+
 def _text_max_trials(d: dict[str, Any]) -> None:
     d["settings"]["config"]["max_trials"] = "many"
 
@@ -472,6 +476,10 @@ RNG_GAP = (
     "learn.py: LearnerState.from_dict does not check rng_state (fix: try assigning it to "
     "np.random.default_rng().bit_generator.state, catch TypeError/ValueError/KeyError)"
 )
+SETTINGS_TYPE_GAP = (
+    "cli/train.py: _load_checkpoint calls dict(data['settings']) catching KeyError/TypeError "
+    "only; dict('x') raises ValueError (fix: catch ValueError too, or check isinstance dict)"
+)
 INT_GAP = (
     "learn.py: LearnerConfig calls int() on max_trials/action_every unguarded (fix: "
     "catch TypeError/ValueError and raise ParameterError)"
@@ -560,6 +568,10 @@ SCENARIOS: tuple[Scenario, ...] = (
       "exit 2, one line, files untouched",
       usage_error(("train", "--resume", "--out", "OUT"),
                   prepare=_with_checkpoint(_edit_json(_drop_seed))), SETTINGS_GAP),
+    S("resume-settings-text", "bad file", "`striatal train --resume`, settings = \"x\"",
+      "exit 2, one line, files untouched",
+      usage_error(("train", "--resume", "--out", "OUT"),
+                  prepare=_with_checkpoint(_edit_json(_text_settings))), SETTINGS_TYPE_GAP),
     S("resume-text-int", "bad file", "`striatal train --resume`, max_trials = \"many\"",
       "exit 2, one line, files untouched",
       usage_error(("train", "--resume", "--out", "OUT"),
@@ -658,14 +670,14 @@ def _cell(text: str) -> str:
 
 def table(scenario_tmp: Path) -> str:
     lines = [
-        "| # | kind | what was tried | expected | what happened | verdict |",
+        "| id | kind | what was tried | expected | what happened | verdict |",
         "|---|---|---|---|---|---|",
     ]
-    for i, s in enumerate(SCENARIOS, 1):
+    for s in SCENARIOS:
         ok, observed = outcome(s, scenario_tmp)
         verdict = "as expected" if ok else f"**gap** ({s.gap})" if s.gap else "**FAILED**"
         lines.append(
-            f"| {i} | {s.kind} | {_cell(s.tried)} | {_cell(s.expected)} | {_cell(observed)} "
+            f"| {s.key} | {s.kind} | {_cell(s.tried)} | {_cell(s.expected)} | {_cell(observed)} "
             f"| {_cell(verdict)} |"
         )
     return "\n".join(lines) + "\n"
