@@ -51,6 +51,14 @@ def test_alpha_zero_leaves_gains_unchanged(learner: str) -> None:
         assert r.theta_c == RANDOM_START.theta_c
 
 
+def test_decay_alone_shrinks_the_gains_geometrically() -> None:
+    """With a zero prediction error (max_step 0+) the decay acts: W_k = (1 - alpha d)^k W_0."""
+    cfg = replace(PGPE, alpha=0.5, decay=0.2, max_step=1e-300, max_trials=3)
+    r = train(Plant(), RANDOM_START, cfg, seed=0)
+    np.testing.assert_allclose(r.W[1:5], 0.9**3 * np.array(RANDOM_START.gains[1:5]), rtol=1e-12)
+    assert r.W[5] == RANDOM_START.gains[5]
+
+
 def test_tracked_baseline_converges_to_the_mean_reward() -> None:
     rng = np.random.default_rng(0)
     b = 0.0
@@ -75,8 +83,10 @@ def test_pgpe_update_equals_its_formula() -> None:
     s1, rec1 = learning_step(
         initial_state(RANDOM_START.gains, 0.6, 5), plant, RANDOM_START, sim, protocol, cfg
     )
-    # the first trial only sets the prediction b to its reward
-    assert RANDOM_START.gains == s1.W and s1.theta_c == 0.6
+    # the first trial only sets the prediction b to its reward (and the gains decay)
+    shrink = 1 - cfg.alpha * cfg.decay
+    np.testing.assert_allclose(s1.W[:5], shrink * np.array(RANDOM_START.gains[:5]), rtol=1e-12)
+    assert s1.theta_c == 0.6
     assert s1.reward_mean == rec1.reward
     s2, rec2 = learning_step(s1, plant, RANDOM_START, sim, protocol, cfg)
     delta = rec2.reward - s1.reward_mean
@@ -85,19 +95,22 @@ def test_pgpe_update_equals_its_formula() -> None:
         factor = math.copysign(1.0, delta) if delta else 0.0
     p1 = np.array([*s1.W[:5], s1.theta_c])
     p2 = np.array([*s2.W[:5], s2.theta_c])
-    np.testing.assert_allclose(p2 - p1, cfg.alpha * factor * np.array(s2.trace), atol=1e-12)
+    decay = cfg.alpha * cfg.decay * np.array([*p1[:5], 0.0])
+    expected = cfg.alpha * factor * np.array(s2.trace) - decay
+    np.testing.assert_allclose(p2 - p1, expected, atol=1e-12)
     assert s2.W[5] == s1.W[5]
     assert s2.reward_mean == pytest.approx(s1.reward_mean + cfg.rpe_rate * delta)
 
 
 def test_rpe_update_is_the_chapter_rule_with_the_prediction_error() -> None:
-    cfg = replace(RPE, normalise=False, max_step=math.inf)
+    cfg = replace(RPE, normalise=False, max_step=math.inf, decay=2.0)
     s1, _rec1 = learning_step(
         initial_state(START.gains, 0.6, 2), Plant(), START, Simulation(), Protocol(), cfg
     )
     s2, rec2 = learning_step(s1, Plant(), START, Simulation(), Protocol(), cfg)
     delta = rec2.reward - s1.reward_mean
     expected = cfg.alpha * (1 - cfg.gamma) * delta * np.array(s2.trace)
+    expected[:5] -= cfg.alpha * (1 - cfg.gamma) * cfg.decay * np.array(s1.W[:5])
     np.testing.assert_allclose(np.array(s2.W) - np.array(s1.W), expected, atol=1e-12)
 
 
@@ -112,7 +125,7 @@ def test_three_factor_update_keeps_non_finite_numbers_out() -> None:
 
 @pytest.mark.parametrize("learner", ["rpe", "pgpe"])
 def test_absurd_rates_stay_finite(learner: str) -> None:
-    cfg = replace(LEARNER_DEFAULTS[learner], alpha=1e6, max_step=math.inf, max_trials=25)
+    cfg = replace(LEARNER_DEFAULTS[learner], alpha=1e6, max_step=math.inf, max_trials=25, decay=0)
     r = train(Plant(), RANDOM_START, cfg, seed=0)
     assert all(math.isfinite(w) for w in (*r.W, r.theta_c)) and r.W[0] > 0
     assert 0 < r.theta_c < math.pi

@@ -100,6 +100,9 @@ class LearnerConfig:
     normalise : divide the prediction error r - b by its running root mean square.
     explore : parameter-exploration std of W1..W5 ("pgpe"); theta_c's is 0.3 times it [rad].
     sigma_rate : rate of the log-std adaptation of the exploration ("pgpe"; 0: fixed).
+    decay : synaptic decay lambda of W1..W5 ("rpe", "pgpe"): the update adds
+        -rate * lambda * W (rate: alpha for "pgpe", alpha (1 - gamma) for "rpe"), a weak
+        prior for small gains; with alpha = 0 nothing changes.
     """
 
     alpha: float = 5.0
@@ -119,6 +122,7 @@ class LearnerConfig:
     normalise: bool = False
     explore: float = 0.3
     sigma_rate: float = 0.0
+    decay: float = 0.0
 
     def __post_init__(self) -> None:
         a = require_finite("alpha", self.alpha)
@@ -163,6 +167,12 @@ class LearnerConfig:
             raise ParameterError(f"explore must be > 0, got {self.explore}")
         if require_finite("sigma_rate", self.sigma_rate) < 0.0:
             raise ParameterError(f"sigma_rate must be >= 0, got {self.sigma_rate}")
+        if require_finite("decay", self.decay) < 0.0:
+            raise ParameterError(f"decay must be >= 0, got {self.decay}")
+        if self.decay_per_update >= 1.0:
+            raise ParameterError(
+                f"the decay per update (rate x decay = {self.decay_per_update:g}) must be < 1"
+            )
         if self.theta_c_rule == "learned" and self.learner != "pgpe":
             raise ParameterError(
                 "theta_c_rule 'learned' (theta_c perturbed and updated with the gains) "
@@ -173,6 +183,16 @@ class LearnerConfig:
                 "learner 'pgpe' acts with the mean policy of perturbed gains: "
                 "its success test is judged on the mean policy (success_on 'mean')"
             )
+
+    @property
+    def update_rate(self) -> float:
+        """The rate multiplying factor x eligibility: alpha ("pgpe") or alpha (1 - gamma)."""
+        return self.alpha if self.learner == "pgpe" else self.alpha * (1.0 - self.gamma)
+
+    @property
+    def decay_per_update(self) -> float:
+        """Fraction by which W1..W5 shrink per update: update_rate x decay."""
+        return self.update_rate * self.decay
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

@@ -315,9 +315,8 @@ def rpe_step(
     new_W, new_theta_c = W, state.theta_c
     if not success:
         if finite:
-            new_W = three_factor_update(
-                W, trace, factor, config.alpha * (1.0 - config.gamma), config.max_step
-            )
+            new_W = three_factor_update(W, trace, factor, config.update_rate, config.max_step)
+            new_W[:5] -= config.decay_per_update * W[:5]
             new_W[0] = max(new_W[0], config.w1_floor)
         new_theta_c = theta_c_rule(outcome, state.theta_c, config.theta_c_rule)
     if not finite:
@@ -409,7 +408,8 @@ def pgpe_step(
     factor, b, square = _prediction_error(state, reward, config)
     new_p, new_s = p, s
     if not success:
-        new_p = three_factor_update(p, eps, factor, config.alpha, config.max_step)
+        new_p = three_factor_update(p, eps, factor, config.update_rate, config.max_step)
+        new_p[:5] -= config.decay_per_update * p[:5]
         if learn_theta_c:
             new_p = _clamp_params(new_p, config)
         else:

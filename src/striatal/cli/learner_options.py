@@ -20,7 +20,8 @@ LEARNER_DEFAULTS: dict[str, LearnerConfig] = {
         alpha=0.3,
         reward="shaped",
         normalise=True,
-        explore=0.3,
+        explore=1.0,
+        decay=0.1,
         success_on="mean",
         theta_c_rule="learned",
     ),
@@ -42,6 +43,7 @@ _FIELDS = {
     "explore": "explore",
     "sigma_rate": "sigma_rate",
     "normalise": "normalise",
+    "decay": "decay",
 }
 
 
@@ -141,6 +143,13 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         default=None,
         help="adaptation rate of the exploration std (pgpe); " + _default_text("sigma_rate"),
+    )
+    lg.add_argument(
+        "--decay",
+        type=float,
+        default=None,
+        help="synaptic decay: the update adds -rate*decay*W1..5 (rpe, pgpe); "
+        + _default_text("decay"),
     )
 
 

@@ -1,0 +1,166 @@
+"""Ablation of the learner variants from random initial gains (docs/ablation.md).
+
+Every run starts from W(0) uniform in [-1, 1]^6 (W1 floored) and theta_c(0) = 0.6,
+drawn exactly as ``striatal train --init random --seed S`` draws them, with the
+policy noise seeded by S, so any row of the table can be rerun on its own with
+``striatal train --init random --seed S --learner ... --success-on mean``.
+Success is the chapter's success test on the mean policy; "trials" counts the
+learner's 60-s trials (the mean-policy check of each trial is not counted, as in
+``train --success-on mean``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from striatal.cli.learner_options import LEARNER_DEFAULTS
+from striatal.errors import ParameterError
+from striatal.learn import LearnerConfig, random_initial_gains, train
+from striatal.params import CHAPTER_INITIAL_THETA_C, Controller, Plant, Simulation
+from striatal.rollout import Protocol, simulate
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One row of the ablation: a learner's defaults with some options changed."""
+
+    name: str
+    learner: str
+    changes: tuple[tuple[str, Any], ...]
+    what: str
+
+    def config(self, max_trials: int) -> LearnerConfig:
+        return replace(
+            LEARNER_DEFAULTS[self.learner],
+            max_trials=max_trials,
+            success_on="mean",
+            **dict(self.changes),
+        )
+
+    @property
+    def options(self) -> str:
+        """The train/sweep options that select this variant."""
+        parts = [f"--learner {self.learner}"]
+        for k, v in self.changes:
+            flag = "--" + k.replace("_", "-")
+            if isinstance(v, bool):
+                parts.append(flag if v else "--no-" + k.replace("_", "-"))
+            else:
+                parts.append(f"{flag} {v}")
+        return " ".join([*parts, "--success-on mean"])
+
+
+VARIANTS: tuple[Variant, ...] = (
+    Variant("chapter", "chapter", (), "the chapter's rule (alpha 5, sparse reward, b = 0)"),
+    Variant("chapter-control", "chapter", (("alpha", 0.0),), "its alpha = 0 control"),
+    Variant("rpe", "rpe", (), "chapter rule, delta = r - b with tracked b, normalised"),
+    Variant("rpe-shaped", "rpe", (("reward", "shaped"),), "rpe with the shaped reward"),
+    Variant(
+        "rpe-shaped-decay",
+        "rpe",
+        (("reward", "shaped"), ("decay", 6.0)),
+        "rpe, shaped reward, decay 6 (W shrinks 3 % per trial)",
+    ),
+    Variant("pgpe-sparse", "pgpe", (("reward", "sparse"),), "pgpe with the sparse reward"),
+    Variant(
+        "pgpe-first",
+        "pgpe",
+        (("explore", 0.3), ("decay", 0.0)),
+        "first pgpe: exploration 0.3, no decay",
+    ),
+    Variant("pgpe-no-decay", "pgpe", (("decay", 0.0),), "pgpe without decay"),
+    Variant("pgpe-explore-0.3", "pgpe", (("explore", 0.3),), "pgpe, exploration 0.3"),
+    Variant("pgpe", "pgpe", (), "pgpe defaults: exploration 1.0, decay 0.1 (3 % per trial)"),
+    Variant("pgpe-raw-rpe", "pgpe", (("normalise", False),), "pgpe, delta not normalised"),
+    Variant(
+        "pgpe-theta-c-eq21",
+        "pgpe",
+        (("theta_c_rule", "swingup"),),
+        "pgpe, theta_c by eq 21 instead of learned",
+    ),
+    Variant(
+        "pgpe-theta-c-fixed", "pgpe", (("theta_c_rule", "fixed"),), "pgpe, theta_c kept at 0.6"
+    ),
+    Variant("pgpe-adaptive-sigma", "pgpe", (("sigma_rate", 0.1),), "pgpe, adaptive exploration"),
+    Variant("pgpe-control", "pgpe", (("alpha", 0.0),), "its alpha = 0 control"),
+)
+VARIANT_NAMES = tuple(v.name for v in VARIANTS)
+
+
+def variant(name: str) -> Variant:
+    for v in VARIANTS:
+        if v.name == name:
+            return v
+    raise ParameterError(f"no variant {name!r}; choose from {', '.join(VARIANT_NAMES)}")
+
+
+def run_seed(config: LearnerConfig, seed: int) -> dict[str, Any]:
+    """One learning run from the random W(0) of ``seed``; the learned gains re-simulated."""
+    W0 = random_initial_gains(np.random.default_rng([seed, 1]))
+    template = Controller(W0, CHAPTER_INITIAL_THETA_C)
+    result = train(Plant(), template, config, seed)
+    resimulated = False
+    if result.success:
+        learned = template.with_gains(result.W, result.theta_c)
+        resimulated = simulate(Plant(), learned, Simulation(), protocol=Protocol()).outcome.success
+    return {
+        "seed": seed,
+        "success": result.success,
+        "trials": result.trials,
+        "W0": list(W0),
+        "W": list(result.W),
+        "theta_c": result.theta_c,
+        "resimulated": resimulated,
+    }
+
+
+def _run_one(job: tuple[LearnerConfig, int]) -> dict[str, Any]:
+    return run_seed(*job)
+
+
+def run_variant(
+    config: LearnerConfig, seeds: Sequence[int], workers: int = 1
+) -> list[dict[str, Any]]:
+    """run_seed for every seed, in ``workers`` processes (results in seed order)."""
+    jobs = [(config, s) for s in seeds]
+    if workers <= 1:
+        return [_run_one(j) for j in jobs]
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        return list(pool.map(_run_one, jobs, chunksize=4))
+
+
+def summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Success rate, trials to success (median, 90th percentile) and re-simulation check."""
+    ok = [r["trials"] for r in runs if r["success"]]
+    return {
+        "runs": len(runs),
+        "successes": len(ok),
+        "median_trials": float(np.median(ok)) if ok else math.nan,
+        "p90_trials": float(np.percentile(ok, 90)) if ok else math.nan,
+        "resimulated": sum(bool(r["resimulated"]) for r in runs),
+    }
+
+
+def markdown_table(rows: Sequence[tuple[Variant, dict[str, Any]]]) -> str:
+    """The ablation table, one row per variant."""
+
+    def num(v: float) -> str:
+        return "-" if not math.isfinite(v) else f"{v:g}"
+
+    lines = [
+        "| variant | options | what | success | median trials | 90th pct | re-simulated |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for v, s in rows:
+        lines.append(
+            f"| {v.name} | `{v.options}` | {v.what} | {s['successes']}/{s['runs']} | "
+            f"{num(s['median_trials'])} | {num(s['p90_trials'])} | "
+            f"{s['resimulated']}/{s['successes']} |"
+        )
+    return "\n".join(lines) + "\n"

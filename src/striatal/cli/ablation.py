@@ -1,0 +1,57 @@
+"""``striatal ablation``: the learner variants side by side from random initial gains."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from striatal.ablation import VARIANT_NAMES, markdown_table, run_variant, summary, variant
+from striatal.errors import ParameterError
+from striatal.files import atomic_write_text, write_json
+
+COMMAND = "ablation"
+ORDER = 45
+HELP = "compare the learner variants over many seeds from random W(0)"
+DESCRIPTION = (
+    "Run each named learner variant from W(0) uniform in [-1, 1]^6 (as train --init random) "
+    "for seeds 0..N-1 and tabulate success (mean policy) and trials to success "
+    "(docs/ablation.md)."
+)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--seeds", type=int, default=100, help="seeds 0..N-1")
+    parser.add_argument("--max-trials", type=int, default=300)
+    parser.add_argument(
+        "--variants",
+        default=",".join(VARIANT_NAMES),
+        help="comma-separated names from: " + ", ".join(VARIANT_NAMES),
+    )
+    parser.add_argument("--workers", type=int, default=2, help="worker processes")
+    parser.add_argument(
+        "--out", type=Path, default=None, help="write ablation.json and ablation.md here"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.seeds < 1:
+        raise ParameterError(f"--seeds must be >= 1, got {args.seeds}")
+    if args.workers < 1:
+        raise ParameterError(f"--workers must be >= 1, got {args.workers}")
+    chosen = [variant(n.strip()) for n in args.variants.split(",") if n.strip()]
+    configs = [v.config(args.max_trials) for v in chosen]
+    rows = []
+    runs = {}
+    for v, config in zip(chosen, configs, strict=True):
+        result = run_variant(config, range(args.seeds), args.workers)
+        runs[v.name] = {"options": v.options, "config": config.to_dict(), "runs": result}
+        rows.append((v, summary(result)))
+        print(f"{v.name}: {rows[-1][1]}", file=sys.stderr, flush=True)
+    table = markdown_table(rows)
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        write_json(args.out / "ablation.json", runs)
+        atomic_write_text(args.out / "ablation.md", table)
+    sys.stdout.write(table)
+    return 0

@@ -1,0 +1,53 @@
+"""``striatal robustness``: learned controllers on a plant they did not learn on."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from striatal.errors import DataFileError, ParameterError
+from striatal.files import atomic_write_text, dumps_json, read_json
+from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller
+from striatal.robustness import CONDITIONS, controllers_from, robustness_table
+
+COMMAND = "robustness"
+ORDER = 50
+HELP = "success of learned gains when pole mass/length differ or sensors are noisy"
+DESCRIPTION = (
+    "Run the mean policy of learned gains (train result.json files, or the successful runs "
+    "of an ablation.json) on plants with pole mass and length +-20 %% and with sensor noise, "
+    "the controller believing the nominal plant. Each cell: success test %% / balanced at "
+    "T_f (+10 reward) %%. The chapter's final gains are the hand-tuned reference."
+)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("files", type=Path, nargs="+", help="result.json or ablation.json")
+    parser.add_argument(
+        "--variant", default=None, help="variant of an ablation.json (default: all)"
+    )
+    parser.add_argument("--repeats", type=int, default=10, help="sensor-noise runs per controller")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
+    parser.add_argument("--json", action="store_true", help="print the rows as JSON")
+    parser.add_argument("--out", type=Path, default=None, help="write the markdown table here")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.repeats < 1:
+        raise ParameterError(f"--repeats must be >= 1, got {args.repeats}")
+    learned: list[Controller] = []
+    for f in args.files:
+        try:
+            learned += controllers_from(read_json(f, what="result"), variant=args.variant)
+        except (KeyError, TypeError) as exc:
+            raise DataFileError(f"{f} is not a result.json or ablation.json: {exc!r}") from None
+    if not learned:
+        raise ParameterError("the files hold no successful run to evaluate")
+    reference = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
+    groups = [("learned", learned), ("chapter's final gains", [reference])]
+    table, rows = robustness_table(groups, CONDITIONS, repeats=args.repeats, seed=args.seed)
+    if args.out is not None:
+        atomic_write_text(args.out, table)
+    sys.stdout.write(dumps_json(rows) if args.json else table)
+    return 0

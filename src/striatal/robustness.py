@@ -1,0 +1,167 @@
+"""Robustness of learned controllers to a plant that differs from the one they learned on.
+
+The controller keeps believing in the nominal plant (its partial feedback
+linearisation, eq 12, uses the nominal M, m, l), while the true plant has the pole
+mass and length scaled by +-20 %, and/or the x and theta the controller sees carry
+Gaussian sensor noise. Every run acts with the mean policy (no policy noise) from
+the chapter's start (theta = 3.12 at rest) for 60 s under the protocol of eqs 24-25.
+Two measures per run: the chapter's success test (at rest within 0.05 m / 0.05 rad
+/ 0.005 per s at T_f) and "balanced": the +10 reward of eq 25 (|x| < 0.1 m and
+|theta| < pi/9 at T_f, and the t = 30 s check passed).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from striatal import kernel
+from striatal.errors import ParameterError
+from striatal.params import Controller, Plant, Simulation
+from striatal.rollout import Protocol, SensorNoise, TrialOutcome, _call_kernel
+
+
+@dataclass(frozen=True)
+class Condition:
+    """A true plant (pole mass and length factors) and sensor noise (stds in m and rad)."""
+
+    name: str
+    pole_mass: float = 1.0
+    length: float = 1.0
+    x_std: float = 0.0
+    theta_std: float = 0.0
+
+    @property
+    def sensor(self) -> SensorNoise:
+        return SensorNoise(x_std=self.x_std, theta_std=self.theta_std)
+
+
+CONDITIONS: tuple[Condition, ...] = (
+    Condition("nominal"),
+    Condition("pole mass -20%", pole_mass=0.8),
+    Condition("pole mass +20%", pole_mass=1.2),
+    Condition("length -20%", length=0.8),
+    Condition("length +20%", length=1.2),
+    Condition("mass and length -20%", pole_mass=0.8, length=0.8),
+    Condition("mass and length +20%", pole_mass=1.2, length=1.2),
+    Condition("sensor noise 0.001", x_std=0.001, theta_std=0.001),
+    Condition("sensor noise 0.01", x_std=0.01, theta_std=0.01),
+    Condition("sensor noise 0.05", x_std=0.05, theta_std=0.05),
+)
+
+
+def mean_policy_trial(
+    plant: Plant,
+    model: Plant,
+    controller: Controller,
+    sim: Simulation,
+    protocol: Protocol,
+    sensor: SensorNoise,
+    rng: np.random.Generator | None,
+) -> TrialOutcome:
+    """One trial of the mean policy on the true ``plant``, the controller believing ``model``.
+
+    Sensor noise (if active) is drawn from ``rng``; the policy itself draws nothing.
+    """
+    if sensor.active:
+        if rng is None:
+            raise ParameterError("sensor noise needs a random generator")
+        sensor_noise = rng.standard_normal((sim.n_steps, 2))
+    else:
+        sensor_noise = np.empty((0, 2))
+    out = _call_kernel(
+        plant,
+        controller,
+        sim,
+        protocol=protocol,
+        noise=np.empty(0),
+        sensor_noise=sensor_noise,
+        sensor=sensor,
+        model=model,
+        action_every=1,
+        gamma=0.0,
+        chapter_eligibility=False,
+        trace=np.zeros(6),
+        gains=None,
+        traj=np.empty((0, kernel.N_TRAJ)),
+    )
+    return TrialOutcome.from_row(out, sim)
+
+
+def evaluate(
+    controllers: Sequence[Controller],
+    condition: Condition,
+    *,
+    nominal: Plant | None = None,
+    repeats: int = 10,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """Fractions of runs passing the success test and balanced at T_f, over controllers.
+
+    Each controller runs once without sensor noise, or ``repeats`` times with
+    independent sensor noise (streams spawned from ``seed``).
+    """
+    if not controllers:
+        raise ParameterError("no controllers to evaluate")
+    nominal = nominal or Plant()
+    plant = nominal.scaled(pole_mass=condition.pole_mass, length=condition.length)
+    sim, protocol = Simulation(), Protocol()
+    n = repeats if condition.sensor.active else 1
+    streams = np.random.SeedSequence(seed).spawn(len(controllers))
+    success = balanced = 0
+    for controller, ss in zip(controllers, streams, strict=True):
+        rng = np.random.default_rng(ss)
+        for _ in range(n):
+            o = mean_policy_trial(plant, nominal, controller, sim, protocol, condition.sensor, rng)
+            success += o.success
+            balanced += o.reward == protocol.reward_success
+    total = n * len(controllers)
+    return {
+        "condition": condition.name,
+        "runs": total,
+        "success": success / total,
+        "balanced": balanced / total,
+    }
+
+
+def robustness_table(
+    groups: Sequence[tuple[str, Sequence[Controller]]],
+    conditions: Sequence[Condition] = CONDITIONS,
+    *,
+    repeats: int = 10,
+    seed: int = 0,
+) -> tuple[str, list[dict[str, Any]]]:
+    """Markdown table (conditions x groups: success % / balanced %) and its rows."""
+    rows: list[dict[str, Any]] = []
+    header = "| condition | " + " | ".join(f"{name} (n={len(c)})" for name, c in groups) + " |"
+    lines = [header, "|---|" + "---|" * len(groups)]
+    for cond in conditions:
+        cells = []
+        for name, ctrls in groups:
+            r = evaluate(ctrls, cond, repeats=repeats, seed=seed)
+            r["group"] = name
+            rows.append(r)
+            cells.append(f"{100 * r['success']:.0f}% / {100 * r['balanced']:.0f}%")
+        lines.append(f"| {cond.name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n", rows
+
+
+def controllers_from(data: Any, *, variant: str | None = None) -> list[Controller]:
+    """Controllers from a ``train`` result.json or the successful runs of an ablation.json."""
+    if isinstance(data, dict) and "W" in data and "theta_c" in data:
+        readings = data.get("settings", {}).get("controller", {})
+        return [Controller(gains=data["W"], theta_c=data["theta_c"], **readings)]
+    if isinstance(data, dict) and all(isinstance(v, dict) and "runs" in v for v in data.values()):
+        names = [variant] if variant else list(data)
+        out = []
+        for name in names:
+            if name not in data:
+                raise ParameterError(f"no variant {name!r} in the ablation file")
+            for r in data[name]["runs"]:
+                if r.get("success"):
+                    out.append(Controller(gains=r["W"], theta_c=r["theta_c"]))
+        return out
+    raise ParameterError("expected a train result.json or an ablation.json")

@@ -1,0 +1,57 @@
+"""The ablation runner: its options reproduce its configs, its runs reproduce ``train``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import shlex
+import subprocess
+import sys
+
+import pytest
+
+from striatal.ablation import VARIANTS, markdown_table, run_seed, summary, variant
+from striatal.cli.learner_options import add_learner_arguments, learner_config_from
+from striatal.errors import ParameterError
+
+
+@pytest.mark.parametrize("v", VARIANTS, ids=[v.name for v in VARIANTS])
+def test_printed_options_select_the_same_config(v: object) -> None:
+    parser = argparse.ArgumentParser()
+    add_learner_arguments(parser)
+    args = parser.parse_args([*shlex.split(v.options), "--max-trials", "300"])  # type: ignore[attr-defined]
+    assert learner_config_from(args) == v.config(300)  # type: ignore[attr-defined]
+
+
+def test_run_seed_equals_train_from_the_command_line() -> None:
+    v = variant("pgpe")
+    row = run_seed(v.config(40), seed=2)
+    cmd = [sys.executable, "-m", "striatal", "train", "--init", "random", "--seed", "2"]
+    cmd += [*shlex.split(v.options), "--max-trials", "40", "--json"]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert (out["success"], out["trials"], out["W"], out["theta_c"]) == (
+        row["success"],
+        row["trials"],
+        row["W"],
+        row["theta_c"],
+    )
+    assert row["success"] and row["resimulated"]
+
+
+def test_summary_and_table() -> None:
+    runs = [
+        {"success": True, "trials": 10, "resimulated": True},
+        {"success": True, "trials": 30, "resimulated": True},
+        {"success": False, "trials": 300, "resimulated": False},
+    ]
+    s = summary(runs)
+    assert (s["successes"], s["median_trials"], s["resimulated"]) == (2, 20.0, 2)
+    none = summary(runs[2:])
+    assert none["successes"] == 0 and math.isnan(none["median_trials"])
+    table = markdown_table([(variant("pgpe"), s), (variant("chapter"), none)])
+    assert "| 2/3 | 20 |" in table and "| 0/1 | - | - |" in table
+    with pytest.raises(ParameterError):
+        variant("nope")
