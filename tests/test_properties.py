@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from striatal.cli import main
@@ -265,6 +265,110 @@ def test_invalid_learner_config_is_a_parameter_error(
     bad = {"alpha": alpha, "gamma": gamma, "max_trials": max_trials, "action_every": action_every}
     with pytest.raises(ParameterError):
         LearnerConfig(**{which: bad[which]})
+
+
+# ---------------------------------------------------------------- the command line
+
+odd_float = st.one_of(
+    st.sampled_from([math.nan, math.inf, -math.inf, 0.0, -1.0, 1e308, -1e308, 1e-308]),
+    st.floats(-1e3, 1e3),
+)
+
+
+def option(name: str, values: st.SearchStrategy[float]) -> st.SearchStrategy[list[str]]:
+    return st.one_of(st.just([]), values.map(lambda v: [name, repr(v)]))
+
+
+def gains_option(name: str) -> st.SearchStrategy[list[str]]:
+    six = st.tuples(pos(1e-3, 100), *[st.floats(-100, 100)] * 5)
+    return st.one_of(st.just([]), six.map(lambda g: [name, *map(repr, g)]))
+
+
+def one_odd(names: list[str]) -> st.SearchStrategy[list[str]]:
+    """Nothing, or one of ``names`` given an odd value (argparse: the last one wins)."""
+    odd = st.tuples(st.sampled_from(names), odd_float).map(lambda t: [t[0], repr(t[1])])
+    return st.one_of(st.just([]), odd)
+
+
+SIMULATE_VALID = {
+    "--cart-mass": pos(0.01, 100),
+    "--pole-mass": pos(0.01, 10),
+    "--length": pos(0.1, 10),
+    "--gravity": pos(0.1, 100),
+    "--dt": pos(1e-3, 0.1),
+    "--duration": pos(0.1, 5),
+    "--theta-c": pos(0.01, 3.1),
+    "--theta0": st.floats(-10, 10),
+    "--x0": st.floats(-10, 10),
+    "--inhibition": pos(0.1, 1e3),
+}
+simulate_argv = st.tuples(
+    *[option(name, values) for name, values in SIMULATE_VALID.items()],
+    st.one_of(st.just([]), gains_option("--gains").map(lambda g: [*g, "--theta-c", "0.5"])),
+    st.sampled_from([[], ["--switch", "soft"], ["--balance-sign", "chapter"]]),
+    one_odd([*SIMULATE_VALID, "--gains"]),
+)
+
+
+@examples(150)
+@given(parts=simulate_argv)
+def test_simulate_with_any_numbers_runs_or_is_exit_2(parts: tuple[list[str], ...]) -> None:
+    argv = ["simulate", "--json", *[a for part in parts for a in part]]
+    if "--duration" not in argv:
+        argv += ["--duration", "2"]
+    rc, out, err = cli(*argv)
+    event(f"exit {rc}")
+    assert rc in (0, 2), err
+    if rc == 2:
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("striatal simulate: error:"), err
+        assert out == ""
+    else:
+        summary = json.loads(out, parse_constant=pytest.fail)  # no NaN/Infinity tokens
+        assert summary["fault"] or all(math.isfinite(v) for v in summary["final_state"])
+
+
+TRAIN_VALID = {
+    "--alpha": pos(0, 1e3),
+    "--gamma": pos(0, 0.999),
+    "--baseline": st.floats(-10, 10),
+    "--max-step": pos(1e-3, 10),
+    "--rpe-rate": pos(0.01, 1),
+    "--explore": pos(0.01, 3),
+    "--sigma-rate": pos(0, 1),
+    "--theta-c0": pos(0.01, 3.1),
+    "--dt": pos(5e-3, 0.1),
+    "--duration": pos(0.1, 3),
+}
+train_argv = st.tuples(
+    st.sampled_from([[], ["--learner", "rpe"], ["--learner", "pgpe"]]),
+    *[option(name, values) for name, values in TRAIN_VALID.items()],
+    gains_option("--init-gains"),
+    st.one_of(st.just([]), st.integers(-2, 3).map(lambda n: ["--max-trials", str(n)])),
+    st.sampled_from([[], ["--theta-c-rule", "learned"], ["--success-on", "mean"]]),
+    one_odd([*TRAIN_VALID, "--init-gains"]),
+)
+
+
+@examples(100)
+@given(parts=train_argv)
+def test_train_with_any_numbers_runs_or_is_exit_2(parts: tuple[list[str], ...]) -> None:
+    argv = ["train", "--json", "--no-progress", *[a for part in parts for a in part]]
+    if "--max-trials" not in argv:
+        argv += ["--max-trials", "2"]
+    if "--duration" not in argv:
+        argv += ["--duration", "2"]
+    rc, out, err = cli(*argv)
+    event(f"exit {rc}")
+    assert rc in (0, 2), err
+    if rc == 2:
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("striatal train: error:"), err
+        assert out == ""
+    else:
+        result = json.loads(out, parse_constant=pytest.fail)
+        assert all(math.isfinite(w) for w in result["W"])
+        assert 0 < result["theta_c"] < math.pi
 
 
 # ---------------------------------------------------------------- files
