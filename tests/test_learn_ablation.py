@@ -9,14 +9,18 @@ import shlex
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
+from striatal import search
 from striatal.ablation import VARIANTS, markdown_table, run_seed, summary, variant
 from striatal.cli.learner_options import add_learner_arguments, learner_config_from
 from striatal.errors import ParameterError
 
+LEARNER_VARIANTS = [v for v in VARIANTS if v.kind == "learner"]
 
-@pytest.mark.parametrize("v", VARIANTS, ids=[v.name for v in VARIANTS])
+
+@pytest.mark.parametrize("v", LEARNER_VARIANTS, ids=[v.name for v in LEARNER_VARIANTS])
 def test_printed_options_select_the_same_config(v: object) -> None:
     parser = argparse.ArgumentParser()
     add_learner_arguments(parser)
@@ -39,6 +43,25 @@ def test_run_seed_equals_train_from_the_command_line() -> None:
         row["theta_c"],
     )
     assert row["success"] and row["resimulated"]
+
+
+def test_search_baselines_are_seeded_and_count_trials() -> None:
+    W0 = (0.5, -0.2, -0.5, 0.5, 0.5, 0.0)
+    a = search.random_search_seed(0, W0, 5)
+    assert a == search.random_search_seed(0, W0, 5)
+    assert a["trials"] <= 5
+    p = np.array([*a["W"][:5], a["theta_c"]])
+    assert search.evaluate_params(p, W0[5])[1] == a["success"]
+    b = search.cmaes_seed(0, W0, 12)
+    assert b == search.cmaes_seed(0, W0, 12)
+    assert b["trials"] <= 12
+
+
+def test_cmaes_finds_the_gains_from_the_chapter_start() -> None:
+    """From the chapter's W(0) (which passes on the mean policy) CMA-ES succeeds at once."""
+    W0 = (0.6813, -0.3795, -0.8318, 0.5028, 0.7095, 0.4289)
+    row = search.cmaes_seed(0, W0, 10)
+    assert row["success"] and row["trials"] == 0
 
 
 def test_summary_and_table() -> None:

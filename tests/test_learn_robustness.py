@@ -15,7 +15,7 @@ from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, 
 from striatal.robustness import (
     CONDITIONS,
     Condition,
-    controllers_from,
+    controller_groups,
     evaluate,
     mean_policy_trial,
 )
@@ -52,20 +52,22 @@ def test_sensor_noise_is_seeded_and_matters() -> None:
     assert r["balanced"] == 1.0 and r["success"] < 1.0
 
 
-def test_controllers_from_result_and_ablation_files() -> None:
+def test_controller_groups_from_result_and_ablation_files() -> None:
     result = {"W": list(CHAPTER_FINAL_W), "theta_c": 0.9, "settings": {"controller": {}}}
-    assert controllers_from(result)[0].gains == CHAPTER_FINAL_W
+    ((name, ctrls),) = controller_groups(result)
+    assert name == "learned" and ctrls[0].gains == CHAPTER_FINAL_W
     runs = [
         {"success": True, "W": list(CHAPTER_FINAL_W), "theta_c": 0.9},
         {"success": False, "W": [1, 0, 0, 0, 0, 0], "theta_c": 0.6},
     ]
-    ablation = {"pgpe": {"runs": runs}, "chapter": {"runs": runs[:1]}}
-    assert len(controllers_from(ablation)) == 2
-    assert len(controllers_from(ablation, variant="pgpe")) == 1
+    ablation = {"pgpe": {"runs": runs}, "chapter": {"runs": runs[:1]}, "x": {"runs": runs[1:]}}
+    groups = controller_groups(ablation)
+    assert [(n, len(c)) for n, c in groups] == [("pgpe", 1), ("chapter", 1)]
+    assert [n for n, _ in controller_groups(ablation, variants=["chapter"])] == ["chapter"]
     with pytest.raises(ParameterError):
-        controllers_from(ablation, variant="nope")
+        controller_groups(ablation, variants=["nope"])
     with pytest.raises(ParameterError):
-        controllers_from([1, 2])
+        controller_groups([1, 2])
 
 
 def test_cli_table_and_clear_error(tmp_path: Path) -> None:

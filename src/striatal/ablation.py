@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from striatal import search
 from striatal.cli.learner_options import LEARNER_DEFAULTS
 from striatal.errors import ParameterError
 from striatal.learn import LearnerConfig, random_initial_gains, train
@@ -34,6 +35,7 @@ class Variant:
     learner: str
     changes: tuple[tuple[str, Any], ...]
     what: str
+    kind: str = "learner"
 
     def config(self, max_trials: int) -> LearnerConfig:
         return replace(
@@ -46,6 +48,8 @@ class Variant:
     @property
     def options(self) -> str:
         """The train/sweep options that select this variant."""
+        if self.kind != "learner":
+            return f"(striatal.search.{self.kind.replace('-', '_')}_seed)"
         parts = [f"--learner {self.learner}"]
         for k, v in self.changes:
             flag = "--" + k.replace("_", "-")
@@ -89,6 +93,20 @@ VARIANTS: tuple[Variant, ...] = (
     ),
     Variant("pgpe-adaptive-sigma", "pgpe", (("sigma_rate", 0.1),), "pgpe, adaptive exploration"),
     Variant("pgpe-control", "pgpe", (("alpha", 0.0),), "its alpha = 0 control"),
+    Variant(
+        "random-search",
+        "pgpe",
+        (),
+        "uniform draws of W1..W5 in [0, 3] x [-3, 3]^4, theta_c in [0.2, 1.4]",
+        kind="random-search",
+    ),
+    Variant(
+        "cma-es",
+        "pgpe",
+        (),
+        "CMA-ES from W(0), sigma0 1, on the shaped reward",
+        kind="cmaes",
+    ),
 )
 VARIANT_NAMES = tuple(v.name for v in VARIANTS)
 
@@ -100,9 +118,17 @@ def variant(name: str) -> Variant:
     raise ParameterError(f"no variant {name!r}; choose from {', '.join(VARIANT_NAMES)}")
 
 
-def run_seed(config: LearnerConfig, seed: int) -> dict[str, Any]:
-    """One learning run from the random W(0) of ``seed``; the learned gains re-simulated."""
+def run_seed(config: LearnerConfig, seed: int, kind: str = "learner") -> dict[str, Any]:
+    """One learning run from the random W(0) of ``seed``; the learned gains re-simulated.
+
+    ``kind`` "random-search" or "cmaes" runs that search baseline instead
+    (:mod:`striatal.search`) with ``config.max_trials`` trials.
+    """
     W0 = random_initial_gains(np.random.default_rng([seed, 1]))
+    if kind == "random-search":
+        return search.random_search_seed(seed, W0, config.max_trials)
+    if kind == "cmaes":
+        return search.cmaes_seed(seed, W0, config.max_trials)
     template = Controller(W0, CHAPTER_INITIAL_THETA_C)
     result = train(Plant(), template, config, seed)
     resimulated = False
@@ -120,15 +146,15 @@ def run_seed(config: LearnerConfig, seed: int) -> dict[str, Any]:
     }
 
 
-def _run_one(job: tuple[LearnerConfig, int]) -> dict[str, Any]:
+def _run_one(job: tuple[LearnerConfig, int, str]) -> dict[str, Any]:
     return run_seed(*job)
 
 
 def run_variant(
-    config: LearnerConfig, seeds: Sequence[int], workers: int = 1
+    config: LearnerConfig, seeds: Sequence[int], workers: int = 1, kind: str = "learner"
 ) -> list[dict[str, Any]]:
     """run_seed for every seed, in ``workers`` processes (results in seed order)."""
-    jobs = [(config, s) for s in seeds]
+    jobs = [(config, s, kind) for s in seeds]
     if workers <= 1:
         return [_run_one(j) for j in jobs]
     with ProcessPoolExecutor(max_workers=workers) as pool:

@@ -149,19 +149,28 @@ def robustness_table(
     return "\n".join(lines) + "\n", rows
 
 
-def controllers_from(data: Any, *, variant: str | None = None) -> list[Controller]:
-    """Controllers from a ``train`` result.json or the successful runs of an ablation.json."""
+def controller_groups(
+    data: Any, *, variants: Sequence[str] = ()
+) -> list[tuple[str, list[Controller]]]:
+    """Named groups of controllers from a ``train`` result.json ("learned") or an ablation.json.
+
+    For an ablation.json: one group per variant (``variants``, or every variant)
+    holding the gains of its successful runs; empty groups are left out.
+    """
     if isinstance(data, dict) and "W" in data and "theta_c" in data:
         readings = data.get("settings", {}).get("controller", {})
-        return [Controller(gains=data["W"], theta_c=data["theta_c"], **readings)]
+        return [("learned", [Controller(gains=data["W"], theta_c=data["theta_c"], **readings)])]
     if isinstance(data, dict) and all(isinstance(v, dict) and "runs" in v for v in data.values()):
-        names = [variant] if variant else list(data)
-        out = []
-        for name in names:
+        groups = []
+        for name in variants or list(data):
             if name not in data:
                 raise ParameterError(f"no variant {name!r} in the ablation file")
-            for r in data[name]["runs"]:
-                if r.get("success"):
-                    out.append(Controller(gains=r["W"], theta_c=r["theta_c"]))
-        return out
+            ctrls = [
+                Controller(gains=r["W"], theta_c=r["theta_c"])
+                for r in data[name]["runs"]
+                if r.get("success")
+            ]
+            if ctrls:
+                groups.append((name, ctrls))
+        return groups
     raise ParameterError("expected a train result.json or an ablation.json")

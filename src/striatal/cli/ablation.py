@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     rows = []
     runs = {}
     for v, config in zip(chosen, configs, strict=True):
-        result = run_variant(config, range(args.seeds), args.workers)
+        result = run_variant(config, range(args.seeds), args.workers, v.kind)
         runs[v.name] = {"options": v.options, "config": config.to_dict(), "runs": result}
         rows.append((v, summary(result)))
         print(f"{v.name}: {rows[-1][1]}", file=sys.stderr, flush=True)

@@ -9,7 +9,7 @@ from pathlib import Path
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import atomic_write_text, dumps_json, read_json
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller
-from striatal.robustness import CONDITIONS, controllers_from, robustness_table
+from striatal.robustness import CONDITIONS, controller_groups, robustness_table
 
 COMMAND = "robustness"
 ORDER = 50
@@ -36,16 +36,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.repeats < 1:
         raise ParameterError(f"--repeats must be >= 1, got {args.repeats}")
-    learned: list[Controller] = []
+    merged: dict[str, list[Controller]] = {}
     for f in args.files:
         try:
-            learned += controllers_from(read_json(f, what="result"), variant=args.variant)
+            found = controller_groups(read_json(f, what="result"), variants=args.variant)
         except (KeyError, TypeError) as exc:
             raise DataFileError(f"{f} is not a result.json or ablation.json: {exc!r}") from None
-    if not learned:
+        for name, ctrls in found:
+            merged.setdefault(name, []).extend(ctrls)
+    if not merged:
         raise ParameterError("the files hold no successful run to evaluate")
     reference = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
-    groups = [("learned", learned), ("chapter's final gains", [reference])]
+    groups = [*merged.items(), ("chapter's final gains", [reference])]
     table, rows = robustness_table(groups, CONDITIONS, repeats=args.repeats, seed=args.seed)
     if args.out is not None:
         atomic_write_text(args.out, table)

@@ -37,12 +37,14 @@ from striatal.rollout import Protocol, simulate
 
 COMMAND = "train"
 ORDER = 20
-HELP = "run the chapter's switching REINFORCE learner"
+HELP = "run the chapter's switching REINFORCE learner (or a variant: --learner)"
 DESCRIPTION = (
     "Learn the six gains and theta_c with the chapter's REINFORCE rule (eqs 1-5, 21-25): "
     "60-s trials from theta = 3.12 at rest, a Gaussian policy, eligibility traces and the "
     "sparse reward, until the chapter's success test holds or --max-trials. "
-    "--init random draws W(0) uniformly in [-1, 1]^6 (W1 floored at 0.001) from the seed."
+    "--init random draws W(0) uniformly in [-1, 1]^6 (W1 floored at 0.001) from the seed. "
+    "--learner rpe / pgpe select the variants beyond the chapter (docs/ablation.md); "
+    "unset learning options take the chosen learner's defaults."
 )
 CHECKPOINT = "checkpoint.json"
 CHECKPOINT_VERSION = 1
