@@ -139,7 +139,7 @@ def usage_error(
         if prepare is not None:
             prepare(out)
         before = snapshot(out)
-        args = tuple(str(out) if a == "OUT" else a for a in argv)
+        args = tuple(a.replace("OUT", str(out)) if a.startswith("OUT") else a for a in argv)
         r = cli_process(*args) if process else cli_in_process(*args)
         lines = r.err.strip().splitlines()
         untouched = snapshot(out) == before and (prepare is not None or not out.exists())
@@ -177,6 +177,11 @@ def _read_text_as_json(tmp: Path, text: str) -> Any:
     path = tmp / "bad.json"
     path.write_text(text)
     return read_json(path)
+
+
+def _a_file(out: Path) -> None:
+    out.mkdir(parents=True)
+    (out / "file").write_text("not a folder\n")
 
 
 def _checkpointed_run(out: Path) -> None:
@@ -589,6 +594,12 @@ SCENARIOS: tuple[Scenario, ...] = (
     S("train-resume-no-out", "bad input", "`striatal train --resume` (no --out)",
       "exit 2, one line", usage_error(("train", "--resume"))),
     # ---- files that are missing, truncated, corrupted or not ours
+    S("sim-out-file", "bad file", "`striatal simulate --out FILE` where FILE is a file",
+      "exit 2, one line, FILE untouched",
+      usage_error(("simulate", "--out", "OUT/file"), prepare=_a_file)),
+    S("train-out-file", "bad file", "`striatal train --out FILE` where FILE is a file",
+      "exit 2, one line, FILE untouched",
+      usage_error(("train", "--max-trials", "2", "--out", "OUT/file"), prepare=_a_file)),
     S("resume-missing", "bad file", "`striatal train --resume --out DIR`, DIR has no checkpoint",
       "exit 2, one line", usage_error(("train", "--resume", "--out", "OUT"))),
     S("resume-truncated", "bad file", "`striatal train --resume` on a checkpoint cut in half",

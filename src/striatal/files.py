@@ -19,11 +19,35 @@ from typing import Any
 from striatal.errors import DataFileError
 
 
+def check_out_dir(path: str | os.PathLike[str]) -> Path:
+    """``path`` as a Path if it is, or can be made, a writable folder; creates nothing.
+
+    Raises DataFileError otherwise, so a command can refuse before it computes.
+    """
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise DataFileError(f"output folder {p} exists and is not a folder")
+    probe = p
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir():
+        raise DataFileError(f"cannot create output folder {p}: {probe} is not a folder")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise DataFileError(f"cannot create or write output folder {p}: {probe} is not writable")
+    return p
+
+
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Write ``text`` to ``path`` atomically (temp file + fsync + rename)."""
+    """Write ``text`` to ``path`` atomically (temp file + fsync + rename).
+
+    A folder that cannot be made or written raises DataFileError.
+    """
     target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    except OSError as exc:
+        raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
             fh.write(text)

@@ -81,3 +81,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
+    except OSError as exc:
+        # an output folder that is a file, a read-only disk, a full disk: the user's to fix
+        where = f"{exc.filename}: " if exc.filename else ""
+        sys.stderr.write(f"striatal {args.command}: error: {where}{exc.strerror or exc}\n")
+        return EXIT_USAGE

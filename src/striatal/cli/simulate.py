@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from striatal.cli import options
-from striatal.files import dumps_json, write_csv, write_json
+from striatal.files import check_out_dir, dumps_json, write_csv, write_json
 from striatal.kernel import TRAJ_COLUMNS
 from striatal.rollout import Trajectory, simulate
 
@@ -70,6 +70,8 @@ def run(args: argparse.Namespace) -> int:
     gains, theta_c = options.gains_from(args)
     controller = options.controller_from(args, gains, theta_c)
     sim = options.simulation_from(args)
+    if args.out is not None:
+        check_out_dir(args.out)
     traj = simulate(plant, controller, sim)
     result = summary(traj, settings_of(args, traj))
     if args.out is not None:
