@@ -184,6 +184,22 @@ def _a_file(out: Path) -> None:
     (out / "file").write_text("not a folder\n")
 
 
+def _result_file(out: Path) -> None:
+    assert cli_in_process("train", "--max-trials", "2", "--out", str(out)).rc == 0
+    for name in ("checkpoint.json", "history.csv"):
+        (out / name).unlink()
+
+
+def _random_result(out: Path) -> None:
+    out.mkdir(parents=True)
+    _random_bytes(out / "result.json")
+
+
+def _null_settings(out: Path) -> None:
+    _result_file(out)
+    _edit_json(lambda d: d.__setitem__("settings", None))(out / "result.json")
+
+
 def _checkpointed_run(out: Path) -> None:
     assert cli_in_process("train", "--max-trials", "5", "--out", str(out)).rc == 0
 
@@ -533,6 +549,14 @@ SETTINGS_TYPE_GAP = (
     "cli/train.py: _load_checkpoint calls dict(data['settings']) catching KeyError/TypeError "
     "only; dict('x') raises ValueError (fix: catch ValueError too, or check isinstance dict)"
 )
+ROBUSTNESS_SETTINGS_GAP = (
+    "robustness.py: controller_groups calls data.get('settings', {}).get(...) on whatever "
+    "settings holds (fix: raise ParameterError unless it is a dict)"
+)
+ROBUSTNESS_SEED_GAP = (
+    "cli/robustness.py: --seed is not validated; numpy raises ValueError (fix: raise "
+    "ParameterError unless args.seed >= 0)"
+)
 INT_GAP = (
     "learn.py: LearnerConfig calls int() on max_trials/action_every unguarded (fix: "
     "catch TypeError/ValueError and raise ParameterError)"
@@ -639,6 +663,18 @@ SCENARIOS: tuple[Scenario, ...] = (
       "exit 2, one line, files untouched",
       usage_error(("train", "--resume", "--out", "OUT"),
                   prepare=_with_checkpoint(_edit_json(_rng_garbage))), RNG_GAP),
+    S("robustness-missing", "bad file", "`striatal robustness missing.json`", "exit 2, one line",
+      usage_error(("robustness", "OUT/missing.json"))),
+    S("robustness-random", "bad file", "`striatal robustness FILE`, FILE 600 random bytes",
+      "exit 2, one line", usage_error(("robustness", "OUT/result.json"), prepare=_random_result)),
+    S("robustness-settings", "bad file", "`striatal robustness result.json` whose settings "
+      "is null", "exit 2, one line",
+      usage_error(("robustness", "OUT/result.json", "--repeats", "1"), prepare=_null_settings),
+      ROBUSTNESS_SETTINGS_GAP),
+    S("robustness-seed", "bad input", "`striatal robustness result.json --seed -1`",
+      "exit 2, one line",
+      usage_error(("robustness", "OUT/result.json", "--seed", "-1", "--repeats", "1"),
+                  prepare=_result_file), ROBUSTNESS_SEED_GAP),
     # ---- the library's typed errors
     S("lib-plant", "bad input", "`Plant(pole_mass=-1.0)`", "ParameterError",
       library_error(lambda _: Plant(pole_mass=-1.0), ParameterError)),
