@@ -203,3 +203,21 @@ def test_train_pgpe_from_random_gains_learns_gains_that_simulate_confirms() -> N
     assert result["learner"] == "pgpe"
     learned = START.with_gains(result["W"], result["theta_c"])
     assert simulate(Plant(), learned, Simulation(), protocol=Protocol()).outcome.success
+    again = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "striatal",
+            "simulate",
+            "--json",
+            "--theta-c",
+            repr(result["theta_c"]),
+            "--gains",
+            *(repr(w) for w in result["W"]),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert again.returncode == 0, again.stderr
+    assert json.loads(again.stdout)["success"] is True

@@ -64,6 +64,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("chapter", "chapter", (), "the chapter's rule (alpha 5, sparse reward, b = 0)"),
     Variant("chapter-control", "chapter", (("alpha", 0.0),), "its alpha = 0 control"),
     Variant("rpe", "rpe", (), "chapter rule, delta = r - b with tracked b, normalised"),
+    Variant("rpe-raw", "rpe", (("normalise", False),), "rpe, delta not normalised"),
     Variant("rpe-shaped", "rpe", (("reward", "shaped"),), "rpe with the shaped reward"),
     Variant(
         "rpe-shaped-decay",

@@ -84,24 +84,28 @@ def cmaes_seed(
     low, high = RANDOM_BOX
     opts = {
         "seed": seed + 1,
-        "bounds": [[W1_FLOOR, *[-np.inf] * 4, low[5]], [*[np.inf] * 5, high[5]]],
+        "bounds": [[W1_FLOOR, *[None] * 4, low[5]], [*[None] * 5, high[5]]],
         "verbose": -9,
     }
     es = cma.CMAEvolutionStrategy([*W0[:5], 0.6], sigma0, opts)
+    lower = np.array([W1_FLOOR, *[-np.inf] * 4, low[5]])
+    upper = np.array([*[np.inf] * 5, high[5]])
     trials = 0
     while trials < max_trials:
-        mean = np.array(es.mean)
+        # cma keeps the mean itself unconstrained; evaluate its feasible projection
+        mean = np.clip(np.array(es.mean), lower, upper)
         if evaluate_params(mean, W0[5])[1]:
             return _row(seed, W0, True, trials, mean)
         candidates = es.ask()[: max_trials - trials]
         losses = []
         for x in candidates:
             trials += 1
-            reward, ok = evaluate_params(np.array(x), W0[5])
+            p = np.clip(np.array(x), lower, upper)
+            reward, ok = evaluate_params(p, W0[5])
             if ok:
-                return _row(seed, W0, True, trials, np.array(x))
+                return _row(seed, W0, True, trials, p)
             losses.append(-reward)
         if len(losses) < es.popsize:
             break
         es.tell(candidates, losses)
-    return _row(seed, W0, False, trials, np.array(es.mean))
+    return _row(seed, W0, False, trials, np.clip(np.array(es.mean), lower, upper))

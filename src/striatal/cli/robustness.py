@@ -25,7 +25,10 @@ DESCRIPTION = (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("files", type=Path, nargs="+", help="result.json or ablation.json")
     parser.add_argument(
-        "--variant", default=None, help="variant of an ablation.json (default: all)"
+        "--variant",
+        action="append",
+        default=[],
+        help="a variant of an ablation.json, one column each (repeatable; default: all)",
     )
     parser.add_argument("--repeats", type=int, default=10, help="sensor-noise runs per controller")
     parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
