@@ -147,8 +147,8 @@ def usage_error(
             r.rc == 2 and r.out == "" and len(lines) == 1 and "Traceback" not in r.err and untouched
         )
         line = one_line(r.err).replace(str(out), "OUT")
-        # where a JSON parser stopped depends on the file's length, not on the behaviour
-        line = re.sub(r"line \d+ column \d+ \(char \d+\)", "line L column C (char N)", line)
+        # where and why the JSON parser stopped depends on the file's layout, not on striatal
+        line = re.sub(r"\(truncated or corrupted\?\): .*", "(truncated or corrupted?): ...", line)
         if "Traceback" in r.err:
             return ok, f"exit {r.rc}, a Python traceback ending `{line}`"
         written = "nothing written" if untouched else "FILES CHANGED"
