@@ -20,7 +20,14 @@ from striatal.cli.learner_options import (
 )
 from striatal.errors import ParameterError
 from striatal.learn import LearnerConfig, initial_state, learning_step, train
-from striatal.params import CHAPTER_INITIAL_W, Controller, Plant, Simulation
+from striatal.params import (
+    CHAPTER_FINAL_THETA_C,
+    CHAPTER_FINAL_W,
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+)
 from striatal.rollout import Protocol, TrialOutcome, simulate
 
 START = Controller(CHAPTER_INITIAL_W, 0.6)
@@ -57,6 +64,36 @@ def test_decay_alone_shrinks_the_gains_geometrically() -> None:
     r = train(Plant(), RANDOM_START, cfg, seed=0)
     np.testing.assert_allclose(r.W[1:5], 0.9**3 * np.array(RANDOM_START.gains[1:5]), rtol=1e-12)
     assert r.W[5] == RANDOM_START.gains[5]
+
+
+def test_plant_jitter_needs_success_on_the_corner_plants() -> None:
+    corners = learners.jitter_corners(Plant(), 0.2)
+    got = sorted((c.pole_mass, c.length) for c in corners)
+    np.testing.assert_allclose(got, [(0.08, 0.8), (0.08, 1.2), (0.12, 0.8), (0.12, 1.2)])
+    robust = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)  # passes on all corners
+    cfg = replace(PGPE, plant_jitter=0.2, max_trials=3)
+    assert train(Plant(), robust, cfg, seed=0).trials == 1
+    # gains learned by pgpe (seed 0) that pass on the nominal plant but not at -20 %
+    fragile = Controller(
+        (
+            2.755608068191568,
+            -0.21023362464983728,
+            -0.33116058773442564,
+            2.516692637176916,
+            2.6014090234219114,
+            -0.5271986094008383,
+        ),
+        0.3641320237980639,
+    )
+    sim, protocol = Simulation(), Protocol()
+    assert simulate(Plant(), fragile, sim, protocol=protocol).outcome.success
+    short = Plant().scaled(pole_mass=0.8, length=0.8)
+    assert not simulate(short, fragile, sim, protocol=protocol, model=Plant()).outcome.success
+    state = initial_state(fragile.gains, fragile.theta_c, 0)
+    assert not learning_step(state, Plant(), fragile, sim, protocol, cfg)[0].success
+    assert learning_step(state, Plant(), fragile, sim, protocol, PGPE)[0].success
+    with pytest.raises(ParameterError):
+        LearnerConfig(plant_jitter=0.2)
 
 
 def test_tracked_baseline_converges_to_the_mean_reward() -> None:

@@ -95,6 +95,12 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("pgpe-adaptive-sigma", "pgpe", (("sigma_rate", 0.1),), "pgpe, adaptive exploration"),
     Variant("pgpe-control", "pgpe", (("alpha", 0.0),), "its alpha = 0 control"),
     Variant(
+        "pgpe-robust",
+        "pgpe",
+        (("plant_jitter", 0.2),),
+        "pgpe on plants with pole mass and length x U[0.8, 1.2]; success also on the 4 corners",
+    ),
+    Variant(
         "random-search",
         "pgpe",
         (),

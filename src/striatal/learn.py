@@ -103,6 +103,8 @@ class LearnerConfig:
     decay : synaptic decay lambda of W1..W5 ("rpe", "pgpe"): the update adds
         -rate * lambda * W (rate: alpha for "pgpe", alpha (1 - gamma) for "rpe"), a weak
         prior for small gains; with alpha = 0 nothing changes.
+    plant_jitter : J of "pgpe": each trial's true pole mass and length are the nominal
+        ones times factors uniform in [1 - J, 1 + J] (0: the nominal plant).
     """
 
     alpha: float = 5.0
@@ -123,6 +125,7 @@ class LearnerConfig:
     explore: float = 0.3
     sigma_rate: float = 0.0
     decay: float = 0.0
+    plant_jitter: float = 0.0
 
     def __post_init__(self) -> None:
         a = require_finite("alpha", self.alpha)
@@ -173,6 +176,11 @@ class LearnerConfig:
             raise ParameterError(
                 f"the decay per update (rate x decay = {self.decay_per_update:g}) must be < 1"
             )
+        jit = require_finite("plant_jitter", self.plant_jitter)
+        if not 0.0 <= jit <= 0.5:
+            raise ParameterError(f"plant_jitter must be in [0, 0.5], got {self.plant_jitter}")
+        if jit > 0.0 and self.learner != "pgpe":
+            raise ParameterError("plant_jitter needs learner 'pgpe'")
         if self.theta_c_rule == "learned" and self.learner != "pgpe":
             raise ParameterError(
                 "theta_c_rule 'learned' (theta_c perturbed and updated with the gains) "

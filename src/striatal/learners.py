@@ -126,10 +126,12 @@ def recorded_trial(
     gamma: float,
     action_every: int = 1,
     chapter_eligibility: bool = False,
+    model: Plant | None = None,
 ) -> tuple[TrialOutcome, np.ndarray]:
     """rollout.run_trial that also returns the recorded rows (n, 8) (for the shaped reward).
 
     Same noise draws from ``rng`` as rollout.run_trial; ``trace`` updated in place.
+    ``model``: the plant the controller believes in (default: ``plant``).
     """
     noise, sensor_noise = _noise_arrays(sim, action_every, rng, SensorNoise())
     traj = np.zeros((sim.n_steps + 1, kernel.N_TRAJ))
@@ -141,7 +143,7 @@ def recorded_trial(
         noise=noise,
         sensor_noise=sensor_noise,
         sensor=SensorNoise(),
-        model=None,
+        model=model,
         action_every=action_every,
         gamma=gamma,
         chapter_eligibility=chapter_eligibility,
@@ -232,8 +234,12 @@ def _mean_success(
     protocol: Protocol,
     W: np.ndarray,
     action_every: int,
+    model: Plant | None = None,
 ) -> bool:
-    """The success test on a noise-free run of the mean policy with gains W."""
+    """The success test on a noise-free run of the mean policy with gains W.
+
+    ``model``: the plant the controller believes in (default: the true ``plant``).
+    """
     return run_trial(
         plant,
         controller,
@@ -244,7 +250,17 @@ def _mean_success(
         rng=None,
         gains=W,
         action_every=action_every,
+        model=model,
     ).success
+
+
+def jitter_corners(plant: Plant, jitter: float) -> list[Plant]:
+    """The four plants with pole mass and length scaled by 1 - jitter or 1 + jitter."""
+    return [
+        plant.scaled(pole_mass=a, length=b)
+        for a in (1.0 - jitter, 1.0 + jitter)
+        for b in (1.0 - jitter, 1.0 + jitter)
+    ]
 
 
 def _prediction_error(
@@ -358,8 +374,12 @@ def pgpe_step(
     """One trial with perturbed parameters p + eps under the mean policy, then the update.
 
     p = (W1..W5, theta_c); with theta_c_rule other than "learned", theta_c is not
-    perturbed and follows that rule (eq 21) instead. The success test is judged on
-    the unperturbed p (mean policy); if it holds p is the result and nothing changes.
+    perturbed and follows that rule (eq 21) instead. With ``plant_jitter`` J > 0 the
+    trial's true plant has pole mass and length scaled by factors drawn uniformly
+    from [1 - J, 1 + J], the controller still believing the nominal ``plant``
+    (learning for robustness), and the success test must then also hold on the four
+    corner plants (:func:`jitter_corners`). The success test is judged on the
+    unperturbed p (mean policy); if it holds p is the result and nothing changes.
     The state's ``trace`` holds the last eligibility eps.
     """
     rng = np.random.default_rng()
@@ -377,9 +397,14 @@ def pgpe_step(
     eps = p_trial - p
     W_trial = np.array([*p_trial[:5], W[5]])
     trial_controller = replace(template, theta_c=float(p_trial[5]))
+    true_plant = plant
+    if config.plant_jitter > 0.0:
+        j = config.plant_jitter
+        scale = rng.uniform(1.0 - j, 1.0 + j, size=2)
+        true_plant = plant.scaled(pole_mass=float(scale[0]), length=float(scale[1]))
     if config.reward == "shaped":
         outcome, data = recorded_trial(
-            plant,
+            true_plant,
             trial_controller,
             sim,
             protocol=protocol,
@@ -388,10 +413,11 @@ def pgpe_step(
             trace=np.zeros(N_GAINS),
             gamma=0.0,
             action_every=config.action_every,
+            model=plant,
         )
     else:
         outcome = run_trial(
-            plant,
+            true_plant,
             trial_controller,
             sim,
             protocol=protocol,
@@ -400,11 +426,17 @@ def pgpe_step(
             rng=None,
             gains=W_trial,
             action_every=config.action_every,
+            model=plant,
         )
         data = None
-    reward = _reward(outcome, data, plant, sim, protocol)
+    reward = _reward(outcome, data, true_plant, sim, protocol)
     controller = replace(template, theta_c=state.theta_c)
     success = _mean_success(plant, controller, sim, protocol, W, config.action_every)
+    if success and config.plant_jitter > 0.0:
+        success = all(
+            _mean_success(corner, controller, sim, protocol, W, config.action_every, model=plant)
+            for corner in jitter_corners(plant, config.plant_jitter)
+        )
     factor, b, square = _prediction_error(state, reward, config)
     new_p, new_s = p, s
     if not success:

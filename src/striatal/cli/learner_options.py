@@ -44,6 +44,7 @@ _FIELDS = {
     "sigma_rate": "sigma_rate",
     "normalise": "normalise",
     "decay": "decay",
+    "plant_jitter": "plant_jitter",
 }
 
 
@@ -150,6 +151,13 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="synaptic decay: the update adds -rate*decay*W1..5 (rpe, pgpe); "
         + _default_text("decay"),
+    )
+    lg.add_argument(
+        "--plant-jitter",
+        type=float,
+        default=None,
+        help="pgpe: each trial's pole mass and length scaled by U[1-J, 1+J], the controller "
+        "believing the nominal plant (learning for robustness); " + _default_text("plant_jitter"),
     )
 
 
