@@ -33,7 +33,7 @@ from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import read_csv, read_json
 from striatal.learn import LearnerConfig, gain_update
-from striatal.params import MAX_STEPS, Controller, Plant, Simulation
+from striatal.params import MAX_STEPS, Controller, Plant, Simulation, check_seed
 from striatal.rollout import Protocol, SensorNoise, run_trial, simulate
 
 N = int(os.environ.get("STRIATAL_HYPOTHESIS_EXAMPLES", "0"))
@@ -265,6 +265,16 @@ def test_invalid_learner_config_is_a_parameter_error(
     bad = {"alpha": alpha, "gamma": gamma, "max_trials": max_trials, "action_every": action_every}
     with pytest.raises(ParameterError):
         LearnerConfig(**{which: bad[which]})
+
+
+@examples(100)
+@given(seed=st.one_of(st.integers(), st.floats(), st.text(max_size=3), st.none(), st.booleans()))
+def test_check_seed_accepts_exactly_whole_numbers_from_0(seed: Any) -> None:
+    if isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0:
+        assert check_seed(seed) == seed
+    else:
+        with pytest.raises(ParameterError):
+            check_seed(seed)
 
 
 # ---------------------------------------------------------------- the command line

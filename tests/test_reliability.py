@@ -566,8 +566,8 @@ def interrupted_train(
 
 
 SEED_GAP = (
-    "cli/train.py: --seed is not validated; numpy raises ValueError (fix: in _fresh, raise "
-    "ParameterError unless args.seed >= 0)"
+    "cli/train.py: --seed is not validated; numpy raises ValueError (fix: in _fresh, "
+    "params.check_seed(args.seed))"
 )
 SETTINGS_GAP = (
     "cli/train.py: _from_settings catches KeyError/TypeError only and reads settings['seed'] "
@@ -586,8 +586,8 @@ ROBUSTNESS_SETTINGS_GAP = (
     "settings holds (fix: raise ParameterError unless it is a dict)"
 )
 ROBUSTNESS_SEED_GAP = (
-    "cli/robustness.py: --seed is not validated; numpy raises ValueError (fix: raise "
-    "ParameterError unless args.seed >= 0)"
+    "cli/robustness.py: --seed is not validated; numpy raises ValueError (fix: "
+    "params.check_seed(args.seed) before computing)"
 )
 SIGNAL_RACE_GAP = (
     "cli/train.py: the signal handler raises KeyboardInterrupt anywhere, so the final "
@@ -714,6 +714,11 @@ SCENARIOS: tuple[Scenario, ...] = (
       usage_error(("robustness", "OUT/result.json", "--seed", "-1", "--repeats", "1"),
                   prepare=_result_file), ROBUSTNESS_SEED_GAP),
     # ---- the library's typed errors
+    S("lib-seed", "bad input", "`learn.initial_state(CHAPTER_INITIAL_W, 0.6, seed=-1)`",
+      "ParameterError",
+      library_error(lambda _: initial_state(CHAPTER_INITIAL_W, 0.6, seed=-1), ParameterError),
+      "learn.py: initial_state passes the seed to numpy unchecked (fix: "
+      "seed = check_seed(seed), from striatal.params)"),
     S("lib-plant", "bad input", "`Plant(pole_mass=-1.0)`", "ParameterError",
       library_error(lambda _: Plant(pole_mass=-1.0), ParameterError)),
     S("lib-plant-text", "bad input", "`Plant(length=\"long\")`", "ParameterError",

@@ -56,6 +56,13 @@ def require_finite(name: str, value: float) -> float:
     return v
 
 
+def check_seed(seed: object) -> int:
+    """A seed for ``np.random.default_rng``: a whole number >= 0, else ParameterError."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ParameterError(f"seed must be a whole number >= 0, got {seed!r}")
+    return int(seed)
+
+
 def check_gains(gains: object, *, need_positive_w1: bool = True) -> tuple[float, ...]:
     """Validate the six gains W1..W6 (eqs 22-23) and return them as a tuple of floats.
 
