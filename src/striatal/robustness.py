@@ -154,17 +154,16 @@ def controller_groups(
 ) -> list[tuple[str, list[Controller]]]:
     """Named groups of controllers from a ``train`` result.json ("learned") or an ablation.json.
 
-    For an ablation.json: one group per variant (``variants``, or every variant)
-    holding the gains of its successful runs; empty groups are left out.
+    For an ablation.json: one group per variant (those of ``variants`` the file
+    holds, or every variant) holding the gains of its successful runs; empty groups
+    are left out.
     """
     if isinstance(data, dict) and "W" in data and "theta_c" in data:
         readings = data.get("settings", {}).get("controller", {})
         return [("learned", [Controller(gains=data["W"], theta_c=data["theta_c"], **readings)])]
     if isinstance(data, dict) and all(isinstance(v, dict) and "runs" in v for v in data.values()):
         groups = []
-        for name in variants or list(data):
-            if name not in data:
-                raise ParameterError(f"no variant {name!r} in the ablation file")
+        for name in [v for v in variants if v in data] if variants else list(data):
             ctrls = [
                 Controller(gains=r["W"], theta_c=r["theta_c"])
                 for r in data[name]["runs"]

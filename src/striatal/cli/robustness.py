@@ -16,9 +16,9 @@ ORDER = 50
 HELP = "success of learned gains when pole mass/length differ or sensors are noisy"
 DESCRIPTION = (
     "Run the mean policy of learned gains (train result.json files, or the successful runs "
-    "of an ablation.json) on plants with pole mass and length +-20 %% and with sensor noise, "
-    "the controller believing the nominal plant. Each cell: success test %% / balanced at "
-    "T_f (+10 reward) %%. The chapter's final gains are the hand-tuned reference."
+    "of an ablation.json) on plants with pole mass and length +-20 % and with sensor noise, "
+    "the controller believing the nominal plant. Each cell: success test % / balanced at "
+    "T_f (+10 reward) %. The chapter's final gains are the hand-tuned reference."
 )
 
 
@@ -47,6 +47,9 @@ def run(args: argparse.Namespace) -> int:
             raise DataFileError(f"{f} is not a result.json or ablation.json: {exc!r}") from None
         for name, ctrls in found:
             merged.setdefault(name, []).extend(ctrls)
+    missing = [v for v in args.variant if v not in merged]
+    if missing:
+        raise ParameterError(f"no successful run of variant(s) {', '.join(missing)} in the files")
     if not merged:
         raise ParameterError("the files hold no successful run to evaluate")
     reference = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
