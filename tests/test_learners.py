@@ -258,3 +258,14 @@ def test_train_pgpe_from_random_gains_learns_gains_that_simulate_confirms() -> N
     )
     assert again.returncode == 0, again.stderr
     assert json.loads(again.stdout)["success"] is True
+
+
+@pytest.mark.parametrize("learner", ["rpe", "pgpe"])
+def test_resume_from_state_equals_uninterrupted_run(learner: str) -> None:
+    cfg = replace(LEARNER_DEFAULTS[learner], max_trials=30)
+    full = train(Plant(), RANDOM_START, cfg, seed=5)
+    half = train(Plant(), RANDOM_START, replace(cfg, max_trials=13), seed=5)
+    state = type(half.state).from_dict(json.loads(json.dumps(half.state.to_dict())))
+    resumed = train(Plant(), RANDOM_START, cfg, seed=5, state=state)
+    assert (resumed.W, resumed.theta_c, resumed.trials) == (full.W, full.theta_c, full.trials)
+    assert resumed.state.to_dict() == full.state.to_dict()
