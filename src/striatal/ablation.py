@@ -93,6 +93,7 @@ VARIANTS: tuple[Variant, ...] = (
         "pgpe-theta-c-fixed", "pgpe", (("theta_c_rule", "fixed"),), "pgpe, theta_c kept at 0.6"
     ),
     Variant("pgpe-adaptive-sigma", "pgpe", (("sigma_rate", 0.1),), "pgpe, adaptive exploration"),
+    Variant("pgpe-rpe-rate-0.3", "pgpe", (("rpe_rate", 0.3),), "pgpe, baseline rate 0.3"),
     Variant("pgpe-control", "pgpe", (("alpha", 0.0),), "its alpha = 0 control"),
     Variant(
         "pgpe-robust",

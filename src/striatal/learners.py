@@ -15,14 +15,17 @@ They differ from the chapter's rule (:mod:`striatal.learn`) in what plays each p
     gradients, Sehnke et al. 2010): the policy over the parameters
     p = (W1..W5, theta_c) is Gaussian, p' = p + eps, eps ~ N(0, diag(s^2)), and the
     trial runs the mean action of eqs 22-23 with p'. Eligibility = eps, factor =
-    delta / rms(delta) with the tracked baseline, p <- p + alpha * factor * eps.
+    delta / rms(delta) with the tracked baseline, p <- p + alpha * factor * eps
+    - alpha * decay * p (the decay on W1..W5 only). With ``plant_jitter`` the trial's
+    plant is randomised and success must hold on the corner plants too.
     With ``sigma_rate`` > 0 the exploration adapts, s <- s exp(sigma_rate * factor *
     (z^2 - 1)) with z = eps / s (the same three factors on the score of s).
     W6 (the per-step sigma) is not used: the trial acts with the mean policy.
 
 The ``shaped`` reward (:func:`shaped_reward`) replaces the sparse +10 / -5 of
 eqs 24-25 by a dense score of the recorded trial. The first trial of a run sets
-the baseline b to its own reward (no update on a prediction error of zero).
+the baseline b to its own reward (a prediction error of zero: only the decay acts).
+Measurements of every option: docs/ablation.md.
 """
 
 from __future__ import annotations
@@ -53,8 +56,8 @@ from striatal.rollout import (
 
 #: Exploration std of theta_c relative to that of the gains (theta_c is in rad, ~0.6).
 THETA_C_EXPLORE = 0.3
-#: Range of a learned theta_c [rad]: below 0.2 the balancer catches too late; eq 21
-#: resets anything above 1.4.
+#: Range of a learned theta_c [rad]: a floor keeps the balancing region from vanishing;
+#: eq 21 resets anything above 1.4.
 THETA_C_LEARNED_RANGE = (0.2, 1.4)
 #: Adapted exploration stays within these multiples of its initial value.
 EXPLORE_RANGE = (0.1, 3.0)
