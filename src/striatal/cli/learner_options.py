@@ -163,12 +163,12 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
 
 def learner_config_from(args: argparse.Namespace) -> LearnerConfig:
     """The LearnerConfig the options describe (validated): the learner's defaults, overridden."""
-    base = LEARNER_DEFAULTS[args.learner]
+    base = LEARNER_DEFAULTS[getattr(args, "learner", None) or "chapter"]
     changes = {
         field: getattr(args, option)
         for option, field in _FIELDS.items()
         if getattr(args, option, None) is not None
     }
-    if args.carry_trace:
+    if getattr(args, "carry_trace", False):
         changes["reset_trace"] = False
     return replace(base, **changes)
