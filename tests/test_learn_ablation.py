@@ -8,6 +8,7 @@ import math
 import shlex
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -78,3 +79,17 @@ def test_summary_and_table() -> None:
     assert "| 2/3 | 20 |" in table and "| 0/1 | - | - |" in table
     with pytest.raises(ParameterError):
         variant("nope")
+
+
+def test_ablation_cli_writes_table_and_runs(tmp_path: Path) -> None:
+    out = tmp_path / "abl"
+    cmd = [sys.executable, "-m", "striatal", "ablation", "--seeds", "2", "--first-seed", "3"]
+    cmd += ["--max-trials", "20", "--variants", "pgpe,random-search", "--workers", "1"]
+    r = subprocess.run([*cmd, "--out", str(out)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    runs = json.loads((out / "ablation.json").read_text())
+    assert [row["seed"] for row in runs["pgpe"]["runs"]] == [3, 4]
+    assert r.stdout == (out / "ablation.md").read_text()
+    assert r.stdout.count("\n") == 4
+    bad = subprocess.run([*cmd[:4], "--variants", "nope"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "nope" in bad.stderr

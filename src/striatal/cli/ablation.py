@@ -15,13 +15,16 @@ ORDER = 45
 HELP = "compare the learner variants over many seeds from random W(0)"
 DESCRIPTION = (
     "Run each named learner variant from W(0) uniform in [-1, 1]^6 (as train --init random) "
-    "for seeds 0..N-1 and tabulate success (mean policy) and trials to success "
+    "for seeds S..S+N-1 and tabulate success (mean policy) and trials to success "
     "(docs/ablation.md)."
 )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seeds", type=int, default=100, help="seeds 0..N-1")
+    parser.add_argument("--seeds", type=int, default=100, help="number of seeds N")
+    parser.add_argument(
+        "--first-seed", type=int, default=0, help="seeds S..S+N-1 (a fresh set: S = 100)"
+    )
     parser.add_argument("--max-trials", type=int, default=300)
     parser.add_argument(
         "--variants",
@@ -37,6 +40,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.seeds < 1:
         raise ParameterError(f"--seeds must be >= 1, got {args.seeds}")
+    if args.first_seed < 0:
+        raise ParameterError(f"--first-seed must be >= 0, got {args.first_seed}")
     if args.workers < 1:
         raise ParameterError(f"--workers must be >= 1, got {args.workers}")
     chosen = [variant(n.strip()) for n in args.variants.split(",") if n.strip()]
@@ -44,7 +49,8 @@ def run(args: argparse.Namespace) -> int:
     rows = []
     runs = {}
     for v, config in zip(chosen, configs, strict=True):
-        result = run_variant(config, range(args.seeds), args.workers, v.kind)
+        seeds = range(args.first_seed, args.first_seed + args.seeds)
+        result = run_variant(config, seeds, args.workers, v.kind)
         runs[v.name] = {"options": v.options, "config": config.to_dict(), "runs": result}
         rows.append((v, summary(result)))
         print(f"{v.name}: {rows[-1][1]}", file=sys.stderr, flush=True)
