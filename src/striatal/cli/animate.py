@@ -1,0 +1,73 @@
+"""``striatal animate``: a GIF (or MP4) of one run with the mean policy."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from striatal.cli import options
+from striatal.cli.figure import add_gain_source_arguments, controller_and_plant
+from striatal.errors import ParameterError
+
+COMMAND = "animate"
+ORDER = 42
+HELP = "animate one run of the switching controller as a GIF (or MP4 with ffmpeg)"
+DESCRIPTION = (
+    "Simulate one run with the mean policy and write an animation: a frame every "
+    "speed / fps seconds of simulated time, drawn by striatal.render.cartpole_frame. "
+    "A .gif is written with Pillow; a .mp4 needs ffmpeg on PATH. Gains as for "
+    "striatal figure."
+)
+
+#: Most frames one animation may hold (memory and file size).
+MAX_FRAMES = 5000
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_gain_source_arguments(parser)
+    parser.add_argument("--out", type=Path, default=Path("run.gif"), help=".gif or .mp4")
+    parser.add_argument("--fps", type=float, default=15.0, help="frames per second of video")
+    parser.add_argument(
+        "--speed", type=float, default=3.0, help="simulated seconds per second of video"
+    )
+    parser.add_argument("--width", type=int, default=480, help="frame width [px]")
+    parser.add_argument("--height", type=int, default=320, help="frame height [px]")
+
+
+def run(args: argparse.Namespace) -> int:
+    from striatal import plots
+    from striatal.rollout import simulate
+
+    out = plots.check_image_path(args.out, (".gif", ".mp4"))
+    if out.suffix.lower() == ".mp4" and plots.ffmpeg_path() is None:
+        raise ParameterError("writing .mp4 needs ffmpeg on PATH; write a .gif instead")
+    for name in ("fps", "speed"):
+        v = getattr(args, name)
+        if not (math.isfinite(v) and v > 0):
+            raise ParameterError(f"--{name} must be a finite number > 0, got {v}")
+    if args.fps > 100:
+        raise ParameterError(
+            f"--fps must be at most 100 (GIF delays are 10 ms units), got {args.fps}"
+        )
+    for name in ("width", "height"):
+        v = getattr(args, name)
+        if not 16 <= v <= 4096:
+            raise ParameterError(f"--{name} must be in [16, 4096] px, got {v}")
+    controller, plant = controller_and_plant(args)
+    sim = options.simulation_from(args)
+    n_frames = len(plots.frame_times(sim.duration, args.fps, args.speed))
+    if n_frames > MAX_FRAMES:
+        raise ParameterError(
+            f"{n_frames} frames is more than {MAX_FRAMES}: raise --speed or lower --fps"
+        )
+    traj = simulate(plant, controller, sim)
+    frames = plots.animation_frames(
+        traj, fps=args.fps, speed=args.speed, width=args.width, height=args.height
+    )
+    plots.save_animation(frames, out, fps=args.fps)
+    print(
+        f"wrote {out}: {len(frames)} frames at {args.fps:g} fps, {args.speed:g}x real time "
+        f"({traj.t[-1]:g} s simulated)"
+    )
+    return 0

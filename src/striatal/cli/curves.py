@@ -1,0 +1,39 @@
+"""``striatal curves``: learning curves of one striatal train run."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from striatal.errors import ParameterError
+
+COMMAND = "curves"
+ORDER = 41
+HELP = "plot reward, running success rate, W1..W6, theta_c and sigma over the trials"
+DESCRIPTION = (
+    "Learning curves from history.csv of striatal train, in one figure: the reward of each "
+    "trial with the running fraction of +10 rewards and of trials passing the success test; "
+    "the six gains used in each trial; theta_c; sigma."
+)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("history", type=Path, help="history.csv of striatal train")
+    parser.add_argument("--out", type=Path, default=Path("curves.png"), help="PNG (or .pdf/.svg)")
+    parser.add_argument("--window", type=int, default=50, help="trials in the running fractions")
+    parser.add_argument("--dpi", type=int, default=120, help="resolution of a PNG")
+
+
+def run(args: argparse.Namespace) -> int:
+    from striatal import plots
+
+    out = plots.check_image_path(args.out, (".png", ".pdf", ".svg"))
+    if args.window < 1:
+        raise ParameterError(f"--window must be >= 1, got {args.window}")
+    if not 10 <= args.dpi <= 1000:
+        raise ParameterError(f"--dpi must be in [10, 1000], got {args.dpi}")
+    history = plots.read_history(args.history)
+    fig = plots.learning_curves(history, window=args.window)
+    plots.save_figure(fig, out, dpi=args.dpi)
+    print(f"wrote {out}: {len(history)} trials")
+    return 0

@@ -1,0 +1,172 @@
+"""``striatal interpret``: the neural reading of section 4 for a set of gains."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from striatal.cli import options
+from striatal.errors import DataFileError, ParameterError
+from striatal.files import dumps_json, read_json
+from striatal.params import Plant
+
+COMMAND = "interpret"
+ORDER = 45
+HELP = "read mu_1, mu_2 as direct/indirect pathway activity and the updates as LTP/LTD"
+DESCRIPTION = (
+    "Section 4's neural reading of a gain set: mu_1 (balancing, eq 22) and mu_2 (swing-up, "
+    "eq 23) as linear forms with numeric coefficients, each labelled direct (excitatory, "
+    "positive) or indirect (inhibitory, negative) pathway; and, from a history.csv of "
+    "striatal train, how many updates potentiated (LTP) or depressed (LTD) each gain after a "
+    "dopamine burst (reward > 0) or dip (reward < 0). Gains from RESULT (result.json; its "
+    "history.csv beside it is read when present), or --chapter-final (default), "
+    "--chapter-initial, --gains with --theta-c."
+)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "result", type=Path, nargs="?", default=None, help="result.json of striatal train"
+    )
+    options.add_controller_arguments(parser, gains_required=True)
+    options.add_plant_arguments(parser)
+    parser.add_argument(
+        "--history",
+        type=Path,
+        default=None,
+        help="history.csv of striatal train (default: the one beside RESULT, if any)",
+    )
+    parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+
+
+def _from_result(path: Path) -> tuple[list[float], float, str, Plant, str]:
+    data = read_json(path, what="result")
+    if not isinstance(data, dict):
+        raise DataFileError(f"result {path} is not a striatal result.json")
+    try:
+        settings: dict[str, Any] = data.get("settings") or {}
+        ctrl: dict[str, Any] = settings.get("controller") or {}
+        plant_d: dict[str, Any] = settings.get("plant") or {}
+        W = [float(w) for w in data["W"]]
+        theta_c = float(data["theta_c"])
+        plant = Plant(
+            **{
+                k: plant_d[k]
+                for k in ("cart_mass", "pole_mass", "length", "gravity")
+                if k in plant_d
+            }
+        )
+        sign = str(ctrl.get("balance_sign", "corrected"))
+        learner = str(data.get("learner", settings.get("learner", "chapter")))
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise DataFileError(f"result {path} lacks W, theta_c or settings: {exc!r}") from None
+    except ParameterError as exc:
+        raise DataFileError(f"result {path} holds an unusable plant: {exc}") from None
+    return W, theta_c, sign, plant, learner
+
+
+def build(args: argparse.Namespace) -> dict[str, Any]:
+    """The JSON reading for the parsed command line (validates everything first)."""
+    from striatal import interpret, plots
+
+    learner = "chapter"
+    if args.result is not None:
+        if args.gains is not None or args.chapter_initial or args.chapter_final:
+            raise ParameterError("give either RESULT or a gain set, not both")
+        W, theta_c, sign, plant, learner = _from_result(args.result)
+        source = str(args.result)
+    else:
+        gains, theta_c = options.gains_from(args)
+        W, sign, plant = list(gains), args.balance_sign, options.plant_from(args)
+        source = (
+            "--gains"
+            if args.gains is not None
+            else ("--chapter-initial" if args.chapter_initial else "--chapter-final")
+        )
+    history_path = args.history
+    if history_path is None and args.result is not None:
+        sibling = args.result.parent / "history.csv"
+        history_path = sibling if sibling.exists() else None
+    try:
+        out: dict[str, Any] = interpret.reading(W, theta_c, plant, sign)
+    except ParameterError as exc:
+        raise (DataFileError(f"result {args.result}: {exc}") if args.result else exc) from None
+    out["source"] = source
+    out["learner"] = learner
+    if history_path is not None:
+        h = plots.read_history(history_path)
+        table = interpret.plasticity_table(h.W, h.reward)
+        out["plasticity"] = {
+            "history": str(history_path),
+            "trials": len(h),
+            "updates": max(len(h) - 1, 0),
+            "updates_after_burst": int((h.reward[:-1] > 0).sum()),
+            "updates_after_dip": int((h.reward[:-1] < 0).sum()),
+            "per_gain": [p.to_dict() for p in table],
+            "note": (
+                "an update is W(k+1) - W(k), made after trial k's reward; burst = reward > 0, "
+                "dip = reward < 0. W6 sets sigma (exploration), not a pathway weight."
+                + (
+                    ""
+                    if learner == "chapter"
+                    else f" Learner {learner!r}: its dopamine-like signal is not the raw "
+                    "reward (reward prediction error or shaped reward), so the split by the "
+                    "reward's sign is only a first reading."
+                )
+            ),
+        }
+    return out
+
+
+def _print_human(r: dict[str, Any]) -> None:
+    W = " ".join(f"{w:.4f}" for w in r["W"])
+    print(f"gains ({r['source']}): W = [{W}]   theta_c = {r['theta_c']:.4f} rad")
+    print(
+        f"balance sign: {r['balance_sign']}   plant: l = {r['plant']['length']:g} m, "
+        f"g = {r['plant']['gravity']:g} m/s^2"
+    )
+    for key, title in (("mu_1", "balancing, eq 22"), ("mu_2", "swing-up, eq 23")):
+        block = r[key]
+        print()
+        print(f"{block['form']}   ({title})")
+        print(f"  {'signal':<24} {'coefficient':>12}  {'from W':<18} pathway")
+        for t in block["terms"]:
+            label = {
+                "direct": "direct (excitatory)",
+                "indirect": "indirect (inhibitory)",
+                "silent": "silent (zero)",
+            }[t["pathway"]]
+            sig = "E~ theta_dot cos theta" if t["signal"] == "energy_pump" else t["signal"]
+            print(f"  {sig:<24} {t['coefficient']:>+12.4f}  {t['formula']:<18} {label}")
+    print()
+    print("sign convention: " + r["sign_note"])
+    p = r.get("plasticity")
+    if p is None:
+        return
+    print()
+    print(
+        f"plasticity from {p['history']}: {p['trials']} trials, {p['updates']} updates "
+        f"({p['updates_after_burst']} after a dopamine burst, reward > 0; "
+        f"{p['updates_after_dip']} after a dip, reward < 0)"
+    )
+    print(
+        f"  {'gain':<5} {'LTP|burst':>10} {'LTD|burst':>10} {'LTP|dip':>10} {'LTD|dip':>10} "
+        f"{'unchanged':>10}"
+    )
+    for g in p["per_gain"]:
+        print(
+            f"  {g['weight']:<5} {g['ltp_after_burst']:>10} {g['ltd_after_burst']:>10} "
+            f"{g['ltp_after_dip']:>10} {g['ltd_after_dip']:>10} {g['unchanged']:>10}"
+        )
+    print("  " + p["note"])
+
+
+def run(args: argparse.Namespace) -> int:
+    result = build(args)
+    if args.json:
+        sys.stdout.write(dumps_json(result))
+    else:
+        _print_human(result)
+    return 0

@@ -1,0 +1,51 @@
+"""``striatal switch-figure``: the cerebellar soft switch of section 4 against |theta|."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from striatal.params import CHAPTER_FINAL_THETA_C, check_theta_c
+
+COMMAND = "switch-figure"
+ORDER = 43
+HELP = "plot the soft switch's balancing and swing-up weights against |theta|"
+DESCRIPTION = (
+    "The cerebellar soft switch of section 4, read with the labels swapped (NOTES section 4): "
+    "balancing weight clip(gamma (theta_c - |theta|), 0, 1) on mu_1 and swing-up weight "
+    "clip(gamma (|theta| - theta_c), 0, 1) on mu_2, for each gamma given, beside the hard "
+    "switch; and their sum, which shows the dead zone of half-width 1/gamma at theta_c."
+)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--theta-c",
+        type=float,
+        default=CHAPTER_FINAL_THETA_C,
+        help="switching threshold [rad]",
+    )
+    parser.add_argument(
+        "--inhibition",
+        type=float,
+        nargs="+",
+        default=[2.0, 5.0, 20.0, 50.0],
+        metavar="GAMMA",
+        help="strengths of lateral inhibition gamma [1/rad], one curve each",
+    )
+    parser.add_argument("--out", type=Path, default=Path("soft_switch.png"), help="PNG file")
+    parser.add_argument("--dpi", type=int, default=120, help="resolution of a PNG")
+
+
+def run(args: argparse.Namespace) -> int:
+    from striatal import plots
+    from striatal.errors import ParameterError
+
+    out = plots.check_image_path(args.out, (".png", ".pdf", ".svg"))
+    theta_c = check_theta_c(args.theta_c)
+    if not 10 <= args.dpi <= 1000:
+        raise ParameterError(f"--dpi must be in [10, 1000], got {args.dpi}")
+    fig = plots.switch_figure(theta_c, args.inhibition)
+    plots.save_figure(fig, out, dpi=args.dpi)
+    print(f"wrote {out}: theta_c = {theta_c:g} rad, gamma = {', '.join(map(str, args.inhibition))}")
+    return 0

@@ -1,0 +1,283 @@
+"""Figures and animations: the plotted data are the trajectory, not just a file on disk."""
+
+from __future__ import annotations
+
+import json
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import striatal
+from striatal import plots
+from striatal.cli import main
+from striatal.control import switch_weights
+from striatal.errors import DataFileError, ParameterError
+from striatal.learn import HISTORY_COLUMNS
+from striatal.params import CHAPTER_FINAL_W, Controller, Plant, Simulation
+from striatal.rollout import Trajectory, simulate
+
+
+@pytest.fixture(scope="module")
+def chapter_run() -> Trajectory:
+    return simulate(Plant(), Controller(), Simulation())
+
+
+def _line(ax, gid: str):  # type: ignore[no-untyped-def]
+    hits = [ln for ln in ax.get_lines() if ln.get_gid() == gid]
+    assert len(hits) == 1, gid
+    return hits[0]
+
+
+# --------------------------------------------------------------------------- Figure 5
+
+
+def test_figure5_has_three_panels_and_a_snapshot_every_0_2_s(chapter_run: Trajectory) -> None:
+    fig = plots.figure5(chapter_run)
+    assert len(fig.axes) == 3
+    snaps = fig.figure5_parts.snapshots
+    assert len(snaps.get_segments()) == round(60.0 / 0.2) + 1 == 301
+    # cart of snapshot k drawn at x(t_k) + drift t_k, pole tip at l (sin, cos) theta from it
+    idx = plots.snapshot_indices(chapter_run)
+    t, x, th = chapter_run.t[idx], chapter_run.column("x")[idx], chapter_run.column("theta")[idx]
+    np.testing.assert_allclose(t, np.arange(301) * 0.2, atol=1e-9)
+    seg = np.array(snaps.get_segments())
+    np.testing.assert_allclose(seg[:, 0, 0], x + plots.DRIFT * t)
+    np.testing.assert_allclose(seg[:, 0, 1], 0.0)
+    np.testing.assert_allclose(seg[:, 1, 0] - seg[:, 0, 0], np.sin(th), atol=1e-12)
+    np.testing.assert_allclose(seg[:, 1, 1], np.cos(th), atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("duration", "every", "n"), [(7.0, 0.2, 36), (3.0, 0.5, 7), (2.1, 0.2, 11)]
+)
+def test_snapshot_count(duration: float, every: float, n: int) -> None:
+    traj = simulate(Plant(), Controller(), Simulation(duration=duration))
+    assert len(plots.snapshot_indices(traj, every)) == n
+    fig = plots.figure5(traj, every=every)
+    assert len(fig.figure5_parts.snapshots.get_segments()) == n
+
+
+def test_figure5_series_equal_the_trajectory(chapter_run: Trajectory) -> None:
+    fig = plots.figure5(chapter_run)
+    _, ax_xy, ax_t = fig.axes
+    x, th, t = chapter_run.column("x"), chapter_run.column("theta"), chapter_run.t
+    tip = _line(ax_xy, "tip_path")
+    np.testing.assert_array_equal(tip.get_xdata(), x + np.sin(th))
+    np.testing.assert_array_equal(tip.get_ydata(), np.cos(th))
+    xl = _line(ax_t, "x")
+    np.testing.assert_array_equal(xl.get_xdata(), t)
+    np.testing.assert_array_equal(xl.get_ydata(), x)
+    thl = _line(ax_t, "theta")
+    shown = np.asarray(thl.get_ydata())
+    # unwrapped theta shifted by whole turns, ending upright near 0
+    turns = (th - shown) / (2 * np.pi)
+    np.testing.assert_allclose(turns, np.round(turns[0]), atol=1e-12)
+    assert abs(shown[-1]) < 0.05
+    # switch times as vertical lines: the one hand-over of the chapter's run at 19.55 s
+    sw = [ln for ln in ax_t.get_lines() if ln.get_gid() == "switch"]
+    assert len(sw) == len(chapter_run.switch_times) == 1
+    assert sw[0].get_xdata()[0] == pytest.approx(19.55)
+    assert "1.1736" in fig.get_suptitle() and "0.9035" in fig.get_suptitle()
+    assert ax_t.get_xlabel() == "time t [s]" and "[m]" in ax_xy.get_xlabel()
+
+
+def test_pole_tip_uses_the_pole_length() -> None:
+    plant = Plant(length=0.5)
+    traj = simulate(plant, Controller(), Simulation(duration=1.0))
+    tx, ty = plots.pole_tip(traj)
+    x = traj.column("x")
+    np.testing.assert_allclose(np.hypot(tx - x, ty), 0.5)
+
+
+def test_figure_cli_writes_png_and_refuses_bad_input(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "fig5.png"
+    assert main(["figure", "--chapter-initial", "--duration", "4", "--out", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "21 snapshots" in capsys.readouterr().out
+    assert main(["figure", "--out", str(tmp_path / "fig.jpg")]) == 2
+    assert not (tmp_path / "fig.jpg").exists()
+    assert main(["figure", "--gains", "1", "0", "0", "0", "0", "0", "--out", str(out)]) == 2
+    assert "--theta-c" in capsys.readouterr().err
+    assert [p.name for p in tmp_path.iterdir()] == ["fig5.png"]  # no temp files left
+
+
+def _result_json(path: Path, W: list[float], theta_c: float, sign: str = "corrected") -> Path:
+    payload = {
+        "success": True,
+        "trials": 3,
+        "W": W,
+        "theta_c": theta_c,
+        "seed": 0,
+        "wall_seconds": 0.1,
+        "learner": "chapter",
+        "settings": {
+            "controller": {"balance_sign": sign, "switch": "hard", "inhibition": 50.0},
+            "plant": {"cart_mass": 1.0, "pole_mass": 0.1, "length": 1.0, "gravity": 9.8},
+        },
+    }
+    path.write_text(json.dumps(payload))
+    return path
+
+
+def test_figure_from_result_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    res = _result_json(tmp_path / "result.json", list(CHAPTER_FINAL_W), 0.9035)
+    out = tmp_path / "f.png"
+    assert main(["figure", "--result", str(res), "--duration", "30", "--out", str(out)]) == 0
+    assert "151 snapshots, 1 switch(es)" in capsys.readouterr().out
+    assert main(["figure", "--result", str(res), "--chapter-initial", "--out", str(out)]) == 2
+    (tmp_path / "bad.json").write_text('{"W": [1, 2]')
+    assert main(["figure", "--result", str(tmp_path / "bad.json"), "--out", str(out)]) == 2
+
+
+# --------------------------------------------------------------------------- curves
+
+
+def _history_csv(path: Path, rewards: list[float], W: np.ndarray) -> Path:
+    lines = [",".join(HISTORY_COLUMNS)]
+    for k, (r, w) in enumerate(zip(rewards, W, strict=True)):
+        sigma = 0.1 + 1.0 / (1.0 + np.exp(-w[5]))
+        succ = int(k == len(rewards) - 1)
+        cells = [k + 1, r, *w, 0.6 + 0.01 * k, sigma, "" if k == 0 else 0.7, 60.0, succ, 0, 0]
+        lines.append(",".join(str(c) for c in cells))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_learning_curves_axes_and_series(tmp_path: Path) -> None:
+    rng = np.random.default_rng(3)
+    W = rng.normal(size=(12, 6))
+    rewards = [10.0, -5.0, 10.0, 10.0, -5.0, -5.0, 10.0, 10.0, 10.0, -5.0, 10.0, 10.0]
+    h = plots.read_history(_history_csv(tmp_path / "history.csv", rewards, W))
+    fig = plots.learning_curves(h, window=4)
+    ax_r, ax_w, ax_c, ax_s, ax_rate = fig.axes
+    assert "reward" in ax_r.get_ylabel() and ax_rate.get_ylabel() == "running fraction"
+    assert ax_c.get_ylabel() == "θ_c [rad]" and ax_s.get_ylabel().startswith("σ")
+    assert ax_s.get_xlabel() == "trial"
+    gains = ax_w.get_lines()[:6]
+    for i, ln in enumerate(gains):
+        assert ln.get_label() == f"W{i + 1}"
+        np.testing.assert_array_equal(ln.get_xdata(), np.arange(1, 13))
+        np.testing.assert_allclose(ln.get_ydata(), W[:, i])
+    np.testing.assert_allclose(ax_c.get_lines()[0].get_ydata(), 0.6 + 0.01 * np.arange(12))
+    rate = ax_rate.get_lines()[0].get_ydata()
+    pos = np.array(rewards) > 0
+    assert rate[3] == pytest.approx(pos[:4].mean()) and rate[11] == pytest.approx(pos[8:].mean())
+    assert ax_rate.get_lines()[1].get_ydata()[-1] == pytest.approx(0.25)
+
+
+def test_running_mean_by_hand() -> None:
+    np.testing.assert_allclose(plots.running_mean(np.array([1, 0, 1, 1]), 2), [1, 0.5, 0.5, 1])
+
+
+def test_read_history_rejects_bad_files(tmp_path: Path) -> None:
+    p = tmp_path / "h.csv"
+    p.write_text("trial,reward\n1,10\n")
+    with pytest.raises(DataFileError, match="lacks the column"):
+        plots.read_history(p)
+    _history_csv(p, [10.0], np.zeros((1, 6)))
+    p.write_text(p.read_text().replace("10.0,", "ten,", 1))
+    with pytest.raises(DataFileError, match="reward is not a number"):
+        plots.read_history(p)
+    p.write_text(",".join(HISTORY_COLUMNS) + "\n")
+    with pytest.raises(DataFileError, match="no trials"):
+        plots.read_history(p)
+
+
+def test_curves_cli(tmp_path: Path) -> None:
+    h = _history_csv(tmp_path / "history.csv", [10.0, -5.0, 10.0], np.ones((3, 6)))
+    out = tmp_path / "c.png"
+    assert main(["curves", str(h), "--out", str(out)]) == 0
+    assert out.stat().st_size > 1000
+    assert main(["curves", str(tmp_path / "missing.csv"), "--out", str(out)]) == 2
+
+
+# --------------------------------------------------------------------------- soft switch
+
+
+def test_switch_figure_plots_control_switch_weights() -> None:
+    theta_c, gammas = 0.9, [2.0, 20.0]
+    fig = plots.switch_figure(theta_c, gammas)
+    ax_w, ax_sum = fig.axes
+    for g in gammas:
+        b, s = _line(ax_w, f"balancing:{g:g}"), _line(ax_w, f"swingup:{g:g}")
+        a = np.asarray(b.get_xdata())
+        wb, ws = switch_weights(a, theta_c, True, g)
+        np.testing.assert_array_equal(b.get_ydata(), wb)
+        np.testing.assert_array_equal(s.get_ydata(), ws)
+        total = np.asarray(_line(ax_sum, f"sum:{g:g}").get_ydata())
+        # dead zone: total < 1 exactly within 1/gamma of theta_c, 0 at theta_c
+        inside = np.abs(a - theta_c) < 1.0 / g - 1e-9
+        outside = np.abs(a - theta_c) > 1.0 / g + 1e-9
+        assert np.all(total[inside] < 1.0) and np.all(total[outside] == 1.0)
+        assert total[np.argmin(np.abs(a - theta_c))] < 2.0 * g * (a[1] - a[0])
+    with pytest.raises(ParameterError):
+        plots.switch_figure(theta_c, [0.0])
+
+
+def test_switch_figure_cli(tmp_path: Path) -> None:
+    out = tmp_path / "s.png"
+    assert main(["switch-figure", "--theta-c", "0.6", "--inhibition", "3", "--out", str(out)]) == 0
+    assert out.exists()
+    assert main(["switch-figure", "--theta-c", "4", "--out", str(tmp_path / "t.png")]) == 2
+
+
+# --------------------------------------------------------------------------- animation
+
+
+def test_frame_times() -> None:
+    np.testing.assert_allclose(plots.frame_times(2.0, 10.0, 1.0), np.arange(21) * 0.1)
+    assert len(plots.frame_times(60.0, 15.0, 3.0)) == 301
+    with pytest.raises(ParameterError):
+        plots.frame_times(1.0, 0.0, 1.0)
+
+
+def _fake_frame(state, plant, *, mode, t, theta_c, width, height):  # type: ignore[no-untyped-def]
+    """A frame that differs at every time (so the GIF writer merges none)."""
+    img = np.zeros((height, width, 3), dtype=np.uint8)
+    img[:, int(t * 10) % width] = 255
+    img[0, 0] = (0, 255 * int(mode), 0)
+    return img
+
+
+@pytest.fixture
+def fake_render(monkeypatch: pytest.MonkeyPatch) -> None:
+    mod = types.ModuleType("striatal.render")
+    mod.cartpole_frame = _fake_frame  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, "striatal.render", mod)
+    monkeypatch.setattr(striatal, "render", mod, raising=False)
+
+
+def test_gif_has_one_frame_per_speed_over_fps(tmp_path: Path, fake_render: None) -> None:
+    from PIL import Image
+
+    out = tmp_path / "run.gif"
+    args = ["animate", "--duration", "2", "--fps", "10", "--speed", "1", "--out", str(out)]
+    assert main([*args, "--width", "64", "--height", "48"]) == 0
+    with Image.open(out) as im:
+        assert im.n_frames == 21
+        assert im.size == (64, 48)
+        assert im.info["duration"] == 100
+
+
+def test_animate_refuses_bad_options(tmp_path: Path, fake_render: None) -> None:
+    assert main(["animate", "--fps", "0", "--out", str(tmp_path / "a.gif")]) == 2
+    assert main(["animate", "--out", str(tmp_path / "a.avi")]) == 2
+    if plots.ffmpeg_path() is None:
+        assert main(["animate", "--out", str(tmp_path / "a.mp4")]) == 2
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_gif_with_the_real_renderer(tmp_path: Path) -> None:
+    pytest.importorskip("striatal.render")
+    from PIL import Image
+
+    out = tmp_path / "run.gif"
+    argv = ["animate", "--duration", "3", "--fps", "10", "--speed", "2", "--out", str(out)]
+    assert main(argv) == 0
+    with Image.open(out) as im:
+        assert im.n_frames == len(plots.frame_times(3.0, 10.0, 2.0)) == 16
