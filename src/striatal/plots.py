@@ -32,6 +32,9 @@ SNAPSHOT_EVERY = 0.2
 #: Horizontal drift of the snapshot strip of Figure 5's top panel [m/s]: snapshot k is
 #: drawn at x(t_k) + DRIFT t_k so that successive stick figures do not overlap.
 DRIFT = 0.5
+#: Runs whose cart leaves |x| <= VIEW_LIMIT [m] (a runaway, e.g. the printed balancing sign)
+#: are drawn clipped to that window, so the part before the runaway stays readable.
+VIEW_LIMIT = 15.0
 SWINGUP_COLOUR = "tab:orange"
 BALANCING_COLOUR = "tab:blue"
 
@@ -106,15 +109,18 @@ def snapshot_indices(traj: Trajectory, every: float = SNAPSHOT_EVERY) -> np.ndar
 
 
 def display_theta(traj: Trajectory) -> np.ndarray:
-    """theta(t) unwrapped, shifted by whole turns so that its last value lies in (-pi, pi].
+    """theta(t) unwrapped, shifted by whole turns so that its last value lies in (-pi, pi]
+    (for a runaway: its last value while |x| <= VIEW_LIMIT).
 
     The kernel records the continuous angle; a pole that swings up over the other
     side ends near 2 pi. The shift makes the final upright read 0 without the
     +-pi jumps a wrapped angle shows while the pole hangs near pi.
     """
     theta = traj.column("theta")
-    turns = np.round(theta[-1] / (2.0 * np.pi)) if np.isfinite(theta[-1]) else 0.0
-    return theta - 2.0 * np.pi * turns
+    # A runaway cart spins the pole: take the turns at the last instant still in view.
+    sane = np.nonzero((np.abs(traj.column("x")) <= VIEW_LIMIT) & np.isfinite(theta))[0]
+    last = theta[sane[-1]] if len(sane) else 0.0
+    return theta - 2.0 * np.pi * np.round(last / (2.0 * np.pi))
 
 
 def pole_tip(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
@@ -177,7 +183,12 @@ def figure5(
     ax_snap.plot(base, np.zeros_like(base), "s", ms=2.5, color="0.3", gid="carts")
     ax_snap.axhline(0.0, color="0.6", lw=0.5)
     pad = 0.3 * l
-    ax_snap.set_xlim(min(base.min(), tip_x.min()) - pad, max(base.max(), tip_x.max()) + pad)
+    near = np.abs(x[idx]) <= VIEW_LIMIT
+    near[0] = True
+    ax_snap.set_xlim(
+        min(base[near].min(), tip_x[near].min()) - pad,
+        max(base[near].max(), tip_x[near].max()) + pad,
+    )
     ax_snap.set_ylim(-1.15 * l, 1.55 * l)
     ax_snap.set_aspect("equal", adjustable="box")
     ax_snap.set_xlabel(f"x(t) + {drift:g} m/s · t  [m]   (snapshot every {every:g} s)")
@@ -205,7 +216,13 @@ def figure5(
     ax_xy.plot(x, np.zeros_like(x), lw=2.0, color="0.5", alpha=0.5, label="cart x(t)")
     ax_xy.plot([tx[0]], [ty[0]], "o", color="tab:green", label="start")
     ax_xy.plot([tx[-1]], [ty[-1]], "*", ms=10, color="tab:red", label="end")
-    ax_xy.set_aspect("equal", adjustable="datalim")
+    runaway = not bool(np.all(np.abs(x) <= VIEW_LIMIT))
+    if runaway:
+        inside = np.abs(x) <= VIEW_LIMIT
+        ax_xy.set_xlim(tx[inside].min() - 0.5, tx[inside].max() + 0.5)
+        ax_xy.set_ylim(-1.2 * l, 1.2 * l)
+    else:
+        ax_xy.set_aspect("equal", adjustable="datalim")
     ax_xy.set_xlabel("x + l sin θ  [m]")
     ax_xy.set_ylabel("l cos θ  [m]")
     ax_xy.set_title("pole tip in the x-y plane", fontsize=10)
@@ -214,14 +231,34 @@ def figure5(
     th_plot = display_theta(traj)
     (x_line,) = ax_t.plot(t, x, color="tab:green", label="x [m]", gid="x")
     (th_line,) = ax_t.plot(t, th_plot, color="tab:purple", label="θ [rad]", gid="theta")
+    many = len(traj.switch_times) > 20
     switch_lines = tuple(
-        ax_t.axvline(ts, color="0.3", ls="--", lw=0.8, gid="switch") for ts in traj.switch_times
+        ax_t.axvline(
+            ts,
+            color="0.3",
+            ls="--",
+            lw=0.4 if many else 0.8,
+            alpha=0.4 if many else 1.0,
+            gid="switch",
+        )
+        for ts in traj.switch_times
     )
     theta_c = traj.controller.theta_c
     ax_t.axhline(theta_c, color="tab:purple", ls=":", lw=0.7)
     ax_t.axhline(-theta_c, color="tab:purple", ls=":", lw=0.7)
     ax_t.axhline(0.0, color="0.6", lw=0.5)
     ax_t.set_xlim(t[0], t[-1])
+    if runaway or not bool(np.all(np.abs(th_plot) <= VIEW_LIMIT)):
+        ax_t.set_ylim(-VIEW_LIMIT, VIEW_LIMIT)
+        ax_t.text(
+            0.01,
+            0.03,
+            f"clipped to ±{VIEW_LIMIT:g}: max |x| = {np.nanmax(np.abs(x)):.3g} m, "
+            f"max |θ| = {np.nanmax(np.abs(th_plot)):.3g} rad",
+            transform=ax_t.transAxes,
+            fontsize=9,
+            color="tab:red",
+        )
     ax_t.set_xlabel("time t [s]")
     ax_t.set_ylabel("x [m],  θ [rad]")
     n_sw = len(switch_lines)
@@ -349,13 +386,15 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
     ax_rate.set_ylabel("running fraction")
     h1, l1 = ax_r.get_legend_handles_labels()
     h2, l2 = ax_rate.get_legend_handles_labels()
-    ax_rate.legend(h1 + h2, l1 + l2, loc="center right", fontsize=8)
+    ax_rate.legend(
+        h1 + h2, l1 + l2, loc="upper left", bbox_to_anchor=(1.07, 1.0), fontsize=8, frameon=False
+    )
 
     for i in range(6):
         ax_w.plot(n, history.W[:, i], lw=1.0, label=f"W{i + 1}")
     ax_w.axhline(0.0, color="0.6", lw=0.5)
     ax_w.set_ylabel("gain (used in the trial)")
-    ax_w.legend(ncol=6, fontsize=8, loc="best")
+    ax_w.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     ax_w.set_title("W1..W6 (eqs 22-23)", fontsize=10)
     ax_c.plot(n, history.theta_c, color="tab:purple", lw=1.0)
     ax_c.set_ylabel("θ_c [rad]")
