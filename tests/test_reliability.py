@@ -195,6 +195,18 @@ def _random_result(out: Path) -> None:
     _random_bytes(out / "result.json")
 
 
+def _random_history(out: Path) -> None:
+    out.mkdir(parents=True)
+    _random_bytes(out / "history.csv")
+
+
+def _text_in_history(out: Path) -> None:
+    _checkpointed_run(out)
+    lines = (out / "history.csv").read_text().splitlines(keepends=True)
+    lines[3] = lines[3].replace(lines[3].split(",")[2], "x", 1)
+    (out / "history.csv").write_text("".join(lines))
+
+
 def _null_settings(out: Path) -> None:
     _result_file(out)
     _edit_json(lambda d: d.__setitem__("settings", None))(out / "result.json")
@@ -713,6 +725,15 @@ SCENARIOS: tuple[Scenario, ...] = (
       "exit 2, one line",
       usage_error(("robustness", "OUT/result.json", "--seed", "-1", "--repeats", "1"),
                   prepare=_result_file), ROBUSTNESS_SEED_GAP),
+    S("curves-random", "bad file", "`striatal curves FILE --out OUT/c.png`, FILE 600 random bytes",
+      "exit 2, one line", usage_error(("curves", "OUT/history.csv", "--out", "OUT/c.png"),
+                                      prepare=_random_history)),
+    S("curves-text", "bad file", "`striatal curves history.csv` with W1 = \"x\" in one row",
+      "exit 2, one line", usage_error(("curves", "OUT/history.csv", "--out", "OUT/c.png"),
+                                      prepare=_text_in_history)),
+    S("figure-random", "bad file", "`striatal figure --result FILE`, FILE 600 random bytes",
+      "exit 2, one line", usage_error(("figure", "--result", "OUT/result.json", "--out",
+                                       "OUT/f.png"), prepare=_random_result)),
     # ---- the library's typed errors
     S("lib-seed", "bad input", "`learn.initial_state(CHAPTER_INITIAL_W, 0.6, seed=-1)`",
       "ParameterError",
