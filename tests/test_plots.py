@@ -236,7 +236,7 @@ def test_frame_times() -> None:
         plots.frame_times(1.0, 0.0, 1.0)
 
 
-def _fake_frame(state, plant, *, mode, t, theta_c, width, height):  # type: ignore[no-untyped-def]
+def _fake_frame(state, plant, *, mode, t, theta_c, width, height, x_limit):  # type: ignore[no-untyped-def]
     """A frame that differs at every time (so the GIF writer merges none)."""
     img = np.zeros((height, width, 3), dtype=np.uint8)
     img[:, int(t * 10) % width] = 255

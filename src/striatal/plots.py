@@ -63,6 +63,10 @@ def _atomic(path: Path, write: Callable[[Path], None]) -> None:
     tmp = Path(tmp_name)
     try:
         write(tmp)
+        # mkstemp makes the file private (0600); give it the mode a plain open() would.
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, target)
     except BaseException:
         if tmp.exists():
@@ -481,8 +485,12 @@ def frame_times(t_end: float, fps: float, speed: float) -> np.ndarray:
     return np.arange(n) * step
 
 
+#: Widest track an animation shows [m]; a runaway cart is drawn clipped at its edge.
+MAX_TRACK = 20.0
+
+
 def animation_frames(
-    traj: Trajectory, *, fps: float, speed: float, width: int = 480, height: int = 320
+    traj: Trajectory, *, fps: float, speed: float, width: int = 720, height: int = 320
 ) -> list[np.ndarray]:
     """(H, W, 3) uint8 frames of ``traj`` from :func:`striatal.render.cartpole_frame`."""
     import importlib
@@ -494,6 +502,9 @@ def animation_frames(
     idx = np.minimum(np.rint(times / traj.sim.dt).astype(int), len(traj.t) - 1)
     states = traj.states
     mode = traj.column("mode")
+    # The track shown must hold the whole run (the chapter's capture travels ~6 m).
+    reach = float(np.nanmax(np.abs(states[idx, 0]))) + 1.05 * traj.plant.length
+    x_limit = min(max(4.0, math.ceil(2.0 * reach) / 2.0), MAX_TRACK)
     frames = []
     for k in idx:
         frames.append(
@@ -505,6 +516,7 @@ def animation_frames(
                 theta_c=traj.controller.theta_c,
                 width=width,
                 height=height,
+                x_limit=x_limit,
             )
         )
     return frames

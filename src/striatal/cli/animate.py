@@ -31,7 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--speed", type=float, default=3.0, help="simulated seconds per second of video"
     )
-    parser.add_argument("--width", type=int, default=480, help="frame width [px]")
+    parser.add_argument("--width", type=int, default=720, help="frame width [px]")
     parser.add_argument("--height", type=int, default=320, help="frame height [px]")
 
 
