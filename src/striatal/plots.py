@@ -493,10 +493,7 @@ def animation_frames(
     traj: Trajectory, *, fps: float, speed: float, width: int = 720, height: int = 320
 ) -> list[np.ndarray]:
     """(H, W, 3) uint8 frames of ``traj`` from :func:`striatal.render.cartpole_frame`."""
-    import importlib
-
-    # The frame renderer loads only when an animation is made (and tests may stand in for it).
-    render = importlib.import_module("striatal.render")
+    from striatal import render
 
     times = frame_times(float(traj.t[-1]), fps, speed)
     idx = np.minimum(np.rint(times / traj.sim.dt).astype(int), len(traj.t) - 1)
