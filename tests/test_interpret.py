@@ -181,3 +181,5 @@ def test_interpret_cli_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert main(["interpret", "--history", str(tmp_path / "none.csv")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 3 and "none.csv" in err
+    assert main(["interpret", "--chapter-final", "--theta-c", "4"]) == 2
+    assert "theta_c" in capsys.readouterr().err

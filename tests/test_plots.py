@@ -281,3 +281,15 @@ def test_gif_with_the_real_renderer(tmp_path: Path) -> None:
     assert main(argv) == 0
     with Image.open(out) as im:
         assert im.n_frames == len(plots.frame_times(3.0, 10.0, 2.0)) == 16
+
+
+def test_runaway_run_is_drawn_clipped_but_complete() -> None:
+    """The printed balancing sign runs away (NOTES 1): the data stay whole, the view clips."""
+    traj = simulate(Plant(), Controller(balance_sign="chapter"), Simulation())
+    assert traj.outcome.fault
+    fig = plots.figure5(traj)
+    ax_t = fig.axes[2]
+    np.testing.assert_array_equal(_line(ax_t, "x").get_ydata(), traj.column("x"))
+    assert ax_t.get_ylim() == (-plots.VIEW_LIMIT, plots.VIEW_LIMIT)
+    assert any("clipped" in t.get_text() for t in ax_t.texts)
+    assert len(fig.figure5_parts.switch_lines) == len(traj.switch_times) > 20

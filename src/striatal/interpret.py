@@ -18,7 +18,7 @@ from typing import Literal
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.params import Plant, check_gains
+from striatal.params import Plant, check_gains, check_theta_c
 
 Pathway = Literal["direct", "indirect", "silent"]
 
@@ -179,7 +179,7 @@ def reading(
     mu2 = swingup_terms(W)
     return {
         "W": list(check_gains(W)),
-        "theta_c": float(theta_c),
+        "theta_c": check_theta_c(theta_c),
         "balance_sign": balance_sign,
         "plant": {"length": plant.length, "gravity": plant.gravity},
         "mu_1": {
