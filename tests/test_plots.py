@@ -293,3 +293,20 @@ def test_runaway_run_is_drawn_clipped_but_complete() -> None:
     assert ax_t.get_ylim() == (-plots.VIEW_LIMIT, plots.VIEW_LIMIT)
     assert any("clipped" in t.get_text() for t in ax_t.texts)
     assert len(fig.figure5_parts.switch_lines) == len(traj.switch_times) > 20
+
+
+def test_mp4_goes_through_ffmpeg_on_path(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, fake_render: None
+) -> None:
+    """A stand-in ffmpeg that stores its stdin: the frames reach it raw, in order, atomically."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    fake = bin_dir / "ffmpeg"
+    fake.write_text('#!/bin/sh\nfor a; do out="$a"; done\ncat > "$out"\n')
+    fake.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{bin_dir}:/usr/bin:/bin")
+    out = tmp_path / "run.mp4"
+    argv = ["animate", "--duration", "1", "--fps", "10", "--speed", "1", "--out", str(out)]
+    assert main([*argv, "--width", "32", "--height", "16"]) == 0
+    assert out.stat().st_size == 11 * 32 * 16 * 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bin", "run.mp4"]
