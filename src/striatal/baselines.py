@@ -1,0 +1,275 @@
+"""Baselines on the learner's plant, protocol and success test (docs/results.md).
+
+Every baseline is judged like the learner: one evaluation of a candidate
+(W1..W6, theta_c) is one 60-s trial of the chapter's :class:`~striatal.rollout.Protocol`
+(:func:`striatal.rollout.run_trial`), and the trial passes with the same reading
+``success_on`` as the learner: "noisy" (the chapter) judges the noisy trial
+(policy noise sigma(W6), eqs 22-23) drawn from the seed's generator; "mean" a
+noise-free trial of the mean policy. Each baseline reports the trials (60-s
+episodes) to its first success, at most ``max_trials``.
+
+lqr
+    The linear-quadratic regulator of the upright linearization (eq 18,
+    :func:`striatal.dynamics.linearization`), Q = diag(1, 1, 1, 1), R = 1,
+    K = R^-1 B^T P with P from the continuous algebraic Riccati equation
+    (:func:`scipy.linalg.solve_continuous_are`). The kernel only runs the chapter's
+    balancing law mu_1 = -K_W s with K_W = [W2, W3, -(1 + W1 l) g, -2 l sqrt(W1 g)]
+    (eq 22, :func:`striatal.control.balancing_gain_matrix`): three gains for four
+    coefficients. So the arm runs the least-squares fit of W1..W3 to K (W2, W3 match
+    K exactly; W1 fits the two theta coefficients), with the chapter's learned swing-up
+    W4, W5, noise W6 and theta_c. :func:`lqr_fit` reports K, the fitted K_W and the
+    closed-loop eigenvalues of both; the pure LQR law itself is not run.
+hand
+    The chapter's learned gains W and theta_c (params.CHAPTER_FINAL_W/THETA_C), fixed.
+random
+    Every trial draws (W1..W6, theta_c) uniformly from :data:`RANDOM_BOX`; no learning.
+cmaes
+    CMA-ES (``cma``, Hansen) over the same 7 numbers from (W(0), theta_c(0)) with step
+    size 1, bounded to W1 >= W1_FLOOR and theta_c in [0.2, 1.4], minimising minus the
+    dense score :func:`striatal.learners.shaped_reward` of each candidate's trial (the
+    sparse +10/-5 reward of eqs 24-25 is almost flat for a black-box search). Success
+    when a candidate's trial passes the success test.
+
+For the fixed controllers (lqr, hand) with the "noisy" reading, the seed's generator
+draws a new noisy trial each time until one passes; with "mean" the one noise-free
+trial decides (a fixed mean policy gives the same trial every time), and a failure
+is reported as unsolved at ``max_trials``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from striatal.control import balancing_gain_matrix
+from striatal.dynamics import linearization
+from striatal.learn import W1_FLOOR, SuccessOn
+from striatal.learners import THETA_C_LEARNED_RANGE, recorded_trial, shaped_reward
+from striatal.params import (
+    CHAPTER_FINAL_THETA_C,
+    CHAPTER_FINAL_W,
+    N_GAINS,
+    Controller,
+    Plant,
+    Simulation,
+)
+from striatal.rollout import Protocol, run_trial
+
+BASELINES: tuple[str, ...] = ("lqr", "hand", "random", "cmaes")
+
+#: LQR weights on (x, x_dot, theta, theta_dot) and on u.
+LQR_Q = np.eye(4)
+LQR_R = np.eye(1)
+
+#: (low, high) of (W1..W6, theta_c) for random search [-, rad].
+RANDOM_BOX = (
+    np.array([W1_FLOOR, -3.0, -3.0, -3.0, -3.0, -3.0, THETA_C_LEARNED_RANGE[0]]),
+    np.array([3.0, 3.0, 3.0, 3.0, 3.0, 3.0, THETA_C_LEARNED_RANGE[1]]),
+)
+
+
+def lqr_gain(
+    plant: Plant, Q: np.ndarray = LQR_Q, R: np.ndarray = LQR_R
+) -> tuple[np.ndarray, np.ndarray]:
+    """(K (1, 4), P (4, 4)): u = -K s minimises int s'Qs + u'Ru on the eq-18 linearization."""
+    from scipy.linalg import solve_continuous_are
+
+    A, B = linearization(plant)
+    P = solve_continuous_are(A, B, Q, R)
+    K = np.linalg.solve(R, B.T @ P)
+    return K, P
+
+
+@dataclass(frozen=True)
+class LqrFit:
+    """The LQR gain and the balancing-law gains W1..W3 closest to it (least squares)."""
+
+    K: tuple[float, ...]
+    W123: tuple[float, float, float]
+    K_fit: tuple[float, ...]
+    residual: float
+    eig_lqr: tuple[complex, ...]
+    eig_fit: tuple[complex, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "Q": LQR_Q.diagonal().tolist(),
+            "R": float(LQR_R[0, 0]),
+            "K": list(self.K),
+            "W123": list(self.W123),
+            "K_fit": list(self.K_fit),
+            "residual": self.residual,
+            "eig_lqr_real": [z.real for z in self.eig_lqr],
+            "eig_fit_real": [z.real for z in self.eig_fit],
+        }
+
+
+def lqr_fit(plant: Plant, Q: np.ndarray = LQR_Q, R: np.ndarray = LQR_R) -> LqrFit:
+    """Least-squares W1..W3 with K_W(W) (eq 22, corrected sign) closest to the LQR K.
+
+    W2 = K[0], W3 = K[1] exactly; W1 >= W1_FLOOR minimises the squared error of the
+    theta and theta_dot coefficients, -(1 + W1 l) g and -2 l sqrt(W1 g).
+    """
+    from scipy.optimize import minimize_scalar
+
+    K, _ = lqr_gain(plant, Q, R)
+    k = K[0]
+
+    def err(w1: float) -> float:
+        kw = balancing_gain_matrix(np.array([w1, k[0], k[1]]), plant)[0]
+        return float(np.sum((kw[2:] - k[2:]) ** 2))
+
+    res = minimize_scalar(err, bounds=(W1_FLOOR, 100.0), method="bounded", options={"xatol": 1e-10})
+    W123 = (float(res.x), float(k[0]), float(k[1]))
+    K_fit = balancing_gain_matrix(np.array(W123), plant)[0]
+    A, B = linearization(plant)
+    return LqrFit(
+        K=tuple(float(v) for v in k),
+        W123=W123,
+        K_fit=tuple(float(v) for v in K_fit),
+        residual=float(math.sqrt(err(res.x))),
+        eig_lqr=tuple(complex(z) for z in np.linalg.eigvals(A - B @ K)),
+        eig_fit=tuple(complex(z) for z in np.linalg.eigvals(A - B @ K_fit[None, :])),
+    )
+
+
+def lqr_controller(plant: Plant) -> tuple[tuple[float, ...], float]:
+    """(W, theta_c) of the lqr arm: fitted W1..W3, the chapter's learned W4..W6 and theta_c."""
+    fit = lqr_fit(plant)
+    return (*fit.W123, *CHAPTER_FINAL_W[3:]), CHAPTER_FINAL_THETA_C
+
+
+def _trial(
+    plant: Plant,
+    template: Controller,
+    sim: Simulation,
+    p: np.ndarray,
+    success_on: SuccessOn,
+    rng: np.random.Generator,
+    shaped: bool = False,
+) -> tuple[bool, float]:
+    """(success, shaped score or nan) of one 60-s trial of p = (W1..W6, theta_c)."""
+    controller = template.with_gains(template.gains, float(p[6]))
+    W = np.array(p[:N_GAINS], dtype=float)
+    noise = rng if success_on == "noisy" else None
+    if shaped:
+        outcome, data = recorded_trial(
+            plant,
+            controller,
+            sim,
+            protocol=Protocol(),
+            gains=W,
+            rng=noise,
+            trace=np.zeros(N_GAINS),
+            gamma=0.0,
+        )
+        return outcome.success, shaped_reward(data, outcome, plant, sim, Protocol())
+    outcome = run_trial(
+        plant,
+        controller,
+        sim,
+        protocol=Protocol(),
+        trace=np.zeros(N_GAINS),
+        gamma=0.0,
+        rng=noise,
+        gains=W,
+    )
+    return outcome.success, math.nan
+
+
+def _result(ok: bool, trials: int, p: np.ndarray) -> dict[str, Any]:
+    return {
+        "success": ok,
+        "trials": trials,
+        "W": tuple(float(v) for v in p[:N_GAINS]),
+        "theta_c": float(p[N_GAINS]),
+    }
+
+
+def fixed_controller(
+    plant: Plant,
+    template: Controller,
+    sim: Simulation,
+    W: tuple[float, ...],
+    theta_c: float,
+    seed: int,
+    max_trials: int,
+    success_on: SuccessOn,
+) -> dict[str, Any]:
+    """Trials of a fixed (W, theta_c) until one passes (lqr, hand)."""
+    p = np.array([*W, theta_c])
+    rng = np.random.default_rng(seed)
+    budget = max_trials if success_on == "noisy" else 1
+    for trial in range(1, budget + 1):
+        if _trial(plant, template, sim, p, success_on, rng)[0]:
+            return _result(True, trial, p)
+    return _result(False, max_trials, p)
+
+
+def random_search(
+    plant: Plant,
+    template: Controller,
+    sim: Simulation,
+    seed: int,
+    max_trials: int,
+    success_on: SuccessOn,
+) -> dict[str, Any]:
+    """Uniform draws of (W1..W6, theta_c) from RANDOM_BOX, one trial each."""
+    draw = np.random.default_rng([seed, 3])
+    rng = np.random.default_rng(seed)
+    low, high = RANDOM_BOX
+    p = draw.uniform(low, high)
+    for trial in range(1, max_trials + 1):
+        if trial > 1:
+            p = draw.uniform(low, high)
+        if _trial(plant, template, sim, p, success_on, rng)[0]:
+            return _result(True, trial, p)
+    return _result(False, max_trials, p)
+
+
+def cmaes(
+    plant: Plant,
+    template: Controller,
+    sim: Simulation,
+    W0: tuple[float, ...],
+    theta_c0: float,
+    seed: int,
+    max_trials: int,
+    success_on: SuccessOn,
+    sigma0: float = 1.0,
+) -> dict[str, Any]:
+    """CMA-ES over (W1..W6, theta_c) from (W0, theta_c0) on minus the shaped reward."""
+    import cma
+
+    low, high = RANDOM_BOX
+    lower = np.array([W1_FLOOR, *[-np.inf] * 5, low[6]])
+    upper = np.array([*[np.inf] * 6, high[6]])
+    x0 = np.clip(np.array([*W0, theta_c0]), lower + 1e-9, upper - 1e-9)
+    opts = {
+        "seed": int(seed) % (2**31 - 1) + 1,
+        "bounds": [[W1_FLOOR, *[None] * 5, low[6]], [*[None] * 6, high[6]]],
+        "verbose": -9,
+    }
+    es = cma.CMAEvolutionStrategy(x0.tolist(), sigma0, opts)
+    rng = np.random.default_rng(seed)
+    trials = 0
+    p = x0
+    while trials < max_trials:
+        candidates = es.ask()
+        losses = []
+        for x in candidates:
+            trials += 1
+            p = np.clip(np.array(x), lower, upper)
+            ok, score = _trial(plant, template, sim, p, success_on, rng, shaped=True)
+            if ok:
+                return _result(True, trials, p)
+            losses.append(-score)
+            if trials >= max_trials:
+                break
+        if len(losses) < len(candidates):
+            break
+        es.tell(candidates, losses)
+    return _result(False, max_trials, p)

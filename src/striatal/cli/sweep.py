@@ -1,0 +1,165 @@
+"""``striatal sweep``: many learning runs over seeds, a control arm, baselines; resumable."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from striatal import baselines, experiments
+from striatal.cli import learner_options, options
+from striatal.errors import ParameterError
+from striatal.files import check_out_dir, dumps_json
+from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W, Simulation
+from striatal.rollout import Protocol
+
+COMMAND = "sweep"
+ORDER = 40
+HELP = "many learning runs over seeds (and a grid), with the alpha = 0 control and baselines"
+DESCRIPTION = (
+    "Run the learner for N seeds spawned from --seed (SeedSequence), for each --init and "
+    "each alpha x gamma of the grid, plus the alpha = 0 control arm and any --baselines. "
+    "Writes runs.csv (one row per run, appended as runs finish; a rerun with the same --out "
+    "skips finished runs) and summary.json. Row seed S reruns alone as "
+    "'striatal train --seed S --init INIT' with the same learner options."
+)
+
+
+def _floats(text: str, name: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise ParameterError(f"{name} must be comma-separated numbers, got {text!r}") from None
+    if not values:
+        raise ParameterError(f"{name} is empty")
+    return values
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    g = parser.add_argument_group("sweep")
+    g.add_argument("--seeds", type=int, default=10, help="number of seeds N per arm and init")
+    g.add_argument("--seed", type=int, default=0, help="root seed of SeedSequence")
+    g.add_argument(
+        "--init",
+        nargs="+",
+        choices=("chapter", "random"),
+        default=["chapter"],
+        help="W(0): the chapter's, and/or uniform in [-1, 1]^6 per seed (as train --init random)",
+    )
+    g.add_argument(
+        "--theta-c0", type=float, default=CHAPTER_INITIAL_THETA_C, help="theta_c(0) [rad]"
+    )
+    g.add_argument("--alpha-grid", default=None, help="comma-separated alphas (default: --alpha)")
+    g.add_argument("--gamma-grid", default=None, help="comma-separated gammas (default: --gamma)")
+    g.add_argument("--no-control", action="store_true", help="skip the alpha = 0 control arm")
+    g.add_argument(
+        "--baselines",
+        default="",
+        help="comma-separated baselines to run on the same seeds: "
+        + ", ".join(baselines.BASELINES),
+    )
+    learner_options.add_learner_arguments(parser)
+    options.add_controller_arguments(parser, gains_required=False)
+    rg = parser.add_argument_group("trial")
+    rg.add_argument("--dt", type=float, default=0.01, help="control and RK4 step [s]")
+    rg.add_argument("--duration", type=float, default=60.0, help="trial length T_f [s]")
+    options.add_plant_arguments(parser)
+    eg = parser.add_argument_group("engine and output")
+    eg.add_argument("--backend", choices=("local", "ray"), default="local")
+    eg.add_argument("--address", default=None, help="Ray cluster address HOST:PORT (--backend ray)")
+    eg.add_argument("--workers", type=int, default=1, help="local worker processes")
+    eg.add_argument("--out", type=Path, default=None, help="write runs.csv, summary.json here")
+    eg.add_argument("--json", action="store_true", help="print summary.json on stdout")
+    eg.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def prepare(
+    args: argparse.Namespace,
+) -> tuple[list[experiments.RunSpec], dict[str, Any], int]:
+    """(specs, settings, max_trials) the options describe; everything validated."""
+    if args.seeds < 1:
+        raise ParameterError(f"--seeds must be >= 1, got {args.seeds}")
+    if args.workers < 1:
+        raise ParameterError(f"--workers must be >= 1, got {args.workers}")
+    if args.backend == "ray" and not args.address:
+        raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
+    config = learner_options.learner_config_from(args)
+    plant = options.plant_from(args)
+    sim = Simulation(duration=args.duration, dt=args.dt)
+    template = options.controller_from(args, CHAPTER_INITIAL_W, args.theta_c0)
+    alphas = _floats(args.alpha_grid, "--alpha-grid") if args.alpha_grid else ()
+    gammas = _floats(args.gamma_grid, "--gamma-grid") if args.gamma_grid else ()
+    methods = [m.strip() for m in args.baselines.split(",") if m.strip()]
+    inits = tuple(dict.fromkeys(args.init))
+    seeds = experiments.spawn_seeds(args.seed, args.seeds)
+    specs, arm_settings = experiments.build_specs(
+        config=config,
+        template=template,
+        plant=plant,
+        sim=sim,
+        seeds=seeds,
+        inits=inits,  # type: ignore[arg-type]
+        alphas=alphas,
+        gammas=gammas,
+        control=not args.no_control,
+        methods=methods,
+    )
+    settings: dict[str, Any] = {
+        "command": "striatal sweep",
+        "root_seed": args.seed,
+        "seeds": args.seeds,
+        "run_seeds": list(seeds),
+        "seed_rule": "SeedSequence(root_seed).spawn(seeds)[i].generate_state(1)[0]",
+        "inits": list(inits),
+        "theta_c0": template.theta_c,
+        "max_trials": config.max_trials,
+        "success_on": config.success_on,
+        "arms": arm_settings,
+        "control": not args.no_control,
+        "controller": {
+            "balance_sign": template.balance_sign,
+            "switch": template.switch,
+            "inhibition": template.inhibition,
+        },
+        "plant": {
+            "cart_mass": plant.cart_mass,
+            "pole_mass": plant.pole_mass,
+            "length": plant.length,
+            "gravity": plant.gravity,
+        },
+        "trial": {"dt": sim.dt, "duration": sim.duration, "theta0": sim.theta0, "x0": sim.x0},
+        "protocol": experiments.json_roundtrip(Protocol().__dict__),
+        "baselines": {
+            "lqr": baselines.lqr_fit(plant).to_dict(),
+            "random_box": [baselines.RANDOM_BOX[0].tolist(), baselines.RANDOM_BOX[1].tolist()],
+            "cmaes": "sigma0 1 from (W(0), theta_c(0)), minimising minus the shaped reward",
+        },
+        "reproduce": "striatal train --seed S --init INIT with the same learner options "
+        "(control arm: --alpha 0)",
+    }
+    return specs, settings, config.max_trials
+
+
+def run(args: argparse.Namespace) -> int:
+    specs, settings, max_trials = prepare(args)
+    out = check_out_dir(args.out) if args.out is not None else None
+    result = experiments.sweep(
+        specs,
+        settings,
+        out=out,
+        max_trials=max_trials,
+        backend=args.backend,
+        workers=args.workers,
+        address=args.address,
+        progress=not (args.no_progress or args.json) and sys.stderr.isatty(),
+    )
+    if args.json:
+        sys.stdout.write(dumps_json(result.summary))
+        return 0
+    sys.stdout.write(experiments.markdown_table(result.summary))
+    print(f"\n{experiments.NOTE_CONTROL}")
+    print(f"ran {result.ran} runs, {result.skipped} already in --out")
+    if out is not None:
+        print(f"wrote {out / 'runs.csv'}, {out / 'summary.json'}")
+    return 0
