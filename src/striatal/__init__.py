@@ -20,6 +20,11 @@ from striatal.rollout import Protocol, Trajectory, TrialOutcome, run_trial, simu
 
 __version__ = "0.1.0"
 
+# Gymnasium id striatal/CartPoleSwingUp-v0 (and its vector entry point); idempotent.
+from striatal.envs import register_envs as _register_envs
+
+_register_envs()
+
 __all__ = [
     "CHAPTER_FINAL_THETA_C",
     "CHAPTER_FINAL_W",

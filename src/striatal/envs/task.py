@@ -1,0 +1,232 @@
+"""The swing-up task shared by the scalar and the vector environment.
+
+Settings, observations and rewards only: the physics is :func:`striatal.kernel.rk4_step`
+(scalar env) and :func:`striatal.kernel.step_batch` (vector env). Every function
+here works on batches (leading axis B) so that both environments compute their
+observations and rewards with the very same NumPy calls.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from striatal import kernel
+from striatal.errors import ParameterError
+from striatal.params import (
+    CHAPTER_THETA0,
+    MAX_STEPS,
+    Plant,
+    check_dt,
+    require_finite,
+    require_finite_positive,
+)
+from striatal.rollout import Protocol
+
+ObservationKind = Literal["trig", "raw"]
+RewardKind = Literal["chapter", "dense"]
+
+#: Default clip on the commanded cart acceleration u [m/s^2]. The chapter's final
+#: controller peaks at |u| = 13.4 m/s^2 (``striatal simulate --chapter-final``), so
+#: 50 never clips it.
+DEFAULT_U_MAX = 50.0
+
+#: Names of the observation entries, by observation kind.
+OBSERVATION_NAMES = {
+    "trig": ("x", "x_dot", "sin_theta", "cos_theta", "theta_dot"),
+    "raw": ("x", "x_dot", "theta", "theta_dot"),
+}
+
+
+@dataclass(frozen=True)
+class SwingUpTask:
+    """Settings of one ``striatal/CartPoleSwingUp-v0`` environment.
+
+    Attributes
+    ----------
+    plant : the point-mass cart-pole (eqs 7-14); the action is x_ddot = u exactly (eq 13).
+    dt : control step [s]; each env step is one RK4 step of the kernel with u held.
+    duration : episode length [s]; reaching it is a truncation (Gymnasium's time limit).
+    u_max : actions are clipped to [-u_max, u_max] [m/s^2].
+    observation : ``"trig"`` = [x, x_dot, sin theta, cos theta, theta_dot];
+        ``"raw"`` = the kernel state [x, x_dot, theta, theta_dot] (theta unwrapped).
+    reward : ``"chapter"`` (sparse eqs 24-25 from ``protocol``) or ``"dense"``
+        (DeepMind-Control-style upright-and-centred reward in [0, 1] per step).
+    protocol : the check at t = 30 s and the final goal of eqs 24-25 (chapter reward;
+        the t = 30 s check terminates the episode in both reward modes).
+    initial_state : start state [x, x_dot, theta, theta_dot]; default the chapter's
+        x = 0, theta = 3.12 at rest.
+    perturbation : half-width of a uniform random offset added to each start state
+        component at reset, drawn from the env's ``np_random`` (0: none).
+    """
+
+    plant: Plant = field(default_factory=Plant)
+    dt: float = 0.01
+    duration: float = 60.0
+    u_max: float = DEFAULT_U_MAX
+    observation: ObservationKind = "trig"
+    reward: RewardKind = "chapter"
+    protocol: Protocol = field(default_factory=Protocol)
+    initial_state: tuple[float, float, float, float] = (0.0, 0.0, CHAPTER_THETA0, 0.0)
+    perturbation: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.plant, Plant):
+            raise ParameterError(f"plant must be a striatal.Plant, got {self.plant!r}")
+        if not isinstance(self.protocol, Protocol):
+            raise ParameterError(f"protocol must be a striatal.Protocol, got {self.protocol!r}")
+        object.__setattr__(self, "dt", check_dt(self.dt))
+        object.__setattr__(self, "duration", require_finite_positive("duration", self.duration))
+        object.__setattr__(self, "u_max", require_finite_positive("u_max", self.u_max))
+        if self.observation not in OBSERVATION_NAMES:
+            raise ParameterError(f"observation must be 'trig' or 'raw', got {self.observation!r}")
+        if self.reward not in ("chapter", "dense"):
+            raise ParameterError(f"reward must be 'chapter' or 'dense', got {self.reward!r}")
+        object.__setattr__(self, "initial_state", check_state(self.initial_state))
+        p = require_finite("perturbation", self.perturbation)
+        if p < 0.0:
+            raise ParameterError(f"perturbation must be >= 0, got {p}")
+        object.__setattr__(self, "perturbation", p)
+        steps = self.duration / self.dt
+        if not 1 <= round(steps) <= MAX_STEPS:
+            raise ParameterError(
+                f"duration / dt = {steps:.3g} steps must be between 1 and {MAX_STEPS:,}"
+            )
+
+    @classmethod
+    def from_kwargs(cls, **kwargs: Any) -> SwingUpTask:
+        """Build from ``gymnasium.make`` keyword arguments; ParameterError on unknown names."""
+        known = set(cls.__dataclass_fields__)
+        unknown = sorted(set(kwargs) - known)
+        if unknown:
+            raise ParameterError(f"unknown environment option(s) {unknown}; known: {sorted(known)}")
+        if "initial_state" in kwargs and kwargs["initial_state"] is not None:
+            kwargs["initial_state"] = check_state(kwargs["initial_state"])
+        elif "initial_state" in kwargs:
+            del kwargs["initial_state"]
+        return cls(**kwargs)
+
+    @property
+    def n_steps(self) -> int:
+        """Steps in a full episode: round(duration / dt)."""
+        return int(round(self.duration / self.dt))
+
+    @property
+    def check_step(self) -> int:
+        """Step count at which the eq-24 check applies (-1: never)."""
+        return self.protocol.check_step(self.dt)
+
+    @property
+    def obs_size(self) -> int:
+        return len(OBSERVATION_NAMES[self.observation])
+
+
+def check_state(state: object) -> tuple[float, float, float, float]:
+    """A finite start state [x, x_dot, theta, theta_dot], or ParameterError."""
+    try:
+        s = np.asarray(state, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ParameterError(f"initial_state must be four numbers, got {state!r}") from None
+    if s.shape != (4,) or not np.all(np.isfinite(s)):
+        raise ParameterError(
+            f"initial_state must be four finite numbers [x, x_dot, theta, theta_dot], got {state!r}"
+        )
+    return (float(s[0]), float(s[1]), float(s[2]), float(s[3]))
+
+
+def start_state(
+    task: SwingUpTask, rng: np.random.Generator, options: dict[str, Any] | None
+) -> np.ndarray:
+    """(4,) start state for a reset: ``options["initial_state"]`` or the task's, plus perturbation.
+
+    ``options["perturbation"]`` overrides the task's perturbation half-width for this reset.
+    The generator is used only when the perturbation is > 0.
+    """
+    opts = options or {}
+    base = opts.get("initial_state")
+    state = np.array(task.initial_state if base is None else check_state(base), dtype=float)
+    p = task.perturbation
+    if opts.get("perturbation") is not None:
+        p = require_finite("perturbation", opts["perturbation"])
+        if p < 0.0:
+            raise ParameterError(f"perturbation must be >= 0, got {p}")
+    if p > 0.0:
+        state += rng.uniform(-p, p, size=4)
+    return state
+
+
+def wrap(theta: np.ndarray) -> np.ndarray:
+    """Angles wrapped to (-pi, pi], the formula of :func:`striatal.kernel.wrap_angle`."""
+    return theta - kernel.TWO_PI * np.ceil((theta - math.pi) / kernel.TWO_PI)
+
+
+def observe(states: np.ndarray, kind: ObservationKind) -> np.ndarray:
+    """(B, 5) trig or (B, 4) raw observations of kernel states (B, 4)."""
+    if kind == "raw":
+        return states.copy()
+    th = states[:, 2]
+    return np.stack([states[:, 0], states[:, 1], np.sin(th), np.cos(th), states[:, 3]], axis=1)
+
+
+def _gaussian_tolerance(d: np.ndarray, margin: float, value_at_margin: float = 0.1) -> np.ndarray:
+    """dm_control ``rewards.tolerance`` with bounds (0, 0) and a Gaussian sigmoid."""
+    scale = math.sqrt(-2.0 * math.log(value_at_margin))
+    z = d / margin * scale
+    return np.exp(-0.5 * z * z)
+
+
+def _quadratic_tolerance(d: np.ndarray, margin: float) -> np.ndarray:
+    """dm_control ``rewards.tolerance`` with bounds (0, 0), quadratic sigmoid, value 0 at margin."""
+    z = d / margin
+    return np.where(np.abs(z) < 1.0, 1.0 - z * z, 0.0)
+
+
+def dense_reward(states: np.ndarray, u: np.ndarray, u_max: float) -> np.ndarray:
+    """(B,) smooth reward in [0, 1], dm_control cartpole swingup's form.
+
+    upright = (cos theta + 1) / 2; centred = (1 + tol(x, margin 2 m)) / 2;
+    small control = (4 + quadratic tol(u / u_max, margin 1)) / 5;
+    small velocity = (1 + tol(theta_dot, margin 5 rad/s)) / 2; reward = their product.
+    """
+    upright = (np.cos(states[:, 2]) + 1.0) / 2.0
+    centred = (1.0 + _gaussian_tolerance(states[:, 0], 2.0)) / 2.0
+    small_control = (4.0 + _quadratic_tolerance(u / u_max, 1.0)) / 5.0
+    small_velocity = (1.0 + _gaussian_tolerance(states[:, 3], 5.0)) / 2.0
+    return upright * small_control * small_velocity * centred
+
+
+def outcome(
+    task: SwingUpTask, states: np.ndarray, steps: np.ndarray, u: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(reward, terminated, truncated, fault) for states (B, 4) just reached after ``steps`` steps.
+
+    Mirrors :func:`striatal.kernel.run_trial`: a non-finite or blown-up state ends the
+    episode (termination, failure reward); at the check step (t = 30 s) the eq-24
+    test |x| > check_x or |theta| > check_theta terminates with the failure reward;
+    at the last step the time limit truncates and the chapter reward is eq 25's
+    success or failure. The dense reward is 0 on a fault.
+    """
+    proto = task.protocol
+    with np.errstate(invalid="ignore"):
+        fault = ~np.all(np.abs(states) < kernel.BLOW_UP, axis=1)
+        th = np.abs(wrap(states[:, 2]))
+        x = np.abs(states[:, 0])
+        at_check = (steps == task.check_step) & (steps < task.n_steps)
+        check_failed = at_check & ((x > proto.check_x) | (th > proto.check_theta)) & ~fault
+        terminated = fault | check_failed
+        truncated = (steps >= task.n_steps) & ~terminated
+        if task.reward == "chapter":
+            goal = (x < proto.goal_x) & (th < proto.goal_theta)
+            reward = np.where(
+                terminated,
+                proto.reward_failure,
+                np.where(
+                    truncated, np.where(goal, proto.reward_success, proto.reward_failure), 0.0
+                ),
+            )
+        else:
+            reward = np.where(fault, 0.0, dense_reward(states, u, task.u_max))
+    return reward.astype(float), terminated, truncated, fault
