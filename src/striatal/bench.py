@@ -1,0 +1,698 @@
+"""Speed of the one kernel, each figure measured beside its reference in the same process.
+
+What is measured (``striatal bench``; the table is docs/performance.md):
+
+1. ``scalar_vs_gymnasium``: single-core env-steps per second of one chapter trial
+   (:func:`striatal.kernel.run_trial`: RK4, switching controller, Gaussian policy
+   noise, eligibility trace), *including* drawing its standard-normal noise from a
+   ``np.random.Generator`` each trial, against Gymnasium's ``CartPole-v1`` step loop
+   (``gymnasium.make("CartPole-v1").unwrapped``: Euler physics only, a fixed action,
+   reset on termination).
+2. ``batch_vs_gymnasium_vector``: :func:`striatal.kernel.run_trials_batch` (Numba
+   ``prange`` over trials, all cores) against Gymnasium's ``CartPoleVectorEnv`` (NumPy
+   over the batch, autoreset) at the same batch size. Steps are env-steps summed over
+   the batch. The kernel does four derivative evaluations per step (RK4), the
+   reference one (Euler).
+3. ``train``: wall seconds of ``striatal train --init chapter`` (a fresh process).
+4. ``scaling``: seconds per trial against n_steps = duration / dt, with a least-squares
+   line (slope [s/step], intercept [s], R^2).
+5. ``compile``: the first call of each kernel function in this process (cache load, or
+   compilation when the on-disk cache missed) and in a second, fresh process.
+
+Timing: ``time.perf_counter``; warm-up calls excluded; the two sides of a ratio are
+timed alternately, repeat by repeat, and the ratio uses the best repeat of each (the
+median ratio is reported too).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from striatal import kernel
+from striatal.errors import ParameterError
+from striatal.params import (
+    CHAPTER_FINAL_THETA_C,
+    CHAPTER_FINAL_W,
+    Plant,
+    Simulation,
+)
+from striatal.rollout import Protocol
+
+#: The eligibility-trace discount of the chapter's learner (LearnerConfig.gamma).
+TRACE_GAMMA = 0.999
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """How long and how big the measurements are.
+
+    ``seconds``: rough wall budget of one timed repeat of one side [s];
+    ``repeats``: timed repeats per side (best and median reported);
+    ``batch_size``: B of the batched comparison; ``duration``: trial length [s];
+    ``train``: also time ``striatal train --init chapter`` (``train_max_trials`` caps it,
+    None for the command's own default); ``scaling_durations``: trial lengths [s] of the
+    cost-growth fit.
+    """
+
+    seconds: float = 0.5
+    repeats: int = 5
+    batch_size: int = 256
+    duration: float = 60.0
+    dt: float = 0.01
+    train: bool = True
+    train_max_trials: int | None = None
+    scaling_durations: tuple[float, ...] = (7.5, 15.0, 30.0, 60.0, 120.0, 240.0)
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.seconds) and self.seconds > 0):
+            raise ParameterError(f"seconds must be a finite number > 0, got {self.seconds}")
+        if self.repeats < 1:
+            raise ParameterError(f"repeats must be >= 1, got {self.repeats}")
+        if self.batch_size < 1:
+            raise ParameterError(f"batch size must be >= 1, got {self.batch_size}")
+        Simulation(duration=self.duration, dt=self.dt)  # validates duration and dt
+        if len(self.scaling_durations) < 2:
+            raise ParameterError("the scaling fit needs at least two durations")
+        for d in self.scaling_durations:
+            Simulation(duration=d, dt=self.dt)
+        if self.train_max_trials is not None and self.train_max_trials < 1:
+            raise ParameterError(f"train max trials must be >= 1, got {self.train_max_trials}")
+
+
+QUICK = BenchConfig(
+    seconds=0.05,
+    repeats=2,
+    batch_size=32,
+    duration=10.0,
+    train_max_trials=20,
+    scaling_durations=(2.5, 5.0, 10.0),
+)
+
+
+@dataclass(frozen=True)
+class Timing:
+    """Repeated timings of one side: env-steps and seconds of each repeat."""
+
+    name: str
+    steps: tuple[int, ...]
+    seconds: tuple[float, ...]
+
+    @property
+    def rates(self) -> list[float]:
+        """Env-steps per second of each repeat."""
+        return [n / t for n, t in zip(self.steps, self.seconds, strict=True)]
+
+    @property
+    def best_steps_per_second(self) -> float:
+        return max(self.rates)
+
+    @property
+    def median_steps_per_second(self) -> float:
+        return statistics.median(self.rates)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "repeat_steps": list(self.steps),
+            "repeat_seconds": list(self.seconds),
+            "best_steps_per_second": self.best_steps_per_second,
+            "median_steps_per_second": self.median_steps_per_second,
+        }
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """One kernel figure and its reference; ``ratio`` = best kernel / best reference."""
+
+    kernel: Timing
+    reference: Timing
+    target_ratio: float
+    notes: str = ""
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def ratio(self) -> float:
+        return self.kernel.best_steps_per_second / self.reference.best_steps_per_second
+
+    @property
+    def median_ratio(self) -> float:
+        return self.kernel.median_steps_per_second / self.reference.median_steps_per_second
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "kernel": self.kernel.to_dict(),
+            "reference": self.reference.to_dict(),
+            "ratio": self.ratio,
+            "median_ratio": self.median_ratio,
+            "target_ratio": self.target_ratio,
+            "meets_target": self.ratio >= self.target_ratio,
+            "notes": self.notes,
+            **self.extra,
+        }
+
+
+# --------------------------------------------------------------------------- kernel side
+
+
+@dataclass(frozen=True)
+class TrialSetup:
+    """The fixed arguments of one chapter trial, built once (no wrapper cost in timings).
+
+    The chapter's learned gains and theta_c from theta0 = 3.12, so every trial swings
+    up, balances and runs all its steps (no early end at the 30-s check).
+    """
+
+    sim: Simulation
+    protocol: Protocol
+    plant: np.ndarray
+    W: np.ndarray
+    theta_c: float
+
+    @classmethod
+    def chapter(cls, duration: float, dt: float, *, check: bool = True) -> TrialSetup:
+        return cls(
+            sim=Simulation(duration=duration, dt=dt),
+            protocol=Protocol() if check else Protocol(check_time=-1.0),
+            plant=Plant().as_array(),
+            W=np.array(CHAPTER_FINAL_W, dtype=float),
+            theta_c=CHAPTER_FINAL_THETA_C,
+        )
+
+    @property
+    def n_steps(self) -> int:
+        return self.sim.n_steps
+
+
+def run_scalar_trial(setup: TrialSetup, rng: np.random.Generator, out: np.ndarray) -> int:
+    """One stochastic trial, its noise drawn from ``rng`` here; returns the steps run."""
+    noise = rng.standard_normal(setup.n_steps)
+    trace = np.zeros(6)
+    p = setup.protocol
+    kernel.run_trial(
+        setup.sim.initial_state,
+        setup.W,
+        setup.theta_c,
+        1.0,
+        False,
+        50.0,
+        setup.plant,
+        setup.plant,
+        False,
+        setup.sim.dt,
+        setup.n_steps,
+        1,
+        noise,
+        np.empty((0, 2)),
+        0.0,
+        0.0,
+        False,
+        TRACE_GAMMA,
+        trace,
+        p.check_step(setup.sim.dt),
+        p.check_x,
+        p.check_theta,
+        p.goal_x,
+        p.goal_theta,
+        p.reward_success,
+        p.reward_failure,
+        np.empty((0, kernel.N_TRAJ)),
+        out,
+    )
+    return int(out[kernel.OUT_END_STEP])
+
+
+def run_batch_trials(
+    setup: TrialSetup,
+    batch_size: int,
+    rng: np.random.Generator,
+    outs: np.ndarray,
+    *,
+    stochastic: bool = True,
+) -> int:
+    """``batch_size`` stochastic trials on all cores, noise drawn here; returns steps run."""
+    B = batch_size
+    noise = rng.standard_normal((B, setup.n_steps)) if stochastic else np.empty((B, 0))
+    p = setup.protocol
+    kernel.run_trials_batch(
+        np.tile(setup.sim.initial_state, (B, 1)),
+        np.tile(setup.W, (B, 1)),
+        np.full(B, setup.theta_c),
+        1.0,
+        False,
+        50.0,
+        setup.plant,
+        setup.plant,
+        False,
+        setup.sim.dt,
+        setup.n_steps,
+        1,
+        noise,
+        False,
+        TRACE_GAMMA,
+        np.zeros((B, 6)),
+        p.check_step(setup.sim.dt),
+        p.check_x,
+        p.check_theta,
+        p.goal_x,
+        p.goal_theta,
+        p.reward_success,
+        p.reward_failure,
+        outs,
+    )
+    return int(outs[:, kernel.OUT_END_STEP].sum())
+
+
+# ------------------------------------------------------------------------ Gymnasium side
+
+
+def _gymnasium() -> Any:
+    try:
+        import gymnasium
+    except ImportError as exc:  # a core dependency, but say what is missing
+        raise ParameterError(f"the benchmark needs gymnasium ({exc})") from None
+    return gymnasium
+
+
+def gymnasium_steps(env: Any, n: int) -> int:
+    """``n`` steps of an unwrapped ``CartPole-v1`` with action 1, reset on termination."""
+    for _ in range(n):
+        _, _, terminated, _, _ = env.step(1)
+        if terminated:
+            env.reset()
+    return n
+
+
+def gymnasium_vector_steps(env: Any, actions: np.ndarray, n: int) -> int:
+    """``n`` steps of ``CartPoleVectorEnv`` (autoreset); returns env-steps over the batch."""
+    for _ in range(n):
+        env.step(actions)
+    return n * int(actions.shape[0])
+
+
+# ---------------------------------------------------------------------------- timing
+
+
+def _calibrate(run: Callable[[], int], seconds: float) -> int:
+    """How many calls of ``run`` take about ``seconds`` (one call timed after warm-up)."""
+    run()
+    t0 = time.perf_counter()
+    run()
+    one = max(time.perf_counter() - t0, 1e-7)
+    return max(1, int(seconds / one))
+
+
+def _timed(run: Callable[[], int], calls: int) -> tuple[int, float]:
+    t0 = time.perf_counter()
+    steps = 0
+    for _ in range(calls):
+        steps += run()
+    return steps, time.perf_counter() - t0
+
+
+def compare(
+    kernel_name: str,
+    kernel_run: Callable[[], int],
+    reference_name: str,
+    reference_run: Callable[[], int],
+    config: BenchConfig,
+) -> tuple[Timing, Timing]:
+    """Time both sides alternately (warm-up excluded), ``config.repeats`` repeats each.
+
+    Each ``run`` returns the env-steps it actually performed (a trial that ends early
+    counts only its steps).
+    """
+    kc = _calibrate(kernel_run, config.seconds)
+    rc = _calibrate(reference_run, config.seconds)
+    kn: list[int] = []
+    ks: list[float] = []
+    rn: list[int] = []
+    rs: list[float] = []
+    for _ in range(config.repeats):
+        n, t = _timed(kernel_run, kc)
+        kn.append(n)
+        ks.append(t)
+        n, t = _timed(reference_run, rc)
+        rn.append(n)
+        rs.append(t)
+    return (
+        Timing(kernel_name, tuple(kn), tuple(ks)),
+        Timing(reference_name, tuple(rn), tuple(rs)),
+    )
+
+
+def scalar_vs_gymnasium(config: BenchConfig, rng: np.random.Generator) -> Comparison:
+    """Item 1: one trial on one core (noise generation included) vs CartPole-v1."""
+    setup = TrialSetup.chapter(config.duration, config.dt)
+    out = np.empty(kernel.N_OUT)
+    env = _gymnasium().make("CartPole-v1").unwrapped
+    env.reset(seed=0)
+    # a block of ~ one trial's steps per call keeps the per-call overhead alike
+    block = setup.n_steps
+    k, r = compare(
+        "kernel.run_trial + rng.standard_normal",
+        lambda: run_scalar_trial(setup, rng, out),
+        "gymnasium CartPole-v1 unwrapped step loop",
+        lambda: gymnasium_steps(env, block),
+        config,
+    )
+    env.close()
+    return Comparison(
+        kernel=k,
+        reference=r,
+        target_ratio=50.0,
+        notes=(
+            f"one {config.duration:g}-s trial = {setup.n_steps} RK4 steps per call, chapter final "
+            "W and theta_c, stochastic policy; drawing its noise from np.random.Generator is "
+            "timed; one thread; reference: Euler, action 1, reset on termination"
+        ),
+        extra={"steps_per_trial": setup.n_steps},
+    )
+
+
+def batch_vs_gymnasium_vector(config: BenchConfig, rng: np.random.Generator) -> Comparison:
+    """Item 2: run_trials_batch vs CartPoleVectorEnv at the same batch size."""
+    import numba
+    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
+
+    B = config.batch_size
+    setup = TrialSetup.chapter(config.duration, config.dt)
+    outs = np.empty((B, kernel.N_OUT))
+    env = CartPoleVectorEnv(num_envs=B)
+    env.reset(seed=0)
+    actions = np.ones(B, dtype=np.int64)
+    block = setup.n_steps
+    k, r = compare(
+        f"kernel.run_trials_batch (B={B}) + rng.standard_normal",
+        lambda: run_batch_trials(setup, B, rng, outs),
+        f"gymnasium CartPoleVectorEnv (num_envs={B})",
+        lambda: gymnasium_vector_steps(env, actions, block),
+        config,
+    )
+    env.close()
+    return Comparison(
+        kernel=k,
+        reference=r,
+        target_ratio=1.0,
+        notes=(
+            "steps = env-steps summed over the batch; the kernel does 4 derivative "
+            "evaluations per step (RK4), the reference 1 (Euler); kernel noise generation "
+            "timed (one thread); kernel parallel over trials with "
+            f"{numba.get_num_threads()} Numba threads"
+        ),
+        extra={"batch_size": B, "numba_threads": numba.get_num_threads()},
+    )
+
+
+# ------------------------------------------------------------------------ scaling
+
+
+def linear_fit(x: np.ndarray, y: np.ndarray) -> dict[str, float]:
+    """Least-squares y = intercept + slope x and its coefficient of determination R^2."""
+    slope, intercept = np.polyfit(x, y, 1)
+    pred = intercept + slope * x
+    ss_res = float(np.sum((y - pred) ** 2))
+    ss_tot = float(np.sum((y - np.mean(y)) ** 2))
+    r2 = 1.0 - ss_res / ss_tot if ss_tot > 0 else 1.0
+    return {"slope": float(slope), "intercept": float(intercept), "r2": r2}
+
+
+def scaling(config: BenchConfig, rng: np.random.Generator) -> dict[str, Any]:
+    """Item 4: best seconds per trial (noise included) against n_steps = duration / dt.
+
+    The eq-24 check is off so each trial runs all its steps.
+    """
+    rows = []
+    out = np.empty(kernel.N_OUT)
+    for duration in config.scaling_durations:
+        setup = TrialSetup.chapter(duration, config.dt, check=False)
+
+        def one(s: TrialSetup = setup) -> int:
+            return run_scalar_trial(s, rng, out)
+
+        calls = _calibrate(one, config.seconds)
+        best = math.inf
+        for _ in range(config.repeats):
+            steps, t = _timed(one, calls)
+            if steps != calls * setup.n_steps:
+                raise ParameterError("a scaling trial ended early; its step count would be wrong")
+            best = min(best, t / calls)
+        rows.append({"duration": duration, "n_steps": setup.n_steps, "seconds_per_trial": best})
+    fit = linear_fit(
+        np.array([r["n_steps"] for r in rows], dtype=float),
+        np.array([r["seconds_per_trial"] for r in rows]),
+    )
+    return {
+        "dt": config.dt,
+        "rows": rows,
+        "fit": {**fit, "ns_per_step": fit["slope"] * 1e9},
+        "notes": "best of repeats; kernel.run_trial with noise drawn per trial; check off",
+    }
+
+
+# ------------------------------------------------------------------------ compile / cache
+
+
+_FIRST_CALL_SCRIPT = """
+import json, time
+t0 = time.perf_counter()
+import numpy as np
+from striatal import bench, kernel
+t_import = time.perf_counter() - t0
+rng = np.random.default_rng(0)
+setup = bench.TrialSetup.chapter(1.0, 0.01)
+t0 = time.perf_counter()
+bench.run_scalar_trial(setup, rng, np.empty(kernel.N_OUT))
+t_scalar = time.perf_counter() - t0
+t0 = time.perf_counter()
+bench.run_batch_trials(setup, 2, rng, np.empty((2, kernel.N_OUT)))
+t_batch = time.perf_counter() - t0
+print(json.dumps({
+    "import_seconds": t_import,
+    "first_run_trial_seconds": t_scalar,
+    "first_run_trials_batch_seconds": t_batch,
+    "cache_misses": bench.cache_misses(),
+}))
+"""
+
+
+def cache_misses() -> int:
+    """Numba on-disk cache misses (compilations) of the two trial kernels in this process."""
+    total = 0
+    for fn in (kernel.run_trial, kernel.run_trials_batch):
+        total += sum(fn.stats.cache_misses.values())
+    return total
+
+
+def first_calls(rng: np.random.Generator) -> dict[str, Any]:
+    """Item 5, this process: the first call of each trial kernel (load or compile)."""
+    setup = TrialSetup.chapter(1.0, 0.01)
+    before = cache_misses()
+    t0 = time.perf_counter()
+    run_scalar_trial(setup, rng, np.empty(kernel.N_OUT))
+    t_scalar = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    run_batch_trials(setup, 2, rng, np.empty((2, kernel.N_OUT)))
+    t_batch = time.perf_counter() - t0
+    misses = cache_misses() - before
+    return {
+        "first_run_trial_seconds": t_scalar,
+        "first_run_trials_batch_seconds": t_batch,
+        "cache_misses": misses,
+        "compile_included": misses > 0,
+    }
+
+
+def second_process() -> dict[str, Any]:
+    """Item 5, a fresh interpreter: import and first calls after this process's cache."""
+    t0 = time.perf_counter()
+    proc = subprocess.run(
+        [sys.executable, "-c", _FIRST_CALL_SCRIPT],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise ParameterError(f"the second-process check failed: {proc.stderr.strip()[-300:]}")
+    result: dict[str, Any] = json.loads(proc.stdout.strip().splitlines()[-1])
+    result["process_wall_seconds"] = wall
+    result["compile_included"] = result["cache_misses"] > 0
+    return result
+
+
+# ------------------------------------------------------------------------ training
+
+
+def train_wall(max_trials: int | None) -> dict[str, Any]:
+    """Item 3: ``striatal train --init chapter`` in a fresh process, timed from outside."""
+    cmd = [sys.executable, "-m", "striatal", "train", "--init", "chapter"]
+    cmd += ["--no-progress", "--json"]
+    if max_trials is not None:
+        cmd += ["--max-trials", str(max_trials)]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise ParameterError(f"striatal train failed: {proc.stderr.strip()[-300:]}")
+    result = json.loads(proc.stdout)
+    shown = ["striatal", *cmd[3:]]
+    return {
+        "command": " ".join(shown),
+        "process_wall_seconds": wall,
+        "learning_loop_seconds": float(result["wall_seconds"]),
+        "trials": int(result["trials"]),
+        "success": bool(result["success"]),
+        "notes": "process wall includes interpreter start, imports and kernel cache load",
+    }
+
+
+# ------------------------------------------------------------------------ machine, all
+
+
+def machine() -> dict[str, Any]:
+    """Cores, CPU model (/proc/cpuinfo), library versions."""
+    import gymnasium
+    import numba
+
+    model = platform.processor() or "unknown"
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    model = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return {
+        "cpu_model": model,
+        "logical_cores": os.cpu_count(),
+        "numba_threads": numba.get_num_threads(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "numba": numba.__version__,
+        "gymnasium": gymnasium.__version__,
+        "platform": platform.platform(),
+    }
+
+
+@dataclass(frozen=True)
+class BenchReport:
+    """Everything ``striatal bench`` measured; ``not_measured`` names what was skipped and why."""
+
+    config: BenchConfig
+    machine: dict[str, Any]
+    compile: dict[str, Any]
+    scalar_vs_gymnasium: Comparison
+    batch_vs_gymnasium_vector: Comparison
+    scaling: dict[str, Any]
+    train: dict[str, Any] | None
+    not_measured: dict[str, str]
+    total_seconds: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "config": asdict(self.config),
+            "machine": self.machine,
+            "compile": self.compile,
+            "scalar_vs_gymnasium": self.scalar_vs_gymnasium.to_dict(),
+            "batch_vs_gymnasium_vector": self.batch_vs_gymnasium_vector.to_dict(),
+            "scaling": self.scaling,
+            "train": self.train,
+            "not_measured": self.not_measured,
+            "total_seconds": self.total_seconds,
+        }
+
+
+def run_all(config: BenchConfig, seed: int = 0) -> BenchReport:
+    """Every measurement in one process, in the order compile, 1, 2, 4, 3."""
+    t_start = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    here = first_calls(rng)
+    compile_info = {"this_process": here, "second_process": second_process()}
+    scalar = scalar_vs_gymnasium(config, rng)
+    batch = batch_vs_gymnasium_vector(config, rng)
+    grow = scaling(config, rng)
+    train = train_wall(config.train_max_trials) if config.train else None
+    not_measured = {
+        "sweep": "striatal sweep (src/striatal/experiments.py) had not landed when this was "
+        "written: no 100-seed sweep time, no 1-to-all-workers speed-up",
+        "sweep_peak_memory": "needs the 1000-run sweep; not measured",
+    }
+    if train is None:
+        not_measured["train"] = "skipped (train disabled)"
+    return BenchReport(
+        config=config,
+        machine=machine(),
+        compile=compile_info,
+        scalar_vs_gymnasium=scalar,
+        batch_vs_gymnasium_vector=batch,
+        scaling=grow,
+        train=train,
+        not_measured=not_measured,
+        total_seconds=time.perf_counter() - t_start,
+    )
+
+
+def format_report(report: BenchReport) -> str:
+    """The human-readable table printed by ``striatal bench``."""
+    m = report.machine
+    lines = [
+        f"machine: {m['cpu_model']}, {m['logical_cores']} logical cores, "
+        f"{m['numba_threads']} Numba threads; numpy {m['numpy']}, numba {m['numba']}, "
+        f"gymnasium {m['gymnasium']}",
+    ]
+    here = report.compile["this_process"]
+    second = report.compile["second_process"]
+    lines.append(
+        "compile/warm-up (excluded from all rates): first run_trial "
+        f"{here['first_run_trial_seconds']:.3f} s, first run_trials_batch "
+        f"{here['first_run_trials_batch_seconds']:.3f} s "
+        f"({'compile included' if here['compile_included'] else 'loaded from cache'}); "
+        f"second process {second['first_run_trial_seconds']:.3f} s + "
+        f"{second['first_run_trials_batch_seconds']:.3f} s "
+        f"({'compile included' if second['compile_included'] else 'loaded from cache'})"
+    )
+    for key, comp in (
+        ("scalar_vs_gymnasium", report.scalar_vs_gymnasium),
+        ("batch_vs_gymnasium_vector", report.batch_vs_gymnasium_vector),
+    ):
+        lines.append(
+            f"{key}: {comp.kernel.best_steps_per_second:,.0f} steps/s "
+            f"vs {comp.reference.best_steps_per_second:,.0f} steps/s = {comp.ratio:.1f}x "
+            f"(median {comp.median_ratio:.1f}x; target >= {comp.target_ratio:g}x)"
+        )
+        lines.append(f"  kernel:    {comp.kernel.name}")
+        lines.append(f"  reference: {comp.reference.name}")
+    fit = report.scaling["fit"]
+    lines.append(
+        f"scaling: time per trial = {fit['intercept'] * 1e6:.1f} us + "
+        f"{fit['ns_per_step']:.1f} ns x n_steps, R^2 = {fit['r2']:.5f}"
+    )
+    for row in report.scaling["rows"]:
+        lines.append(
+            f"  {row['duration']:>7g} s  {row['n_steps']:>7d} steps  "
+            f"{row['seconds_per_trial'] * 1e3:.3f} ms/trial"
+        )
+    if report.train is not None:
+        t = report.train
+        lines.append(
+            f"train: `{t['command']}` {t['process_wall_seconds']:.2f} s wall "
+            f"({t['learning_loop_seconds']:.2f} s learning loop, {t['trials']} trials, "
+            f"success={t['success']})"
+        )
+    for name, why in report.not_measured.items():
+        lines.append(f"not measured: {name}: {why}")
+    lines.append(f"total {report.total_seconds:.1f} s")
+    return "\n".join(lines)

@@ -1,0 +1,67 @@
+"""``striatal bench``: the kernel's speed beside Gymnasium's cart-pole, in one process."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import replace
+
+from striatal.bench import QUICK, BenchConfig, format_report, run_all
+from striatal.files import dumps_json
+from striatal.params import check_seed
+
+COMMAND = "bench"
+ORDER = 90
+HELP = "benchmark the kernel against Gymnasium's CartPole (docs/performance.md)"
+DESCRIPTION = (
+    "Steps per second of one chapter trial (kernel.run_trial, noise generation included) "
+    "against Gymnasium's CartPole-v1 step loop, of the batched kernel against "
+    "CartPoleVectorEnv at the same batch size, time per trial against duration / dt "
+    "(linear fit), the wall time of `striatal train --init chapter`, and the kernels' "
+    "first-call (compile or cache-load) time in this and a fresh process. Both sides of "
+    "each ratio are timed alternately in the same process, warm-up excluded."
+)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--json", action="store_true", help="print the full report as JSON")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="a short run (10-s trials, batch 32, 2 repeats, train capped at 20 trials)",
+    )
+    parser.add_argument(
+        "--batch-size", type=int, default=None, help="B of the batched comparison (default 256)"
+    )
+    parser.add_argument(
+        "--seconds",
+        type=float,
+        default=None,
+        help="wall budget of one timed repeat of one side [s] (default 0.5)",
+    )
+    parser.add_argument("--repeats", type=int, default=None, help="timed repeats (default 5)")
+    parser.add_argument("--no-train", action="store_true", help="skip timing striatal train")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the policy noise")
+
+
+def config_from(args: argparse.Namespace) -> BenchConfig:
+    """The benchmark configuration the options ask for (validated)."""
+    base = QUICK if args.quick else BenchConfig()
+    return replace(
+        base,
+        batch_size=base.batch_size if args.batch_size is None else args.batch_size,
+        seconds=base.seconds if args.seconds is None else args.seconds,
+        repeats=base.repeats if args.repeats is None else args.repeats,
+        train=base.train and not args.no_train,
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    config = config_from(args)
+    seed = check_seed(args.seed)
+    report = run_all(config, seed=seed)
+    if args.json:
+        sys.stdout.write(dumps_json(report.to_dict()))
+    else:
+        sys.stdout.write(format_report(report) + "\n")
+    return 0

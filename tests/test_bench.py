@@ -1,0 +1,212 @@
+"""The benchmark runs and reports finite rates; the batched kernel equals the scalar one.
+
+No speed thresholds here: timings depend on the machine (docs/performance.md has them).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from striatal import bench, kernel
+from striatal.cli import main
+from striatal.errors import ParameterError
+from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Plant, Simulation
+from striatal.rollout import Protocol
+
+SIM = Simulation(duration=35.0)  # past the 30-s check of eq 24
+PROTOCOL = Protocol()
+
+
+def _positive_finite(x: object) -> bool:
+    return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) and x > 0
+
+
+def _scalar(
+    state0: np.ndarray, W: np.ndarray, theta_c: float, noise: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    p = Plant().as_array()
+    trace = np.zeros(6)
+    out = np.empty(kernel.N_OUT)
+    kernel.run_trial(
+        state0,
+        W,
+        theta_c,
+        1.0,
+        False,
+        50.0,
+        p,
+        p,
+        False,
+        SIM.dt,
+        SIM.n_steps,
+        1,
+        noise,
+        np.empty((0, 2)),
+        0.0,
+        0.0,
+        False,
+        0.999,
+        trace,
+        PROTOCOL.check_step(SIM.dt),
+        PROTOCOL.check_x,
+        PROTOCOL.check_theta,
+        PROTOCOL.goal_x,
+        PROTOCOL.goal_theta,
+        PROTOCOL.reward_success,
+        PROTOCOL.reward_failure,
+        np.empty((0, kernel.N_TRAJ)),
+        out,
+    )
+    return out, trace
+
+
+def _batch(
+    states0: np.ndarray, W: np.ndarray, theta_c: np.ndarray, noise: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    p = Plant().as_array()
+    B = states0.shape[0]
+    traces = np.zeros((B, 6))
+    outs = np.empty((B, kernel.N_OUT))
+    kernel.run_trials_batch(
+        states0,
+        W,
+        theta_c,
+        1.0,
+        False,
+        50.0,
+        p,
+        p,
+        False,
+        SIM.dt,
+        SIM.n_steps,
+        1,
+        noise,
+        False,
+        0.999,
+        traces,
+        PROTOCOL.check_step(SIM.dt),
+        PROTOCOL.check_x,
+        PROTOCOL.check_theta,
+        PROTOCOL.goal_x,
+        PROTOCOL.goal_theta,
+        PROTOCOL.reward_success,
+        PROTOCOL.reward_failure,
+        outs,
+    )
+    return outs, traces
+
+
+def _mixed_rows(rng: np.random.Generator, B: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rows that succeed, fail at the check, and fault (RK4 unstable, or NaN from sqrt(W1 g))."""
+    W = np.empty((B, 6))
+    W[:] = CHAPTER_FINAL_W
+    W[1::4] = CHAPTER_INITIAL_W
+    W[2::4, 4] = 1.0e4  # swing-up cart gain far beyond RK4's stability at dt = 0.01 s
+    W[3::4, 0] = -1.0  # sqrt of a negative W1 g once balancing: a NaN state
+    W += rng.normal(0.0, 0.01, W.shape) * (np.abs(W) < 100)
+    theta_c = rng.uniform(0.5, 1.0, B)
+    states0 = np.tile(SIM.initial_state, (B, 1))
+    states0[:, 2] += rng.uniform(-0.05, 0.05, B)
+    return states0, W, theta_c
+
+
+def test_mixed_batch_equals_scalar_kernel_bit_for_bit() -> None:
+    rng = np.random.default_rng(2024)
+    B = 8
+    states0, W, theta_c = _mixed_rows(rng, B)
+    noise = np.random.default_rng(7).standard_normal((B, SIM.n_steps))
+    outs, traces = _batch(states0, W, theta_c, noise)
+    for b in range(B):
+        out, trace = _scalar(states0[b], W[b], theta_c[b], noise[b])
+        np.testing.assert_array_equal(outs[b], out)
+        np.testing.assert_array_equal(traces[b], trace)
+    faults = outs[:, kernel.OUT_FAULT]
+    # the batch really is mixed: faulting rows beside rows that ran to an end
+    assert faults[2::4].all() and faults[3::4].all()
+    assert not faults[0::4].any()
+    assert set(np.unique(outs[:, kernel.OUT_REWARD])) <= {10.0, -5.0}
+
+
+def test_mean_policy_batch_equals_scalar_kernel() -> None:
+    rng = np.random.default_rng(99)
+    B = 4
+    states0, W, theta_c = _mixed_rows(rng, B)
+    outs, traces = _batch(states0, W, theta_c, np.empty((B, 0)))
+    for b in range(B):
+        out, trace = _scalar(states0[b], W[b], theta_c[b], np.empty(0))
+        np.testing.assert_array_equal(outs[b], out)
+        np.testing.assert_array_equal(trace, np.zeros(6))
+    np.testing.assert_array_equal(traces, np.zeros((B, 6)))
+
+
+def test_same_seed_same_benchmark_trial() -> None:
+    setup = bench.TrialSetup.chapter(35.0, 0.01)
+    a = np.empty(kernel.N_OUT)
+    b = np.empty(kernel.N_OUT)
+    bench.run_scalar_trial(setup, np.random.default_rng(3), a)
+    bench.run_scalar_trial(setup, np.random.default_rng(3), b)
+    np.testing.assert_array_equal(a, b)
+    # the benchmark's trial runs its whole length, so its steps per second count all steps
+    assert a[kernel.OUT_END_STEP] == setup.n_steps
+
+
+def test_linear_fit_recovers_a_line() -> None:
+    x = np.array([1.0, 2.0, 4.0, 8.0])
+    fit = bench.linear_fit(x, 3.0 + 0.5 * x)
+    assert fit["slope"] == pytest.approx(0.5)
+    assert fit["intercept"] == pytest.approx(3.0)
+    assert fit["r2"] == pytest.approx(1.0)
+
+
+def test_timing_rates() -> None:
+    t = bench.Timing("x", (100, 100, 100), (1.0, 0.5, 2.0))
+    assert t.best_steps_per_second == 200.0
+    assert t.median_steps_per_second == 100.0
+
+
+@pytest.mark.parametrize(
+    "kwargs", [{"seconds": 0.0}, {"repeats": 0}, {"batch_size": 0}, {"dt": 0.5}]
+)
+def test_bad_config_raises(kwargs: dict[str, float]) -> None:
+    with pytest.raises(ParameterError):
+        bench.BenchConfig(**kwargs)  # type: ignore[arg-type]
+
+
+def test_cli_bad_batch_size_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["bench", "--quick", "--batch-size", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "batch size" in err
+
+
+def test_bench_quick_json_reports_positive_finite_figures(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["bench", "--quick", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    for key in ("scalar_vs_gymnasium", "batch_vs_gymnasium_vector"):
+        comp = report[key]
+        for value in (
+            comp["ratio"],
+            comp["median_ratio"],
+            comp["kernel"]["best_steps_per_second"],
+            comp["reference"]["best_steps_per_second"],
+        ):
+            assert _positive_finite(value)
+    assert report["batch_vs_gymnasium_vector"]["batch_size"] == bench.QUICK.batch_size
+    fit = report["scaling"]["fit"]
+    assert _positive_finite(fit["slope"]) and fit["r2"] <= 1.0
+    assert len(report["scaling"]["rows"]) == len(bench.QUICK.scaling_durations)
+    train = report["train"]
+    assert _positive_finite(train["process_wall_seconds"])
+    assert train["trials"] == bench.QUICK.train_max_trials
+    for where in ("this_process", "second_process"):
+        info = report["compile"][where]
+        assert _positive_finite(info["first_run_trial_seconds"])
+        assert isinstance(info["compile_included"], bool)
+    # this process compiled or loaded the kernels, so a fresh one loads them from disk
+    assert report["compile"]["second_process"]["compile_included"] is False
+    assert report["machine"]["logical_cores"] >= 1
