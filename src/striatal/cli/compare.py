@@ -1,0 +1,65 @@
+"""``striatal compare``: the table of learner, control and baselines from sweep summaries."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from striatal import experiments
+from striatal.errors import DataFileError, ParameterError
+from striatal.files import read_json, write_json
+
+COMMAND = "compare"
+ORDER = 41
+HELP = "print the comparison table (markdown) of sweep summaries and write it as JSON"
+DESCRIPTION = (
+    "Read summary.json of one or more sweeps (a folder or the file itself), print one "
+    "markdown table of every arm (learner, alpha = 0 control, baselines) per init, and "
+    "optionally write the rows as JSON. Run the arms with "
+    "'striatal sweep --baselines lqr,hand,random,cmaes'."
+)
+
+_KEYS = ("arm", "init", "method", "runs", "success_rate", "unsolved_share", "trials_median")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("summaries", nargs="+", type=Path, help="sweep folders or summary.json")
+    parser.add_argument("--out", type=Path, default=None, help="write the table as JSON here")
+
+
+def load_summary(path: Path) -> dict[str, Any]:
+    """A sweep's summary.json (from its folder or the file), checked for its arms."""
+    p = path / "summary.json" if path.is_dir() else path
+    data = read_json(p, what="sweep summary")
+    if not isinstance(data, dict) or not isinstance(data.get("arms"), list):
+        raise DataFileError(f"{p} is not the summary.json of a striatal sweep")
+    for a in data["arms"]:
+        if not isinstance(a, dict) or any(k not in a for k in _KEYS):
+            raise DataFileError(f"{p} has an arm without {', '.join(_KEYS)}")
+    return data
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.out is not None and not args.out.parent.is_dir():
+        raise ParameterError(f"--out {args.out}: folder {args.out.parent} does not exist")
+    summaries = [load_summary(p) for p in args.summaries]
+    arms = [
+        {**a, "source": str(p)}
+        for p, s in zip(args.summaries, summaries, strict=True)
+        for a in s["arms"]
+    ]
+    arms.sort(key=lambda a: (a["init"], a["arm"]))
+    table = experiments.markdown_table({"arms": arms})
+    if args.out is not None:
+        write_json(
+            args.out,
+            {
+                "arms": arms,
+                "notes": [experiments.NOTE_CONTROL],
+                "settings": [s.get("settings", {}) for s in summaries],
+            },
+        )
+    sys.stdout.write(table)
+    return 0
