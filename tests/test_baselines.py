@@ -1,0 +1,78 @@
+"""Baselines: the LQR gain and its fit to the balancing law, and the searches."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from striatal import baselines
+from striatal.control import balancing_gain_matrix
+from striatal.dynamics import linearization
+from striatal.params import (
+    CHAPTER_FINAL_THETA_C,
+    CHAPTER_FINAL_W,
+    CHAPTER_INITIAL_THETA_C,
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+)
+
+TEMPLATE = Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C)
+
+
+def test_lqr_gain_solves_the_riccati_equation(plant: Plant) -> None:
+    K, P = baselines.lqr_gain(plant)
+    A, B = linearization(plant)
+    Q, R = baselines.LQR_Q, baselines.LQR_R
+    residual = A.T @ P + P @ A - P @ B @ np.linalg.solve(R, B.T @ P) + Q
+    assert np.allclose(residual, 0.0, atol=1e-9)
+    assert np.allclose(P, P.T) and np.all(np.linalg.eigvalsh(P) > 0)
+    assert np.all(np.linalg.eigvals(A - B @ K).real < 0)
+
+
+def test_lqr_gain_matches_python_control(plant: Plant) -> None:
+    control = pytest.importorskip("control", reason="python-control is in the [dev] extra")
+    A, B = linearization(plant)
+    K_ref, _, _ = control.lqr(A, B, baselines.LQR_Q, baselines.LQR_R)
+    K, _ = baselines.lqr_gain(plant)
+    assert np.allclose(K, np.asarray(K_ref), rtol=1e-8, atol=1e-10)
+
+
+def test_lqr_fit_matches_the_cart_terms_and_stabilises(plant: Plant) -> None:
+    fit = baselines.lqr_fit(plant)
+    assert fit.W123[1] == pytest.approx(fit.K[0]) and fit.W123[2] == pytest.approx(fit.K[1])
+    K_fit = balancing_gain_matrix(np.array(fit.W123), plant)[0]
+    assert np.allclose(K_fit, fit.K_fit)
+
+    # W1 is the least-squares optimum of the two theta coefficients
+    def err(w1: float) -> float:
+        kw = balancing_gain_matrix(np.array([w1, *fit.W123[1:]]), plant)[0]
+        return float(np.sum((kw[2:] - np.array(fit.K[2:])) ** 2))
+
+    assert err(fit.W123[0]) <= min(err(fit.W123[0] * 0.99), err(fit.W123[0] * 1.01))
+    assert fit.residual == pytest.approx(np.sqrt(err(fit.W123[0])))
+    assert all(z.real < 0 for z in fit.eig_fit) and all(z.real < 0 for z in fit.eig_lqr)
+    W, theta_c = baselines.lqr_controller(plant)
+    assert W[3:] == CHAPTER_FINAL_W[3:] and theta_c == CHAPTER_FINAL_THETA_C
+
+
+def test_chapter_final_gains_pass_on_the_mean_policy(plant: Plant, sim60: Simulation) -> None:
+    out = baselines.fixed_controller(
+        plant, TEMPLATE, sim60, CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C, 0, 50, "mean"
+    )
+    assert out["success"] and out["trials"] == 1
+
+
+def test_searches_are_deterministic_and_within_budget(plant: Plant) -> None:
+    sim = Simulation(duration=20.0)
+    a = baselines.random_search(plant, TEMPLATE, sim, 4, 12, "noisy")
+    assert a == baselines.random_search(plant, TEMPLATE, sim, 4, 12, "noisy")
+    assert 1 <= a["trials"] <= 12
+    low, high = baselines.RANDOM_BOX
+    p = np.array([*a["W"], a["theta_c"]])
+    assert np.all(p >= low) and np.all(p <= high)
+    b = baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 4, 15, "mean")
+    assert b == baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 4, 15, "mean")
+    assert 1 <= b["trials"] <= 15 and b["W"][0] > 0
+    assert low[6] <= b["theta_c"] <= high[6]
