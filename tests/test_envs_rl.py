@@ -64,8 +64,8 @@ def test_sac_trains_on_the_env() -> None:
     after = np.mean([_episode_return(act, 100 + s) for s in range(2)])
     still = np.mean([_episode_return(lambda o: np.zeros(1), 100 + s) for s in range(2)])
     # Doing nothing leaves the pole hanging (return ~0.03 of a possible 500). The untrained
-    # actor scores ~7; after 3000 steps SAC pumps energy into the pole (~53: as much as
-    # uniform random +-50 m/s^2 actions, far from a swing-up, which needs many more steps).
+    # actor scores ~7; after 3000 steps SAC pumps energy into the pole (~53: comparable to
+    # uniform random +-50 m/s^2 actions; far from a swing-up, which needs many more steps).
     assert still < 0.1
     assert after > 3.0 * max(before, still)
     assert after > 20.0
