@@ -287,3 +287,19 @@ def test_vector_controller_batch_balances() -> None:
         obs, r, term, trunc, _ = vec.step(policy(obs))
     assert trunc.all() and not term.any()
     assert np.all(r == 10.0)
+
+
+def test_policy_samples_eq5_and_checks_shapes() -> None:
+    """With a generator the policy draws a = mu + sigma(W6) N(0, 1) (eq 5)."""
+    obs = np.array([0.1, 0.0, math.sin(0.2), math.cos(0.2), 0.0])
+    mean = SwitchingController()(obs)
+    noisy = SwitchingController(rng=np.random.default_rng(0))
+    draws = np.array([noisy(obs)[0] for _ in range(4000)])
+    assert draws.mean() == pytest.approx(mean[0], abs=4 * noisy.sigma / math.sqrt(4000))
+    assert draws.std() == pytest.approx(noisy.sigma, rel=0.05)
+    assert noisy.sigma == pytest.approx(0.1 + 1 / (1 + math.exp(-CHAPTER_FINAL_W[5])))
+    assert SwitchingController()(np.stack([obs, obs])).shape == (2, 1)
+    with pytest.raises(ParameterError):
+        SwitchingController()(np.zeros(4))
+    with pytest.raises(ParameterError):
+        SwitchingController(observation="raw")(np.zeros(5))
