@@ -210,3 +210,10 @@ def test_bench_quick_json_reports_positive_finite_figures(
     # this process compiled or loaded the kernels, so a fresh one loads them from disk
     assert report["compile"]["second_process"]["compile_included"] is False
     assert report["machine"]["logical_cores"] >= 1
+
+
+def test_sweep_measurement_runs_learner_and_control_arm() -> None:
+    info = bench.run_sweep(1, 1, 3)
+    assert info["runs"] == 2  # one seed x (learner + alpha = 0 control arm)
+    assert info["command"].startswith("striatal sweep --seeds 1 --workers 1")
+    assert _positive_finite(info["wall_seconds"]) and _positive_finite(info["peak_rss_mib"])

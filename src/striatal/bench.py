@@ -63,7 +63,11 @@ class BenchConfig:
     ``batch_size``: B of the batched comparison; ``duration``: trial length [s];
     ``train``: also time ``striatal train --init chapter`` (``train_max_trials`` caps it,
     None for the command's own default); ``scaling_durations``: trial lengths [s] of the
-    cost-growth fit.
+    cost-growth fit; ``cold_compile``: also time a fresh process compiling the kernels
+    into an empty Numba cache folder; ``sweep_seeds``: seeds of the timed
+    ``striatal sweep`` on 1 and on all workers (0: skip; ``sweep_max_trials`` caps each
+    run); ``memory_runs``: runs of the sweep whose peak memory is measured (0: skip),
+    capped at ``memory_max_trials``.
     """
 
     seconds: float = 0.5
@@ -74,6 +78,11 @@ class BenchConfig:
     train: bool = True
     train_max_trials: int | None = None
     scaling_durations: tuple[float, ...] = (7.5, 15.0, 30.0, 60.0, 120.0, 240.0)
+    cold_compile: bool = True
+    sweep_seeds: int = 0
+    sweep_max_trials: int | None = None
+    memory_runs: int = 0
+    memory_max_trials: int = 20
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.seconds) and self.seconds > 0):
@@ -87,6 +96,8 @@ class BenchConfig:
             raise ParameterError("the scaling fit needs at least two durations")
         for d in self.scaling_durations:
             Simulation(duration=d, dt=self.dt)
+        if self.sweep_seeds < 0 or self.memory_runs < 0:
+            raise ParameterError("sweep seeds and memory runs must be >= 0")
         if self.train_max_trials is not None and self.train_max_trials < 1:
             raise ParameterError(f"train max trials must be >= 1, got {self.train_max_trials}")
 
@@ -98,6 +109,7 @@ QUICK = BenchConfig(
     duration=10.0,
     train_max_trials=20,
     scaling_durations=(2.5, 5.0, 10.0),
+    cold_compile=False,
 )
 
 
@@ -514,14 +526,22 @@ def first_calls(rng: np.random.Generator) -> dict[str, Any]:
     }
 
 
-def second_process() -> dict[str, Any]:
-    """Item 5, a fresh interpreter: import and first calls after this process's cache."""
+def second_process(cache_dir: str | None = None) -> dict[str, Any]:
+    """Item 5, a fresh interpreter: import and first calls after this process's cache.
+
+    With ``cache_dir`` (an empty folder) Numba caches there instead, so the fresh
+    process compiles both kernels: the cold-start cost.
+    """
+    env = dict(os.environ)
+    if cache_dir is not None:
+        env["NUMBA_CACHE_DIR"] = cache_dir
     t0 = time.perf_counter()
     proc = subprocess.run(
         [sys.executable, "-c", _FIRST_CALL_SCRIPT],
         capture_output=True,
         text=True,
         check=False,
+        env=env,
     )
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
@@ -558,6 +578,89 @@ def train_wall(max_trials: int | None) -> dict[str, Any]:
     }
 
 
+# ------------------------------------------------------------------------ sweeps
+
+
+_PEAK_RSS_SCRIPT = """
+import json, resource, subprocess, sys, time
+t0 = time.perf_counter()
+proc = subprocess.run(sys.argv[1:], capture_output=True, text=True, check=False)
+wall = time.perf_counter() - t0
+print(json.dumps({
+    "returncode": proc.returncode,
+    "stderr": proc.stderr[-300:],
+    "wall": wall,
+    "maxrss_kib": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss,
+}))
+"""
+
+
+def _sweep_command(seeds: int, workers: int, max_trials: int | None) -> list[str]:
+    cmd = ["sweep", "--seeds", str(seeds), "--workers", str(workers)]
+    cmd += ["--no-progress", "--json"]
+    if max_trials is not None:
+        cmd += ["--max-trials", str(max_trials)]
+    return cmd
+
+
+def run_sweep(seeds: int, workers: int, max_trials: int | None) -> dict[str, Any]:
+    """``striatal sweep`` (learner and alpha = 0 control arm) in a fresh process.
+
+    The process is started by a small wrapper that reports the peak resident set
+    (``ru_maxrss`` of its one child; with workers > 1 the largest single process).
+    """
+    cmd = _sweep_command(seeds, workers, max_trials)
+    full = [sys.executable, "-m", "striatal", *cmd]
+    proc = subprocess.run(
+        [sys.executable, "-c", _PEAK_RSS_SCRIPT, *full],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if proc.returncode != 0:
+        raise ParameterError(f"the sweep wrapper failed: {proc.stderr.strip()[-300:]}")
+    info = json.loads(proc.stdout.strip().splitlines()[-1])
+    if info["returncode"] != 0:
+        raise ParameterError(f"striatal sweep failed: {info['stderr'].strip()}")
+    return {
+        "command": "striatal " + " ".join(cmd),
+        "runs": 2 * seeds,
+        "workers": workers,
+        "wall_seconds": float(info["wall"]),
+        "peak_rss_mib": float(info["maxrss_kib"]) / 1024.0,
+    }
+
+
+def sweep_scaling(seeds: int, max_trials: int | None) -> dict[str, Any]:
+    """Item 3: the same sweep on 1 worker and on every core; speed-up = t1 / t_all."""
+    cores = os.cpu_count() or 1
+    one = run_sweep(seeds, 1, max_trials)
+    every = run_sweep(seeds, cores, max_trials)
+    return {
+        "seeds": seeds,
+        "max_trials": max_trials,
+        "one_worker": one,
+        "all_workers": every,
+        "speedup": one["wall_seconds"] / every["wall_seconds"],
+        "notes": "wall time of the whole process (interpreter start, imports, kernel load "
+        "included); runs = seeds x (learner arm + alpha = 0 control arm)",
+    }
+
+
+def sweep_memory(runs: int, max_trials: int) -> dict[str, Any]:
+    """Item 4: peak RSS of a ``runs``-run sweep on one worker beside a 10-run one."""
+    small = run_sweep(5, 1, max_trials)
+    big = run_sweep(runs // 2, 1, max_trials)
+    return {
+        "max_trials": max_trials,
+        "small": small,
+        "large": big,
+        "notes": f"one worker, so the sweep's only process holds everything; trials capped "
+        f"at {max_trials} per run to fit the run's time budget (memory grows with the "
+        "rows, not with trials)",
+    }
+
+
 # ------------------------------------------------------------------------ machine, all
 
 
@@ -584,6 +687,7 @@ def machine() -> dict[str, Any]:
         "numba": numba.__version__,
         "gymnasium": gymnasium.__version__,
         "platform": platform.platform(),
+        "load_average_1_5_15_min": list(os.getloadavg()),
     }
 
 
@@ -598,6 +702,8 @@ class BenchReport:
     batch_vs_gymnasium_vector: Comparison
     scaling: dict[str, Any]
     train: dict[str, Any] | None
+    sweep: dict[str, Any] | None
+    sweep_memory: dict[str, Any] | None
     not_measured: dict[str, str]
     total_seconds: float
 
@@ -610,6 +716,8 @@ class BenchReport:
             "batch_vs_gymnasium_vector": self.batch_vs_gymnasium_vector.to_dict(),
             "scaling": self.scaling,
             "train": self.train,
+            "sweep": self.sweep,
+            "sweep_memory": self.sweep_memory,
             "not_measured": self.not_measured,
             "total_seconds": self.total_seconds,
         }
@@ -621,17 +729,28 @@ def run_all(config: BenchConfig, seed: int = 0) -> BenchReport:
     rng = np.random.default_rng(seed)
     here = first_calls(rng)
     compile_info = {"this_process": here, "second_process": second_process()}
+    if config.cold_compile:
+        import tempfile
+
+        with tempfile.TemporaryDirectory(prefix="striatal-numba-") as empty:
+            compile_info["cold_process"] = second_process(cache_dir=empty)
     scalar = scalar_vs_gymnasium(config, rng)
     batch = batch_vs_gymnasium_vector(config, rng)
     grow = scaling(config, rng)
     train = train_wall(config.train_max_trials) if config.train else None
-    not_measured = {
-        "sweep": "striatal sweep (src/striatal/experiments.py) had not landed when this was "
-        "written: no 100-seed sweep time, no 1-to-all-workers speed-up",
-        "sweep_peak_memory": "needs the 1000-run sweep; not measured",
-    }
+    sweep = (
+        sweep_scaling(config.sweep_seeds, config.sweep_max_trials) if config.sweep_seeds else None
+    )
+    memory = (
+        sweep_memory(config.memory_runs, config.memory_max_trials) if config.memory_runs else None
+    )
+    not_measured: dict[str, str] = {}
     if train is None:
-        not_measured["train"] = "skipped (train disabled)"
+        not_measured["train"] = "skipped (--no-train)"
+    if sweep is None:
+        not_measured["sweep"] = "skipped (--sweep-seeds 0)"
+    if memory is None:
+        not_measured["sweep_memory"] = "skipped (--memory-runs 0)"
     return BenchReport(
         config=config,
         machine=machine(),
@@ -640,6 +759,8 @@ def run_all(config: BenchConfig, seed: int = 0) -> BenchReport:
         batch_vs_gymnasium_vector=batch,
         scaling=grow,
         train=train,
+        sweep=sweep,
+        sweep_memory=memory,
         not_measured=not_measured,
         total_seconds=time.perf_counter() - t_start,
     )
@@ -664,6 +785,13 @@ def format_report(report: BenchReport) -> str:
         f"{second['first_run_trials_batch_seconds']:.3f} s "
         f"({'compile included' if second['compile_included'] else 'loaded from cache'})"
     )
+    cold = report.compile.get("cold_process")
+    if cold is not None:
+        lines.append(
+            "cold start (empty Numba cache, compile included): first run_trial "
+            f"{cold['first_run_trial_seconds']:.2f} s, first run_trials_batch "
+            f"{cold['first_run_trials_batch_seconds']:.2f} s"
+        )
     for key, comp in (
         ("scalar_vs_gymnasium", report.scalar_vs_gymnasium),
         ("batch_vs_gymnasium_vector", report.batch_vs_gymnasium_vector),
@@ -692,6 +820,20 @@ def format_report(report: BenchReport) -> str:
             f"({t['learning_loop_seconds']:.2f} s learning loop, {t['trials']} trials, "
             f"success={t['success']})"
         )
+    if report.sweep is not None:
+        sw = report.sweep
+        for key in ("one_worker", "all_workers"):
+            r = sw[key]
+            lines.append(
+                f"sweep: `{r['command']}` {r['runs']} runs, {r['wall_seconds']:.1f} s wall"
+            )
+        lines.append(f"  speed-up 1 -> all workers: {sw['speedup']:.2f}x")
+    if report.sweep_memory is not None:
+        for key in ("small", "large"):
+            r = report.sweep_memory[key]
+            lines.append(
+                f"memory: `{r['command']}` {r['runs']} runs, peak RSS {r['peak_rss_mib']:.0f} MiB"
+            )
     for name, why in report.not_measured.items():
         lines.append(f"not measured: {name}: {why}")
     lines.append(f"total {report.total_seconds:.1f} s")

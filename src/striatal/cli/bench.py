@@ -28,7 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="a short run (10-s trials, batch 32, 2 repeats, train capped at 20 trials)",
+        help="a short run (10-s trials, batch 32, 2 repeats, train capped at 20 trials, "
+        "no cold compile)",
     )
     parser.add_argument(
         "--batch-size", type=int, default=None, help="B of the batched comparison (default 256)"
@@ -41,6 +42,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--repeats", type=int, default=None, help="timed repeats (default 5)")
     parser.add_argument("--no-train", action="store_true", help="skip timing striatal train")
+    parser.add_argument(
+        "--sweep-seeds",
+        type=int,
+        default=0,
+        help="time `striatal sweep --seeds N` (learner + control arm) on 1 and on all "
+        "workers (0: skip; the docs use 100)",
+    )
+    parser.add_argument(
+        "--memory-runs",
+        type=int,
+        default=0,
+        help="peak memory of a sweep of this many runs on one worker, trials capped at 20 "
+        "(0: skip; the docs use 1000)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed of the policy noise")
 
 
@@ -53,6 +68,8 @@ def config_from(args: argparse.Namespace) -> BenchConfig:
         seconds=base.seconds if args.seconds is None else args.seconds,
         repeats=base.repeats if args.repeats is None else args.repeats,
         train=base.train and not args.no_train,
+        sweep_seeds=args.sweep_seeds,
+        memory_runs=args.memory_runs,
     )
 
 

@@ -1,0 +1,97 @@
+"""Where one 60-s trial's time goes: noise generation, the kernel, the Python wrapper.
+
+    python benchmarks/bench_profile.py
+
+Best of 7 repeats of 200 calls each, after a warm-up call; one thread.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from striatal import bench, kernel, rollout
+from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
+
+
+def best_seconds(fn: Callable[[], object], calls: int = 200, repeats: int = 7) -> float:
+    """Best mean seconds per call over ``repeats`` timed loops of ``calls`` calls."""
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(calls):
+            fn()
+        times.append((time.perf_counter() - t0) / calls)
+    return min(times)
+
+
+def main() -> None:
+    rng = np.random.default_rng(0)
+    setup = bench.TrialSetup.chapter(60.0, 0.01)
+    out = np.empty(kernel.N_OUT)
+    bench.first_calls(rng)
+    fixed_noise = rng.standard_normal(setup.n_steps)
+    p = setup.protocol
+
+    def direct(noise: np.ndarray) -> None:
+        kernel.run_trial(
+            setup.sim.initial_state,
+            setup.W,
+            setup.theta_c,
+            1.0,
+            False,
+            50.0,
+            setup.plant,
+            setup.plant,
+            False,
+            setup.sim.dt,
+            setup.n_steps,
+            1,
+            noise,
+            np.empty((0, 2)),
+            0.0,
+            0.0,
+            False,
+            bench.TRACE_GAMMA,
+            np.zeros(6),
+            p.check_step(setup.sim.dt),
+            p.check_x,
+            p.check_theta,
+            p.goal_x,
+            p.goal_theta,
+            p.reward_success,
+            p.reward_failure,
+            np.empty((0, kernel.N_TRAJ)),
+            out,
+        )
+
+    plant = Plant()
+    controller = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
+    sim = Simulation()
+    rows = {
+        f"rng.standard_normal({setup.n_steps})": lambda: rng.standard_normal(setup.n_steps),
+        "kernel.run_trial, noise given": lambda: direct(fixed_noise),
+        "kernel.run_trial, mean policy (no noise)": lambda: direct(np.empty(0)),
+        "bench.run_scalar_trial (noise drawn + kernel)": lambda: bench.run_scalar_trial(
+            setup, rng, out
+        ),
+        "rollout.run_trial (dataclass wrapper, noise drawn)": lambda: rollout.run_trial(
+            plant,
+            controller,
+            sim,
+            protocol=rollout.Protocol(),
+            trace=np.zeros(6),
+            gamma=bench.TRACE_GAMMA,
+            rng=rng,
+        ),
+    }
+    for name, fn in rows.items():
+        t = best_seconds(fn)
+        print(f"{t * 1e6:9.1f} us/trial {t / setup.n_steps * 1e9:7.1f} ns/step  {name}")
+
+
+if __name__ == "__main__":
+    main()
