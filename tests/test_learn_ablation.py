@@ -13,10 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from striatal import search
+from striatal import baselines
 from striatal.ablation import VARIANTS, markdown_table, run_seed, summary, variant
 from striatal.cli.learner_options import add_learner_arguments, learner_config_from
 from striatal.errors import ParameterError
+from striatal.learn import random_initial_gains
+from striatal.params import Controller, Plant, Simulation
 
 LEARNER_VARIANTS = [v for v in VARIANTS if v.kind == "learner"]
 
@@ -46,23 +48,26 @@ def test_run_seed_equals_train_from_the_command_line() -> None:
     assert row["success"] and row["resimulated"]
 
 
-def test_search_baselines_are_seeded_and_count_trials() -> None:
-    W0 = (0.5, -0.2, -0.5, 0.5, 0.5, 0.0)
-    a = search.random_search_seed(0, W0, 5)
-    assert a == search.random_search_seed(0, W0, 5)
-    assert a["trials"] <= 5
-    p = np.array([*a["W"][:5], a["theta_c"]])
-    assert search.evaluate_params(p, W0[5])[1] == a["success"]
-    b = search.cmaes_seed(0, W0, 12)
-    assert b == search.cmaes_seed(0, W0, 12)
-    assert b["trials"] <= 12
+@pytest.mark.parametrize("kind", ["random-search", "cmaes"])
+def test_search_rows_are_seeded_count_trials_and_resimulate(kind: str) -> None:
+    """The ablation's search rows run the sweep's baselines, judged on the mean policy."""
+    config = variant("pgpe").config(12)
+    a = run_seed(config, 3, kind)
+    assert a == run_seed(config, 3, kind)
+    assert 1 <= a["trials"] <= 12
+    assert a["resimulated"] == a["success"]
+    assert a["W0"] == list(random_initial_gains(np.random.default_rng([3, 1])))
 
 
-def test_cmaes_finds_the_gains_from_the_chapter_start() -> None:
-    """From the chapter's W(0) (which passes on the mean policy) CMA-ES succeeds at once."""
-    W0 = (0.6813, -0.3795, -0.8318, 0.5028, 0.7095, 0.4289)
-    row = search.cmaes_seed(0, W0, 10)
-    assert row["success"] and row["trials"] == 0
+def test_random_search_row_is_the_sweep_baseline() -> None:
+    W0 = random_initial_gains(np.random.default_rng([5, 1]))
+    row = run_seed(variant("random-search").config(20), 5, "random-search")
+    direct = baselines.random_search(Plant(), Controller(W0, 0.6), Simulation(), 5, 20, "mean")
+    assert (row["success"], row["trials"], row["theta_c"]) == (
+        direct["success"],
+        direct["trials"],
+        direct["theta_c"],
+    )
 
 
 def test_summary_and_table() -> None:

@@ -76,9 +76,11 @@ def test_cli_table_and_clear_error(tmp_path: Path) -> None:
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     rows = json.loads(r.stdout)
-    assert {row["group"] for row in rows} == {"learned", "chapter's final gains"}
-    assert len(rows) == 2 * len(CONDITIONS)
+    assert {row["group"] for row in rows} == {"learned", "chapter's final gains", "LQR baseline"}
+    assert len(rows) == 3 * len(CONDITIONS)
     assert np.isclose(rows[0]["success"], 1.0)
+    lqr_nominal = [r for r in rows if r["group"] == "LQR baseline" and r["condition"] == "nominal"]
+    assert lqr_nominal[0]["success"] == 1.0  # the LQR-fitted law passes on the nominal plant
     bad = tmp_path / "bad.json"
     bad.write_text("[1, 2]")
     r = subprocess.run(

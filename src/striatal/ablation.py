@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from striatal import search
+from striatal import baselines
 from striatal.cli.learner_options import LEARNER_DEFAULTS
 from striatal.errors import ParameterError
 from striatal.learn import LearnerConfig, random_initial_gains, train
@@ -49,7 +49,7 @@ class Variant:
     def options(self) -> str:
         """The train/sweep options that select this variant."""
         if self.kind != "learner":
-            return f"(striatal.search.{self.kind.replace('-', '_')}_seed)"
+            return f"(striatal.baselines.{self.kind.replace('-', '_')}, success on mean)"
         parts = [f"--learner {self.learner}"]
         for k, v in self.changes:
             flag = "--" + k.replace("_", "-")
@@ -105,14 +105,14 @@ VARIANTS: tuple[Variant, ...] = (
         "random-search",
         "pgpe",
         (),
-        "uniform draws of W1..W5 in [0, 3] x [-3, 3]^4, theta_c in [0.2, 1.4]",
+        "uniform draws of W1 in [0, 3], W2..W6 in [-3, 3], theta_c in [0.2, 1.4]",
         kind="random-search",
     ),
     Variant(
         "cma-es",
         "pgpe",
         (),
-        "CMA-ES from W(0), sigma0 1, on the shaped reward",
+        "CMA-ES over (W, theta_c) from (W(0), 0.6), sigma0 1, on the shaped reward",
         kind="cmaes",
     ),
 )
@@ -129,27 +129,38 @@ def variant(name: str) -> Variant:
 def run_seed(config: LearnerConfig, seed: int, kind: str = "learner") -> dict[str, Any]:
     """One learning run from the random W(0) of ``seed``; the learned gains re-simulated.
 
-    ``kind`` "random-search" or "cmaes" runs that search baseline instead
-    (:mod:`striatal.search`) with ``config.max_trials`` trials.
+    ``kind`` "random-search" or "cmaes" runs that baseline of the sweep instead
+    (:func:`striatal.baselines.random_search`, :func:`striatal.baselines.cmaes`,
+    success judged on the mean policy) with ``config.max_trials`` trials.
     """
     W0 = random_initial_gains(np.random.default_rng([seed, 1]))
-    if kind == "random-search":
-        return search.random_search_seed(seed, W0, config.max_trials)
-    if kind == "cmaes":
-        return search.cmaes_seed(seed, W0, config.max_trials)
     template = Controller(W0, CHAPTER_INITIAL_THETA_C)
-    result = train(Plant(), template, config, seed)
+    plant, sim = Plant(), Simulation()
+    if kind == "random-search":
+        found = baselines.random_search(plant, template, sim, seed, config.max_trials, "mean")
+    elif kind == "cmaes":
+        found = baselines.cmaes(
+            plant, template, sim, W0, CHAPTER_INITIAL_THETA_C, seed, config.max_trials, "mean"
+        )
+    else:
+        result = train(plant, template, config, seed)
+        found = {
+            "success": result.success,
+            "trials": result.trials,
+            "W": result.W,
+            "theta_c": result.theta_c,
+        }
     resimulated = False
-    if result.success:
-        learned = template.with_gains(result.W, result.theta_c)
-        resimulated = simulate(Plant(), learned, Simulation(), protocol=Protocol()).outcome.success
+    if found["success"]:
+        learned = template.with_gains(tuple(found["W"]), found["theta_c"])
+        resimulated = simulate(plant, learned, sim, protocol=Protocol()).outcome.success
     return {
         "seed": seed,
-        "success": result.success,
-        "trials": result.trials,
+        "success": bool(found["success"]),
+        "trials": int(found["trials"]),
         "W0": list(W0),
-        "W": list(result.W),
-        "theta_c": result.theta_c,
+        "W": [float(v) for v in found["W"]],
+        "theta_c": float(found["theta_c"]),
         "resimulated": resimulated,
     }
 

@@ -6,9 +6,10 @@ import argparse
 import sys
 from pathlib import Path
 
+from striatal import baselines
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import atomic_write_text, dumps_json, read_json
-from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller
+from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant
 from striatal.robustness import CONDITIONS, controller_groups, robustness_table
 
 COMMAND = "robustness"
@@ -18,7 +19,8 @@ DESCRIPTION = (
     "Run the mean policy of learned gains (train result.json files, or the successful runs "
     "of an ablation.json) on plants with pole mass and length +-20 % and with sensor noise, "
     "the controller believing the nominal plant. Each cell: success test % / balanced at "
-    "T_f (+10 reward) %. The chapter's final gains are the hand-tuned reference."
+    "T_f (+10 reward) %. References: the chapter's final gains (hand-tuned) and the sweep's "
+    "LQR baseline (LQR-fitted balancing gains with the chapter's swing-up)."
 )
 
 
@@ -53,7 +55,12 @@ def run(args: argparse.Namespace) -> int:
     if not merged:
         raise ParameterError("the files hold no successful run to evaluate")
     reference = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
-    groups = [*merged.items(), ("chapter's final gains", [reference])]
+    lqr_W, lqr_theta_c = baselines.lqr_controller(Plant())
+    groups = [
+        *merged.items(),
+        ("chapter's final gains", [reference]),
+        ("LQR baseline", [Controller(lqr_W, lqr_theta_c)]),
+    ]
     table, rows = robustness_table(groups, CONDITIONS, repeats=args.repeats, seed=args.seed)
     if args.out is not None:
         atomic_write_text(args.out, table)
