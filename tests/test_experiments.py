@@ -209,6 +209,21 @@ def test_sweep_and_compare_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str
     assert "error" in capsys.readouterr().err.lower()
 
 
+def test_compare_names_the_learner_when_sweeps_mix_learners(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["sweep", "--seeds", "2", "--max-trials", "3", "--duration", "20", "--json"]
+    assert main([*argv, "--out", str(tmp_path / "a")]) == 0
+    assert main([*argv, "--out", str(tmp_path / "b"), "--learner", "pgpe"]) == 0
+    capsys.readouterr()
+    assert main(["compare", str(tmp_path / "a"), str(tmp_path / "b")]) == 0
+    table = capsys.readouterr().out
+    for name in ("learner (chapter)", "control (chapter)", "learner (pgpe)", "control (pgpe)"):
+        assert f"| {name} | chapter | 2 |" in table
+    assert main(["compare", str(tmp_path / "b")]) == 0  # one learner: plain names
+    assert "| learner | chapter | 2 |" in capsys.readouterr().out
+
+
 def test_sweep_passes_learner_options_through(tmp_path: Path) -> None:
     from striatal.cli import build_parser
     from striatal.cli.sweep import prepare

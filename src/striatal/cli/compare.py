@@ -41,15 +41,33 @@ def load_summary(path: Path) -> dict[str, Any]:
     return data
 
 
+def learner_of(summary: dict[str, Any], arm: str) -> str | None:
+    """The learner (chapter, rpe, pgpe) of a learning arm of a sweep, or None."""
+    cfg = summary.get("settings", {}).get("arms", {}).get(arm, {})
+    if not isinstance(cfg, dict) or cfg.get("method") != "learn":
+        return None
+    learner = cfg.get("config", {}).get("learner")
+    return learner if isinstance(learner, str) else None
+
+
+def label_arms(summaries: list[dict[str, Any]], sources: list[str]) -> list[dict[str, Any]]:
+    """Every arm of every summary, the learning arms named with their learner when the
+    summaries hold more than one learner (``learner (pgpe)``, ``control (pgpe)``)."""
+    learners = {learner_of(s, a["arm"]) for s in summaries for a in s["arms"]} - {None}
+    arms = []
+    for src, s in zip(sources, summaries, strict=True):
+        for a in s["arms"]:
+            learner = learner_of(s, a["arm"])
+            name = f"{a['arm']} ({learner})" if learner and len(learners) > 1 else a["arm"]
+            arms.append({**a, "arm": name, "source": src})
+    return arms
+
+
 def run(args: argparse.Namespace) -> int:
     if args.out is not None and not args.out.parent.is_dir():
         raise ParameterError(f"--out {args.out}: folder {args.out.parent} does not exist")
     summaries = [load_summary(p) for p in args.summaries]
-    arms = [
-        {**a, "source": str(p)}
-        for p, s in zip(args.summaries, summaries, strict=True)
-        for a in s["arms"]
-    ]
+    arms = label_arms(summaries, [str(p) for p in args.summaries])
     arms.sort(key=lambda a: (a["init"], a["arm"]))
     table = experiments.markdown_table({"arms": arms})
     if args.out is not None:
