@@ -8,7 +8,7 @@ from pathlib import Path
 
 from striatal.ablation import VARIANT_NAMES, markdown_table, run_variant, summary, variant
 from striatal.errors import ParameterError
-from striatal.files import atomic_write_text, write_json
+from striatal.files import atomic_write_text, check_out_dir, write_json
 
 COMMAND = "ablation"
 ORDER = 45
@@ -38,6 +38,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.out is not None:
+        check_out_dir(args.out)
     if args.seeds < 1:
         raise ParameterError(f"--seeds must be >= 1, got {args.seeds}")
     if args.first_seed < 0:
@@ -56,7 +58,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"{v.name}: {rows[-1][1]}", file=sys.stderr, flush=True)
     table = markdown_table(rows)
     if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
         write_json(args.out / "ablation.json", runs)
         atomic_write_text(args.out / "ablation.md", table)
     sys.stdout.write(table)

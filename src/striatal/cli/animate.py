@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from striatal.cli import options
-from striatal.cli.figure import add_gain_source_arguments, controller_and_plant
+from striatal.cli.options import add_gain_source_arguments, controller_and_plant
 from striatal.errors import ParameterError
 
 COMMAND = "animate"

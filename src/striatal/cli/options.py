@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 from typing import Any
 
-from striatal.errors import ParameterError
+from striatal.errors import DataFileError, ParameterError
+from striatal.files import read_json
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -138,3 +140,57 @@ def json_ready(obj: Any) -> Any:
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj
+
+
+def add_gain_source_arguments(parser: argparse.ArgumentParser) -> None:
+    """The shared controller, run and plant groups, plus --result result.json."""
+    add_controller_arguments(parser, gains_required=True)
+    parser.add_argument(
+        "--result",
+        type=Path,
+        default=None,
+        help="take W, theta_c, the controller readings and the plant from this result.json",
+    )
+    add_simulation_arguments(parser)
+    add_plant_arguments(parser)
+
+
+def result_controller(path: Path) -> tuple[Controller, Plant]:
+    data = read_json(path, what="result")
+    if not isinstance(data, dict):
+        raise DataFileError(f"result {path} is not a striatal result.json")
+    try:
+        settings: dict[str, Any] = data.get("settings") or {}
+        ctrl: dict[str, Any] = settings.get("controller") or {}
+        plant_d: dict[str, Any] = settings.get("plant") or {}
+        controller = Controller(
+            gains=tuple(data["W"]),
+            theta_c=data["theta_c"],
+            balance_sign=ctrl.get("balance_sign", "corrected"),
+            switch=ctrl.get("switch", "hard"),
+            inhibition=ctrl.get("inhibition", 50.0),
+        )
+        plant = Plant(
+            **{
+                k: plant_d[k]
+                for k in ("cart_mass", "pole_mass", "length", "gravity")
+                if k in plant_d
+            }
+        )
+    except (KeyError, TypeError, AttributeError) as exc:
+        raise DataFileError(f"result {path} lacks W, theta_c or settings: {exc!r}") from None
+    except ParameterError as exc:
+        raise DataFileError(f"result {path} holds an unusable controller: {exc}") from None
+    return controller, plant
+
+
+def controller_and_plant(args: argparse.Namespace) -> tuple[Controller, Plant]:
+    """The controller and plant from --result, or from the gain and plant options."""
+    if args.result is not None:
+        if args.gains is not None or args.chapter_initial or args.chapter_final:
+            raise ParameterError("give either --result or a gain set, not both")
+        if args.theta_c is not None:
+            raise ParameterError("--theta-c cannot be combined with --result")
+        return result_controller(args.result)
+    gains, theta_c = gains_from(args)
+    return controller_from(args, gains, theta_c), plant_from(args)

@@ -17,14 +17,14 @@ HELP = "simulate the cart-pole under the switching controller (mean policy)"
 DESCRIPTION = (
     "Simulate the point-mass cart-pole (eqs 7-14) under the energy swing-up (eq 23) and the "
     "balancing law (eq 22), hard- or soft-switched at theta_c, with the mean policy (no "
-    "exploration noise). Reports the chapter's success test at T_f."
+    "exploration noise). Reports the chapter's success test at T_f. Gains: --chapter-final "
+    "(default), --chapter-initial, --gains with --theta-c, or --result result.json of "
+    "striatal train (its W, theta_c, readings and plant)."
 )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    options.add_controller_arguments(parser, gains_required=True)
-    options.add_simulation_arguments(parser)
-    options.add_plant_arguments(parser)
+    options.add_gain_source_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     parser.add_argument(
         "--out", type=Path, default=None, help="write trajectory.csv and summary.json here"
@@ -66,9 +66,7 @@ def settings_of(args: argparse.Namespace, traj: Trajectory) -> dict[str, object]
 
 
 def run(args: argparse.Namespace) -> int:
-    plant = options.plant_from(args)
-    gains, theta_c = options.gains_from(args)
-    controller = options.controller_from(args, gains, theta_c)
+    controller, plant = options.controller_and_plant(args)
     sim = options.simulation_from(args)
     if args.out is not None:
         check_out_dir(args.out)

@@ -142,8 +142,8 @@ def prepare(
 
 
 def run(args: argparse.Namespace) -> int:
-    specs, settings, max_trials = prepare(args)
     out = check_out_dir(args.out) if args.out is not None else None
+    specs, settings, max_trials = prepare(args)
     result = experiments.sweep(
         specs,
         settings,

@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+import threading
 from collections import deque
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from types import FrameType
 from typing import Any, TextIO
@@ -15,7 +16,14 @@ import numpy as np
 
 from striatal.cli import EXIT_INTERRUPTED, learner_options, options
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import csv_text, dumps_json, read_json, write_json
+from striatal.files import (
+    atomic_write_text,
+    check_out_dir,
+    csv_text,
+    dumps_json,
+    read_json,
+    write_json,
+)
 from striatal.learn import (
     HISTORY_COLUMNS,
     LearnerConfig,
@@ -32,6 +40,7 @@ from striatal.params import (
     Controller,
     Plant,
     Simulation,
+    check_seed,
 )
 from striatal.rollout import Protocol, simulate
 
@@ -110,43 +119,55 @@ def _settings(
     }
 
 
-def _from_settings(s: dict[str, Any]) -> tuple[LearnerConfig, Controller, Plant, Simulation]:
+Setup = tuple[LearnerConfig, Controller, Plant, Simulation, int]
+
+
+def _from_settings(s: dict[str, Any], where: str) -> Setup:
+    """The run that ``settings`` describe; DataFileError naming ``where`` if they do not."""
     try:
         config = LearnerConfig(**s["config"])
         template = Controller(gains=s["W0"], theta_c=s["theta_c0"], **s["controller"])
         plant = Plant(**s["plant"])
         sim = Simulation(**s["trial"])
-    except (KeyError, TypeError) as exc:
-        raise DataFileError(f"checkpoint settings are incomplete: {exc!r}") from None
-    return config, template, plant, sim
+        seed = check_seed(s["seed"])
+    except KeyError as exc:
+        raise DataFileError(f"{where} is corrupted: its settings lack {exc}") from None
+    except (TypeError, ValueError) as exc:  # ParameterError is a ValueError
+        raise DataFileError(f"{where} is corrupted: settings: {exc}") from None
+    return config, template, plant, sim, seed
 
 
 def _fresh(args: argparse.Namespace) -> tuple[dict[str, Any], LearnerState]:
+    seed = check_seed(args.seed)
     config = learner_options.learner_config_from(args)
     plant = options.plant_from(args)
     sim = Simulation(duration=args.duration, dt=args.dt)
     if args.init_gains is not None:
         W0 = tuple(args.init_gains)
     elif args.init == "random":
-        W0 = random_initial_gains(np.random.default_rng([args.seed, 1]))
+        W0 = random_initial_gains(np.random.default_rng([seed, 1]))
     else:
         W0 = CHAPTER_INITIAL_W
     template = options.controller_from(args, W0, args.theta_c0)
     if args.checkpoint_every < 1:
         raise ParameterError(f"--checkpoint-every must be >= 1, got {args.checkpoint_every}")
     settings = _settings(args, config, template, plant, sim, W0)
-    return settings, initial_state(W0, template.theta_c, args.seed)
+    return settings, initial_state(W0, template.theta_c, seed)
 
 
 def _load_checkpoint(out: Path) -> tuple[dict[str, Any], LearnerState]:
-    data = read_json(out / CHECKPOINT, what="checkpoint")
+    """(settings, state) of ``out``/checkpoint.json, both checked; else DataFileError."""
+    path = out / CHECKPOINT
+    data = read_json(path, what="checkpoint")
     if not isinstance(data, dict) or data.get("version") != CHECKPOINT_VERSION:
-        raise DataFileError(f"checkpoint {out / CHECKPOINT} is not a striatal train checkpoint")
+        raise DataFileError(f"checkpoint {path} is not a striatal train checkpoint")
     try:
         state = LearnerState.from_dict(data["state"])
-        settings = dict(data["settings"])
+        settings = data["settings"]
     except (KeyError, TypeError, ParameterError) as exc:
-        raise DataFileError(f"checkpoint {out / CHECKPOINT} is corrupted: {exc}") from None
+        raise DataFileError(f"checkpoint {path} is corrupted: {exc}") from None
+    if not isinstance(settings, dict):
+        raise DataFileError(f"checkpoint {path} is corrupted: its settings are not an object")
     return settings, state
 
 
@@ -155,36 +176,65 @@ def _truncate_history(path: Path, n_rows: int) -> None:
     if not path.exists():
         if n_rows:
             raise DataFileError(f"history {path} is missing but the checkpoint has {n_rows} trials")
-        path.write_text(csv_text(HISTORY_COLUMNS, []), encoding="utf-8")
+        atomic_write_text(path, csv_text(HISTORY_COLUMNS, []))
         return
     lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
     if len(lines) < 1 + n_rows or lines[0].strip() != ",".join(HISTORY_COLUMNS):
         raise DataFileError(f"history {path} has fewer rows than the checkpoint's {n_rows} trials")
-    path.write_text("".join(lines[: 1 + n_rows]), encoding="utf-8")
+    atomic_write_text(path, "".join(lines[: 1 + n_rows]))
 
 
-def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
-    raise KeyboardInterrupt
+class _StopRequest:
+    """SIGINT/SIGTERM handler for the learning loop.
+
+    The first signal only sets ``requested``: the run stops after the trial in
+    progress, once its history row (and any checkpoint due) is written, so the final
+    checkpoint never counts a trial that history.csv lacks. A second signal stops at
+    once (KeyboardInterrupt); the run then keeps only the trials already recorded.
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._old: dict[int, Any] = {}
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+    def __enter__(self) -> _StopRequest:
+        # signal handlers can only be set from the main thread
+        if threading.current_thread() is threading.main_thread():
+            self._old = {s: signal.signal(s, self) for s in self.SIGNALS}
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for s, old in self._old.items():
+            signal.signal(s, old)
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.out is not None:
+        check_out_dir(args.out)
     if args.resume:
         if args.out is None:
             raise ParameterError("--resume needs --out DIR holding a checkpoint")
         settings, state = _load_checkpoint(args.out)
+        where = f"checkpoint {args.out / CHECKPOINT}"
     else:
         settings, state = _fresh(args)
-    config, template, plant, sim = _from_settings(settings)
-    seed = int(settings["seed"])
+        where = "the options"  # settings built from validated options: never reported
+    config, template, plant, sim, seed = _from_settings(settings, where)
 
     history: TextIO | None = None
     if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
         hpath = args.out / "history.csv"
         if args.resume:
             _truncate_history(hpath, state.trials_done)
         else:
-            hpath.write_text(csv_text(HISTORY_COLUMNS, []), encoding="utf-8")
+            atomic_write_text(hpath, csv_text(HISTORY_COLUMNS, []))
         history = hpath.open("a", encoding="utf-8", newline="")
 
     def checkpoint(s: LearnerState) -> None:
@@ -206,22 +256,37 @@ def run(args: argparse.Namespace) -> int:
         file=sys.stderr,
     )
     recent: deque[float] = deque(maxlen=50)
+    recorded = state  # the state after the last trial whose history row is written
+    stop = _StopRequest()
 
     def on_trial(s: LearnerState, rec: TrialRecord) -> None:
+        nonlocal recorded
         if history is not None:
             history.write(csv_text(HISTORY_COLUMNS, [rec.row()]).split("\n", 1)[1])
+        recorded = s
         recent.append(rec.reward)
         bar.update(1)
         bar.set_postfix(reward=rec.reward, plus10=f"{np.mean([r > 0 for r in recent]):.2f}")
         if s.trials_done % args.checkpoint_every == 0:
             checkpoint(s)
+        if stop.requested:
+            raise KeyboardInterrupt
 
-    old_term = signal.signal(signal.SIGTERM, _raise_interrupt)
     try:
-        result = train(plant, template, config, seed, sim=sim, state=state, on_trial=on_trial)
+        with stop:
+            result = train(plant, template, config, seed, sim=sim, state=state, on_trial=on_trial)
     finally:
-        signal.signal(signal.SIGTERM, old_term)
         bar.close()
+    if result.interrupted and result.state is not recorded:
+        # stopped between a trial's update and its history row: that trial is not kept
+        result = replace(
+            result,
+            success=recorded.success,
+            trials=recorded.trials_done,
+            W=recorded.W,
+            theta_c=recorded.theta_c,
+            state=recorded,
+        )
     checkpoint(result.state)
     if history is not None:
         history.close()
