@@ -83,3 +83,24 @@ def test_bad_input_is_one_line_exit_2_nothing_written(args: list[str], tmp_path:
 def test_python_m_and_console_script_help() -> None:
     r = run_cli("--help")
     assert r.returncode == 0 and "simulate" in r.stdout
+
+
+def test_simulate_result_of_train_uses_its_gains_and_readings(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--result takes W, theta_c, readings and plant from a result.json of train."""
+    out = tmp_path / "t"
+    argv = ["train", "--max-trials", "2", "--seed", "3", "--out", str(out), "--no-progress"]
+    assert main([*argv, "--pole-mass", "0.12"]) == 0
+    result = json.loads((out / "result.json").read_text())
+    capsys.readouterr()
+    assert main(["simulate", "--result", str(out / "result.json"), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["settings"]["controller"]["gains"] == result["W"]
+    assert got["settings"]["controller"]["theta_c"] == result["theta_c"]
+    assert got["settings"]["plant"]["pole_mass"] == 0.12
+    gains = [str(w) for w in result["W"]]
+    assert main(["simulate", "--json", "--pole-mass", "0.12", "--gains", *gains,
+                 "--theta-c", str(result["theta_c"])]) == 0  # fmt: skip
+    assert json.loads(capsys.readouterr().out)["final_state"] == got["final_state"]
+    assert main(["simulate", "--result", str(out / "result.json"), "--chapter-final"]) == 2
