@@ -31,7 +31,9 @@ from striatal.params import (
     Controller,
     Plant,
     Simulation,
+    as_float,
     check_gains,
+    check_seed,
     check_theta_c,
     require_finite,
 )
@@ -70,6 +72,16 @@ HISTORY_COLUMNS = (
     "fault",
     "early",
 )
+
+
+def _require_count(name: str, value: object) -> None:
+    """ParameterError unless ``value`` is a whole number >= 1 (text, null or a list too)."""
+    try:
+        whole = int(value) == value  # type: ignore[call-overload]
+    except (TypeError, ValueError, OverflowError):
+        whole = False
+    if not whole or value < 1:  # type: ignore[operator]
+        raise ParameterError(f"{name} must be a whole number >= 1, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -135,15 +147,12 @@ class LearnerConfig:
         if not 0.0 <= g < 1.0:
             raise ParameterError(f"gamma must be in [0, 1), got {self.gamma}")
         require_finite("baseline", self.baseline)
-        if int(self.action_every) != self.action_every or self.action_every < 1:
-            raise ParameterError(
-                f"action_every must be a whole number >= 1, got {self.action_every}"
-            )
-        if int(self.max_trials) != self.max_trials or self.max_trials < 1:
-            raise ParameterError(f"max_trials must be a whole number >= 1, got {self.max_trials}")
-        if not (self.max_step > 0):
+        _require_count("action_every", self.action_every)
+        _require_count("max_trials", self.max_trials)
+        if not (as_float("max_step", self.max_step) > 0):
             raise ParameterError(f"max_step must be > 0 (inf for no bound), got {self.max_step}")
-        if not (math.isfinite(self.w1_floor) and self.w1_floor > 0):
+        floor = as_float("w1_floor", self.w1_floor)
+        if not (math.isfinite(floor) and floor > 0):
             raise ParameterError(f"w1_floor must be a finite number > 0, got {self.w1_floor}")
         if self.eligibility not in ("score", "chapter"):
             raise ParameterError(
@@ -239,14 +248,16 @@ class LearnerState:
                 W=W,
                 theta_c=float(d["theta_c"]),
                 trace=trace,
-                rng_state=dict(d["rng_state"]),
+                rng_state=_checked_rng_state(d["rng_state"]),
                 success=bool(d["success"]),
                 n_positive=int(d.get("n_positive", 0)),
                 reward_mean=float(d.get("reward_mean", 0.0)),
                 rpe_square=float(d.get("rpe_square", 0.0)),
                 explore=tuple(float(v) for v in d.get("explore", ())),
             )
-        except (KeyError, TypeError, ValueError) as exc:
+        except ParameterError:
+            raise
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
             raise ParameterError(f"learner state is incomplete or malformed: {exc!r}") from None
         if len(W) != N_GAINS or len(trace) != N_GAINS or state.trials_done < 0:
             raise ParameterError("learner state has the wrong number of gains or trials")
@@ -255,6 +266,18 @@ class LearnerState:
             raise ParameterError("learner state holds a non-finite number")
         check_theta_c(state.theta_c)
         return state
+
+
+def _checked_rng_state(value: object) -> dict[str, Any]:
+    """``value`` as the state of a PCG64 generator (the learner's), or ParameterError."""
+    rng = np.random.default_rng()
+    try:
+        rng.bit_generator.state = dict(value)  # type: ignore[call-overload]
+    except (TypeError, ValueError, KeyError, OverflowError) as exc:
+        raise ParameterError(
+            f"learner state rng_state is not the state of a PCG64 generator: {exc}"
+        ) from None
+    return dict(rng.bit_generator.state)
 
 
 @dataclass(frozen=True)
@@ -319,7 +342,7 @@ def initial_state(W0: object, theta_c0: float, seed: int) -> LearnerState:
     """The state before trial 1: gains, threshold, a zero trace and a fresh PCG64 stream."""
     gains = check_gains(W0)
     check_theta_c(theta_c0)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(check_seed(seed))
     return LearnerState(
         trials_done=0,
         W=gains,
