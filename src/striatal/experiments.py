@@ -123,6 +123,9 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     out: dict[str, Any]
     if spec.method == "learn":
         result = train(spec.plant, template, cfg, spec.seed, sim=spec.sim)
+        if result.interrupted:
+            # train turns Ctrl-C into a partial result; a cut run must not become a row
+            raise KeyboardInterrupt
         out = {
             "success": result.success,
             "trials": result.trials,
