@@ -20,7 +20,7 @@ import numpy as np
 
 from striatal import kernel
 from striatal.errors import ParameterError
-from striatal.params import Controller, Plant, Simulation
+from striatal.params import Controller, Plant, Simulation, check_seed
 from striatal.rollout import Protocol, SensorNoise, TrialOutcome, _call_kernel
 
 
@@ -106,6 +106,7 @@ def evaluate(
     """
     if not controllers:
         raise ParameterError("no controllers to evaluate")
+    seed = check_seed(seed)
     nominal = nominal or Plant()
     plant = nominal.scaled(pole_mass=condition.pole_mass, length=condition.length)
     sim, protocol = Simulation(), Protocol()
@@ -159,7 +160,17 @@ def controller_groups(
     are left out.
     """
     if isinstance(data, dict) and "W" in data and "theta_c" in data:
-        readings = data.get("settings", {}).get("controller", {})
+        settings = data.get("settings", {})
+        if not isinstance(settings, dict):
+            raise ParameterError(
+                f"the settings of a train result.json must be an object, got {settings!r}"
+            )
+        readings = settings.get("controller", {})
+        if not isinstance(readings, dict):
+            raise ParameterError(
+                "the settings.controller of a train result.json must be an object, "
+                f"got {readings!r}"
+            )
         return [("learned", [Controller(gains=data["W"], theta_c=data["theta_c"], **readings)])]
     if isinstance(data, dict) and all(isinstance(v, dict) and "runs" in v for v in data.values()):
         groups = []
