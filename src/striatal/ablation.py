@@ -144,6 +144,9 @@ def run_seed(config: LearnerConfig, seed: int, kind: str = "learner") -> dict[st
         )
     else:
         result = train(plant, template, config, seed)
+        if result.interrupted:
+            # train turns Ctrl-C into a partial result; a cut run must not be tabulated
+            raise KeyboardInterrupt
         found = {
             "success": result.success,
             "trials": result.trials,
