@@ -449,15 +449,6 @@ def test_random_bytes_as_checkpoint_is_exit_2(data: bytes, checkpointed: Path) -
 ODD_VALUES = st.sampled_from(
     [None, True, "x", "", -1, 0, 3, 0.5, -0.5, 1e308, -1e308, [], {}, [1, 2], {"a": 1}]
 )
-# Known gaps (listed in docs/reliability.md, fixes reported to the owner of
-# cli/train.py and learn.py): these entries still crash on some values.
-KNOWN_GAPS = {
-    ("settings", "seed"),
-    ("settings", "config", "max_trials"),
-    ("settings", "config", "action_every"),
-    ("state", "rng_state"),
-}
-KNOWN_EXACT_GAPS = {("settings",)}  # a string there: dict("x") raises ValueError
 
 
 def leaves(obj: Any, path: tuple[str | int, ...] = ()) -> list[tuple[str | int, ...]]:
@@ -488,12 +479,7 @@ def test_one_changed_checkpoint_entry_runs_or_is_exit_2(
     data: st.DataObject, value: Any, delete: bool, checkpointed: Path
 ) -> None:
     good = json.loads((checkpointed / "checkpoint.json").read_text())
-    paths = [
-        p
-        for p in leaves(good)
-        if not any(p[: len(g)] == g for g in KNOWN_GAPS) and p not in KNOWN_EXACT_GAPS
-    ]
-    path = data.draw(st.sampled_from(paths))
+    path = data.draw(st.sampled_from(leaves(good)))
     text = json.dumps(replaced(good, path, value, delete)).encode()
     rc, _, err, _ = resume_on(checkpointed, text)
     assert rc in (0, 2), err
@@ -529,8 +515,7 @@ def test_one_changed_result_entry_runs_or_is_exit_2(
     data: st.DataObject, value: Any, delete: bool, result_file: bytes
 ) -> None:
     good = json.loads(result_file)
-    # settings replaced by a non-object: a known gap (docs/reliability.md, robustness-settings)
-    path = data.draw(st.sampled_from([p for p in leaves(good) if p != ("settings",)]))
+    path = data.draw(st.sampled_from(leaves(good)))
     rc, _, err = robustness_on(json.dumps(replaced(good, path, value, delete)).encode())
     event(f"exit {rc}")
     assert rc in (0, 2), err
