@@ -47,6 +47,8 @@ def run(args: argparse.Namespace) -> int:
             found = controller_groups(read_json(f, what="result"), variants=args.variant)
         except (KeyError, TypeError) as exc:
             raise DataFileError(f"{f} is not a result.json or ablation.json: {exc!r}") from None
+        except ParameterError as exc:
+            raise DataFileError(f"{f}: {exc}") from None
         for name, ctrls in found:
             merged.setdefault(name, []).extend(ctrls)
     missing = [v for v in args.variant if v not in merged]
