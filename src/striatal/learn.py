@@ -387,6 +387,51 @@ def gain_update(
     return new
 
 
+def mean_policy_success(
+    plant: Plant,
+    controller: Controller,
+    sim: Simulation,
+    protocol: Protocol,
+    W: np.ndarray,
+    action_every: int,
+    model: Plant | None = None,
+) -> bool:
+    """The success test on a noise-free run of the mean policy (eqs 22-23) with gains W.
+
+    ``model``: the plant the controller believes in (default: the true ``plant``).
+    """
+    return run_trial(
+        plant,
+        controller,
+        sim,
+        protocol=protocol,
+        trace=np.zeros(N_GAINS),
+        gamma=0.0,
+        rng=None,
+        gains=W,
+        action_every=action_every,
+        model=model,
+    ).success
+
+
+def trial_record(
+    state: LearnerState, outcome: TrialOutcome, *, reward: float, sigma: float, success: bool
+) -> TrialRecord:
+    """The history row of the trial run from ``state`` (its W and theta_c, before the update)."""
+    return TrialRecord(
+        trial=state.trials_done + 1,
+        reward=reward,
+        W=state.W,
+        theta_c=state.theta_c,
+        sigma=sigma,
+        min_abs_theta_swingup=outcome.min_abs_theta_swingup,
+        ended_at=outcome.ended_at,
+        success=success,
+        fault=outcome.fault,
+        early=outcome.early,
+    )
+
+
 def learning_step(
     state: LearnerState,
     plant: Plant,
@@ -425,29 +470,9 @@ def learning_step(
     if config.success_on == "noisy":
         success = outcome.success
     else:
-        mean_run = run_trial(
-            plant,
-            controller,
-            sim,
-            protocol=protocol,
-            trace=np.zeros(N_GAINS),
-            gamma=0.0,
-            rng=None,
-            gains=W,
-            action_every=config.action_every,
-        )
-        success = mean_run.success
-    record = TrialRecord(
-        trial=state.trials_done + 1,
-        reward=outcome.reward,
-        W=state.W,
-        theta_c=state.theta_c,
-        sigma=float(sigma_of(W[5])),
-        min_abs_theta_swingup=outcome.min_abs_theta_swingup,
-        ended_at=outcome.ended_at,
-        success=success,
-        fault=outcome.fault,
-        early=outcome.early,
+        success = mean_policy_success(plant, controller, sim, protocol, W, config.action_every)
+    record = trial_record(
+        state, outcome, reward=outcome.reward, sigma=float(sigma_of(W[5])), success=success
     )
     if success:
         new_W, new_theta_c = W, state.theta_c

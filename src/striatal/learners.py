@@ -42,7 +42,9 @@ from striatal.learn import (
     LearnerConfig,
     LearnerState,
     TrialRecord,
+    mean_policy_success,
     theta_c_rule,
+    trial_record,
 )
 from striatal.params import N_GAINS, Controller, Plant, Simulation
 from striatal.rollout import (
@@ -230,33 +232,6 @@ def _reward(
     return shaped_reward(data, outcome, plant, sim, protocol)
 
 
-def _mean_success(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    protocol: Protocol,
-    W: np.ndarray,
-    action_every: int,
-    model: Plant | None = None,
-) -> bool:
-    """The success test on a noise-free run of the mean policy with gains W.
-
-    ``model``: the plant the controller believes in (default: the true ``plant``).
-    """
-    return run_trial(
-        plant,
-        controller,
-        sim,
-        protocol=protocol,
-        trace=np.zeros(N_GAINS),
-        gamma=0.0,
-        rng=None,
-        gains=W,
-        action_every=action_every,
-        model=model,
-    ).success
-
-
 def jitter_corners(plant: Plant, jitter: float) -> list[Plant]:
     """The four plants with pole mass and length scaled by 1 - jitter or 1 + jitter."""
     return [
@@ -328,7 +303,7 @@ def rpe_step(
     if config.success_on == "noisy":
         success = outcome.success
     else:
-        success = _mean_success(plant, controller, sim, protocol, W, config.action_every)
+        success = mean_policy_success(plant, controller, sim, protocol, W, config.action_every)
     finite = bool(np.all(np.isfinite(trace)))
     factor, b, square = _prediction_error(state, reward, config)
     new_W, new_theta_c = W, state.theta_c
@@ -340,17 +315,8 @@ def rpe_step(
         new_theta_c = theta_c_rule(outcome, state.theta_c, config.theta_c_rule)
     if not finite:
         trace = np.zeros(N_GAINS)
-    record = TrialRecord(
-        trial=state.trials_done + 1,
-        reward=reward,
-        W=state.W,
-        theta_c=state.theta_c,
-        sigma=float(sigma_of(W[5])),
-        min_abs_theta_swingup=outcome.min_abs_theta_swingup,
-        ended_at=outcome.ended_at,
-        success=success,
-        fault=outcome.fault,
-        early=outcome.early,
+    record = trial_record(
+        state, outcome, reward=reward, sigma=float(sigma_of(W[5])), success=success
     )
     new_state = LearnerState(
         trials_done=state.trials_done + 1,
@@ -434,10 +400,12 @@ def pgpe_step(
         data = None
     reward = _reward(outcome, data, true_plant, sim, protocol)
     controller = replace(template, theta_c=state.theta_c)
-    success = _mean_success(plant, controller, sim, protocol, W, config.action_every)
+    success = mean_policy_success(plant, controller, sim, protocol, W, config.action_every)
     if success and config.plant_jitter > 0.0:
         success = all(
-            _mean_success(corner, controller, sim, protocol, W, config.action_every, model=plant)
+            mean_policy_success(
+                corner, controller, sim, protocol, W, config.action_every, model=plant
+            )
             for corner in jitter_corners(plant, config.plant_jitter)
         )
     factor, b, square = _prediction_error(state, reward, config)
@@ -451,18 +419,7 @@ def pgpe_step(
             new_p[5] = theta_c_rule(outcome, state.theta_c, config.theta_c_rule)
         new_p[0] = max(new_p[0], config.w1_floor)
         new_s = adapt_explore(s, z, factor, config)
-    record = TrialRecord(
-        trial=state.trials_done + 1,
-        reward=reward,
-        W=state.W,
-        theta_c=state.theta_c,
-        sigma=float(s[0]),
-        min_abs_theta_swingup=outcome.min_abs_theta_swingup,
-        ended_at=outcome.ended_at,
-        success=success,
-        fault=outcome.fault,
-        early=outcome.early,
-    )
+    record = trial_record(state, outcome, reward=reward, sigma=float(s[0]), success=success)
     new_state = LearnerState(
         trials_done=state.trials_done + 1,
         W=(*(float(v) for v in new_p[:5]), float(W[5])),

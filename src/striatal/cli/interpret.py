@@ -43,28 +43,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _from_result(path: Path) -> tuple[list[float], float, str, Plant, str]:
     data = read_json(path, what="result")
-    if not isinstance(data, dict):
-        raise DataFileError(f"result {path} is not a striatal result.json")
-    try:
-        settings: dict[str, Any] = data.get("settings") or {}
-        ctrl: dict[str, Any] = settings.get("controller") or {}
-        plant_d: dict[str, Any] = settings.get("plant") or {}
-        W = [float(w) for w in data["W"]]
-        theta_c = float(data["theta_c"])
-        plant = Plant(
-            **{
-                k: plant_d[k]
-                for k in ("cart_mass", "pole_mass", "length", "gravity")
-                if k in plant_d
-            }
-        )
-        sign = str(ctrl.get("balance_sign", "corrected"))
-        learner = str(data.get("learner", settings.get("learner", "chapter")))
-    except (KeyError, TypeError, ValueError, AttributeError) as exc:
-        raise DataFileError(f"result {path} lacks W, theta_c or settings: {exc!r}") from None
-    except ParameterError as exc:
-        raise DataFileError(f"result {path} holds an unusable plant: {exc}") from None
-    return W, theta_c, sign, plant, learner
+    controller, plant = options.controller_of_result(data, path)
+    settings = data.get("settings")
+    learner = data.get("learner", settings.get("learner") if isinstance(settings, dict) else None)
+    return (
+        list(controller.gains),
+        controller.theta_c,
+        controller.balance_sign,
+        plant,
+        str(learner or "chapter"),
+    )
 
 
 def build(args: argparse.Namespace) -> dict[str, Any]:

@@ -156,7 +156,12 @@ def add_gain_source_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def result_controller(path: Path) -> tuple[Controller, Plant]:
-    data = read_json(path, what="result")
+    """The controller (W, theta_c, readings) and plant of a result.json of train."""
+    return controller_of_result(read_json(path, what="result"), path)
+
+
+def controller_of_result(data: Any, path: Path) -> tuple[Controller, Plant]:
+    """:func:`result_controller` of already-parsed JSON ``data`` read from ``path``."""
     if not isinstance(data, dict):
         raise DataFileError(f"result {path} is not a striatal result.json")
     try:
@@ -177,7 +182,7 @@ def result_controller(path: Path) -> tuple[Controller, Plant]:
                 if k in plant_d
             }
         )
-    except (KeyError, TypeError, AttributeError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise DataFileError(f"result {path} lacks W, theta_c or settings: {exc!r}") from None
     except ParameterError as exc:
         raise DataFileError(f"result {path} holds an unusable controller: {exc}") from None
