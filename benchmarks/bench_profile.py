@@ -34,39 +34,9 @@ def main() -> None:
     out = np.empty(kernel.N_OUT)
     bench.first_calls(rng)
     fixed_noise = rng.standard_normal(setup.n_steps)
-    p = setup.protocol
 
     def direct(noise: np.ndarray) -> None:
-        kernel.run_trial(
-            setup.sim.initial_state,
-            setup.W,
-            setup.theta_c,
-            1.0,
-            False,
-            50.0,
-            setup.plant,
-            setup.plant,
-            False,
-            setup.sim.dt,
-            setup.n_steps,
-            1,
-            noise,
-            np.empty((0, 2)),
-            0.0,
-            0.0,
-            False,
-            bench.TRACE_GAMMA,
-            np.zeros(6),
-            p.check_step(setup.sim.dt),
-            p.check_x,
-            p.check_theta,
-            p.goal_x,
-            p.goal_theta,
-            p.reward_success,
-            p.reward_failure,
-            np.empty((0, kernel.N_TRAJ)),
-            out,
-        )
+        bench.run_kernel_trial(setup, noise, out)
 
     plant = Plant()
     controller = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)

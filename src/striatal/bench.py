@@ -209,7 +209,11 @@ class TrialSetup:
 
 def run_scalar_trial(setup: TrialSetup, rng: np.random.Generator, out: np.ndarray) -> int:
     """One stochastic trial, its noise drawn from ``rng`` here; returns the steps run."""
-    noise = rng.standard_normal(setup.n_steps)
+    return run_kernel_trial(setup, rng.standard_normal(setup.n_steps), out)
+
+
+def run_kernel_trial(setup: TrialSetup, noise: np.ndarray, out: np.ndarray) -> int:
+    """One trial of the kernel with the given policy noise (empty: the mean policy)."""
     trace = np.zeros(6)
     p = setup.protocol
     kernel.run_trial(
