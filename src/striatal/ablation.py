@@ -19,10 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from striatal import baselines
+from striatal import baselines, experiments
 from striatal.cli.learner_options import LEARNER_DEFAULTS
 from striatal.errors import ParameterError
-from striatal.learn import LearnerConfig, random_initial_gains, train
+from striatal.learn import LearnerConfig, random_initial_gains
 from striatal.params import CHAPTER_INITIAL_THETA_C, Controller, Plant, Simulation
 from striatal.rollout import Protocol, simulate
 
@@ -143,16 +143,7 @@ def run_seed(config: LearnerConfig, seed: int, kind: str = "learner") -> dict[st
             plant, template, sim, W0, CHAPTER_INITIAL_THETA_C, seed, config.max_trials, "mean"
         )
     else:
-        result = train(plant, template, config, seed)
-        if result.interrupted:
-            # train turns Ctrl-C into a partial result; a cut run must not be tabulated
-            raise KeyboardInterrupt
-        found = {
-            "success": result.success,
-            "trials": result.trials,
-            "W": result.W,
-            "theta_c": result.theta_c,
-        }
+        found = experiments.learning_run(plant, template, config, seed, sim)
     resimulated = False
     if found["success"]:
         learned = template.with_gains(tuple(found["W"]), found["theta_c"])

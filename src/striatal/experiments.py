@@ -112,6 +112,25 @@ def initial_gains(init: Init, seed: int) -> tuple[float, ...]:
     raise ParameterError(f"init must be 'chapter' or 'random', got {init!r}")
 
 
+def learning_run(
+    plant: Plant, template: Controller, config: LearnerConfig, seed: int, sim: Simulation
+) -> dict[str, Any]:
+    """success, trials, W and theta_c of one finished ``learn.train`` run.
+
+    train turns Ctrl-C into a partial result; a cut run must never be recorded as
+    finished, so it is raised again here as KeyboardInterrupt.
+    """
+    result = train(plant, template, config, seed, sim=sim)
+    if result.interrupted:
+        raise KeyboardInterrupt
+    return {
+        "success": result.success,
+        "trials": result.trials,
+        "W": result.W,
+        "theta_c": result.theta_c,
+    }
+
+
 def run_one(spec: RunSpec) -> dict[str, Any]:
     """One run -> one row (RUN_COLUMNS). Pure: the same spec gives the same row
     (except wall_seconds)."""
@@ -122,16 +141,7 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     cfg = spec.config
     out: dict[str, Any]
     if spec.method == "learn":
-        result = train(spec.plant, template, cfg, spec.seed, sim=spec.sim)
-        if result.interrupted:
-            # train turns Ctrl-C into a partial result; a cut run must not become a row
-            raise KeyboardInterrupt
-        out = {
-            "success": result.success,
-            "trials": result.trials,
-            "W": result.W,
-            "theta_c": result.theta_c,
-        }
+        out = learning_run(spec.plant, template, cfg, spec.seed, spec.sim)
     elif spec.method in ("lqr", "hand"):
         if spec.method == "lqr":
             W, theta_c = baselines.lqr_controller(spec.plant)
