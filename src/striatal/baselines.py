@@ -47,7 +47,7 @@ import numpy as np
 from striatal.control import balancing_gain_matrix
 from striatal.dynamics import linearization
 from striatal.learn import W1_FLOOR, SuccessOn
-from striatal.learners import THETA_C_LEARNED_RANGE, recorded_trial, shaped_reward
+from striatal.learners import THETA_C_LEARNED_RANGE, shaped_reward
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -56,7 +56,7 @@ from striatal.params import (
     Plant,
     Simulation,
 )
-from striatal.rollout import Protocol, run_trial
+from striatal.rollout import Protocol, recorded_trial, run_trial
 
 BASELINES: tuple[str, ...] = ("lqr", "hand", "random", "cmaes")
 

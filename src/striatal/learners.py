@@ -35,7 +35,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from striatal import kernel
 from striatal.dynamics import energy_error, wrap_angle
 from striatal.kernel import sigma_of
 from striatal.learn import (
@@ -49,10 +48,8 @@ from striatal.learn import (
 from striatal.params import N_GAINS, Controller, Plant, Simulation
 from striatal.rollout import (
     Protocol,
-    SensorNoise,
     TrialOutcome,
-    _call_kernel,
-    _noise_arrays,
+    recorded_trial,
     run_trial,
 )
 
@@ -117,47 +114,6 @@ def shaped_reward(
     upright = float(np.sum(_closeness(states, sim) * near)) / n
     w = weights
     return float(w[0] * energy + w[1] * centre + w[2] * final + w[3] * upright)
-
-
-def recorded_trial(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    *,
-    protocol: Protocol,
-    gains: np.ndarray,
-    rng: np.random.Generator | None,
-    trace: np.ndarray,
-    gamma: float,
-    action_every: int = 1,
-    chapter_eligibility: bool = False,
-    model: Plant | None = None,
-) -> tuple[TrialOutcome, np.ndarray]:
-    """rollout.run_trial that also returns the recorded rows (n, 8) (for the shaped reward).
-
-    Same noise draws from ``rng`` as rollout.run_trial; ``trace`` updated in place.
-    ``model``: the plant the controller believes in (default: ``plant``).
-    """
-    noise, sensor_noise = _noise_arrays(sim, action_every, rng, SensorNoise())
-    traj = np.zeros((sim.n_steps + 1, kernel.N_TRAJ))
-    out = _call_kernel(
-        plant,
-        controller,
-        sim,
-        protocol=protocol,
-        noise=noise,
-        sensor_noise=sensor_noise,
-        sensor=SensorNoise(),
-        model=model,
-        action_every=action_every,
-        gamma=gamma,
-        chapter_eligibility=chapter_eligibility,
-        trace=trace,
-        gains=gains,
-        traj=traj,
-    )
-    end = int(out[kernel.OUT_END_STEP])
-    return TrialOutcome.from_row(out, sim), traj[: end + 1]
 
 
 def tracked_baseline(b: float, reward: float, rate: float) -> float:

@@ -18,10 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from striatal import kernel
 from striatal.errors import ParameterError
 from striatal.params import Controller, Plant, Simulation, check_seed
-from striatal.rollout import Protocol, SensorNoise, TrialOutcome, _call_kernel
+from striatal.rollout import Protocol, SensorNoise, TrialOutcome, run_trial
 
 
 @dataclass(frozen=True)
@@ -66,29 +65,20 @@ def mean_policy_trial(
 
     Sensor noise (if active) is drawn from ``rng``; the policy itself draws nothing.
     """
-    if sensor.active:
-        if rng is None:
-            raise ParameterError("sensor noise needs a random generator")
-        sensor_noise = rng.standard_normal((sim.n_steps, 2))
-    else:
-        sensor_noise = np.empty((0, 2))
-    out = _call_kernel(
+    if sensor.active and rng is None:
+        raise ParameterError("sensor noise needs a random generator")
+    return run_trial(
         plant,
         controller,
         sim,
         protocol=protocol,
-        noise=np.empty(0),
-        sensor_noise=sensor_noise,
-        sensor=sensor,
-        model=model,
-        action_every=1,
-        gamma=0.0,
-        chapter_eligibility=False,
         trace=np.zeros(6),
-        gains=None,
-        traj=np.empty((0, kernel.N_TRAJ)),
+        gamma=0.0,
+        rng=rng,
+        model=model,
+        sensor=sensor,
+        mean_policy=True,
     )
-    return TrialOutcome.from_row(out, sim)
 
 
 def evaluate(

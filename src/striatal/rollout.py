@@ -149,9 +149,11 @@ def _noise_arrays(
     action_every: int,
     rng: np.random.Generator | None,
     sensor: SensorNoise,
+    mean_policy: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     n_draws = -(-sim.n_steps // action_every)
-    noise = rng.standard_normal(n_draws) if rng is not None else np.empty(0)
+    draws_actions = rng is not None and not mean_policy
+    noise = rng.standard_normal(n_draws) if draws_actions and rng is not None else np.empty(0)
     if sensor.active:
         if rng is None:
             raise ParameterError("sensor noise needs a random generator (give a seed)")
@@ -276,13 +278,88 @@ def run_trial(
     chapter_eligibility: bool = False,
     model: Plant | None = None,
     sensor: SensorNoise = SensorNoise(),
+    mean_policy: bool = False,
 ) -> TrialOutcome:
     """One trial of the protocol; the eligibility trace ``trace`` (6,) is updated in place.
 
     ``gains`` may override ``controller.gains`` without validation (the learner's
-    guarded W); ``rng`` None runs the mean policy.
+    guarded W); ``rng`` None runs the mean policy. ``mean_policy`` runs the mean
+    policy even with a generator, which then draws only the sensor noise.
     """
-    noise, sensor_noise = _noise_arrays(sim, action_every, rng, sensor)
+    outcome, _ = _trial(
+        plant,
+        controller,
+        sim,
+        protocol=protocol,
+        trace=trace,
+        gamma=gamma,
+        rng=rng,
+        gains=gains,
+        action_every=action_every,
+        chapter_eligibility=chapter_eligibility,
+        model=model,
+        sensor=sensor,
+        mean_policy=mean_policy,
+        record=False,
+    )
+    return outcome
+
+
+def recorded_trial(
+    plant: Plant,
+    controller: Controller,
+    sim: Simulation,
+    *,
+    protocol: Protocol,
+    gains: np.ndarray | None,
+    rng: np.random.Generator | None,
+    trace: np.ndarray,
+    gamma: float,
+    action_every: int = 1,
+    chapter_eligibility: bool = False,
+    model: Plant | None = None,
+) -> tuple[TrialOutcome, np.ndarray]:
+    """:func:`run_trial` that also returns the recorded rows (n, 8), columns kernel.TRAJ_COLUMNS.
+
+    Same noise draws from ``rng`` as :func:`run_trial`; ``trace`` updated in place.
+    """
+    return _trial(
+        plant,
+        controller,
+        sim,
+        protocol=protocol,
+        trace=trace,
+        gamma=gamma,
+        rng=rng,
+        gains=gains,
+        action_every=action_every,
+        chapter_eligibility=chapter_eligibility,
+        model=model,
+        sensor=SensorNoise(),
+        mean_policy=False,
+        record=True,
+    )
+
+
+def _trial(
+    plant: Plant,
+    controller: Controller,
+    sim: Simulation,
+    *,
+    protocol: Protocol,
+    trace: np.ndarray,
+    gamma: float,
+    rng: np.random.Generator | None,
+    gains: np.ndarray | None,
+    action_every: int,
+    chapter_eligibility: bool,
+    model: Plant | None,
+    sensor: SensorNoise,
+    mean_policy: bool,
+    record: bool,
+) -> tuple[TrialOutcome, np.ndarray]:
+    noise, sensor_noise = _noise_arrays(sim, action_every, rng, sensor, mean_policy)
+    traj = np.zeros((sim.n_steps + 1 if record else 0, kernel.N_TRAJ))
     out = _call_kernel(
         plant,
         controller,
@@ -297,6 +374,7 @@ def run_trial(
         chapter_eligibility=chapter_eligibility,
         trace=trace,
         gains=gains,
-        traj=np.empty((0, kernel.N_TRAJ)),
+        traj=traj,
     )
-    return TrialOutcome.from_row(out, sim)
+    end = int(out[kernel.OUT_END_STEP])
+    return TrialOutcome.from_row(out, sim), traj[: end + 1]
