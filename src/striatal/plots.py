@@ -25,6 +25,7 @@ from striatal.errors import DataFileError, ParameterError
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+    from striatal.profiles import Profile
     from striatal.rollout import Trajectory
 
 #: The chapter: "each motion snapshot was recorded in every 0.2 second" (section 3).
@@ -586,3 +587,40 @@ def _write_mp4(frames: Sequence[np.ndarray], tmp: Path, fps: float) -> None:
     if proc.returncode != 0:
         msg = proc.stderr.decode(errors="replace").strip().splitlines()
         raise DataFileError(f"ffmpeg failed: {msg[-1] if msg else proc.returncode}")
+
+
+# --------------------------------------------------------------------------- performance profiles
+
+
+def performance_profiles(
+    profiles: Sequence[Profile], *, xlabel: str, note: str = "", title: str | None = None
+) -> Figure:
+    """Fraction of seeds solved against budget, one step line per arm with its 95 % band.
+
+    ``profiles`` from :func:`striatal.profiles.sweep_profiles`; the band is the
+    pointwise Wilson interval. ``note`` (e.g. the trials fallback) is printed
+    under the axes.
+    """
+    fig = _figure(8.0, 5.0)
+    ax = fig.subplots()
+    for i, p in enumerate(profiles):
+        colour = f"C{i % 10}"
+        ax.fill_between(p.budget, p.low, p.high, step="post", color=colour, alpha=0.2, lw=0)
+        ax.step(
+            p.budget,
+            p.solved,
+            where="post",
+            color=colour,
+            lw=1.6,
+            label=f"{p.arm}: {p.successes}/{p.runs} solved",
+        )
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlim(left=0.0)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("fraction of seeds solved within budget")
+    ax.grid(True, color="0.9", lw=0.5)
+    ax.legend(loc="upper left", fontsize=9, frameon=False)
+    ax.set_title(title or "Performance profiles (bands: pointwise Wilson 95 %)", fontsize=11)
+    if note:
+        fig.supxlabel(note, fontsize=7, color="0.35")
+    return fig
