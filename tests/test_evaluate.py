@@ -131,3 +131,10 @@ def test_cli_hostile_input_is_one_line_exit_2(bad: list[str]) -> None:
     assert proc.returncode == 2
     assert proc.stdout == ""
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_help_text_formats(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(["evaluate", "--help"])
+    assert exc.value.code == 0
+    assert "Wilson 95 % interval" in " ".join(capsys.readouterr().out.split())

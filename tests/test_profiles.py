@@ -166,3 +166,11 @@ def test_cli_bad_input_is_one_line_exit_2(tmp_path: Path, folder: str, extra: li
     assert proc.returncode == 2
     assert len(proc.stderr.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_help_texts_format(capsys: pytest.CaptureFixture[str]) -> None:
+    for argv in (["--help"], ["profile", "--help"]):
+        with pytest.raises(SystemExit) as exc:
+            main(argv)
+        assert exc.value.code == 0
+    assert "95 % band" in " ".join(capsys.readouterr().out.split())

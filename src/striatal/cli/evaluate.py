@@ -17,7 +17,7 @@ DESCRIPTION = (
     "Run DRAWS noisy trials of the chapter's protocol (the Gaussian policy of eq 5, sigma "
     "from W6) with fixed gains and count how many pass the success test at T_f, judged on "
     "the noisy trial as striatal train does (docs/paper-notes.md section 8). Prints the "
-    "pass rate with its Wilson 95 %% interval, the share that earned the +10 of eq 25, and "
+    "pass rate with its Wilson 95 % interval, the share that earned the +10 of eq 25, and "
     "the verdict of the mean policy. Gains: --chapter-final (default), --chapter-initial, "
     "--gains with --theta-c, or --result result.json of striatal train."
 )

@@ -11,11 +11,11 @@ from striatal.files import dumps_json
 
 COMMAND = "profile"
 ORDER = 33
-HELP = "fraction of seeds solved against budget, per arm, with 95 % bands"
+HELP = "fraction of seeds solved against budget, per arm, with 95 %% bands"
 DESCRIPTION = (
     "Performance profiles from the runs.csv of striatal sweep folders: for each arm, the "
     "fraction of its seeds solved within a budget of simulations, simulated seconds or "
-    "learning trials, with a pointwise Wilson 95 %% band. Unsolved seeds count in the "
+    "learning trials, with a pointwise Wilson 95 % band. Unsolved seeds count in the "
     "denominator, so each line ends at the arm's success rate. Without --x: simulations "
     "when every runs.csv has that column, else learning trials (with a note)."
 )
