@@ -150,3 +150,19 @@ def test_arm_summary_reads_mappings_and_refuses_missing_fields() -> None:
     assert out["successes"] == 2
     with pytest.raises(ParameterError):
         stats.arm_summary([{"success": True}], rng=np.random.default_rng(0))
+
+
+def test_compare_arms_pairs_shared_seeds_only() -> None:
+    a = {s: s < 13 for s in range(20)}
+    b = {s: (s < 5) or s == 19 for s in range(20)}
+    out = stats.compare_arms(a, b)
+    assert out["same_seeds"] is True
+    assert out["fisher"]["successes_a"] == 13 and out["fisher"]["successes_b"] == 6
+    assert out["mcnemar"]["only_a"] == 8 and out["mcnemar"]["only_b"] == 1
+    # the pairing matters: the paired test sees 8 vs 1 discordant seeds
+    assert out["mcnemar"]["p_value"] < out["fisher"]["p_value"]
+    apart = stats.compare_arms({0: True, 1: False}, {2: True, 3: True})
+    assert apart["mcnemar"] is None and apart["same_seeds"] is False
+    json.dumps(out, allow_nan=False)
+    with pytest.raises(ParameterError):
+        stats.compare_arms({}, b)

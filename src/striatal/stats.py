@@ -293,3 +293,23 @@ def _count(name: str, value: object, minimum: int = 0) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
         raise ParameterError(f"{name} must be a whole number >= {minimum}, got {value!r}")
     return int(value)
+
+
+def compare_arms(a: Mapping[int, bool], b: Mapping[int, bool]) -> dict[str, Any]:
+    """Both tests of arm A against arm B from ``seed -> solved`` maps, for summary.json.
+
+    ``fisher``: every seed of each arm, as independent samples. ``mcnemar``: the
+    seeds both arms ran, paired (None when they share none). When the arms ran
+    the same seeds (a learner and its control), the paired test is the one to
+    quote: it removes the seed-to-seed variation the two arms share.
+    """
+    if not a or not b:
+        raise ParameterError("each arm needs at least one seed")
+    shared = set(a) & set(b)
+    return {
+        "fisher": fisher_test(
+            sum(map(bool, a.values())), len(a), sum(map(bool, b.values())), len(b)
+        ).to_dict(),
+        "mcnemar": mcnemar_test(a, b).to_dict() if shared else None,
+        "same_seeds": set(a) == set(b),
+    }
