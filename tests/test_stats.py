@@ -150,6 +150,13 @@ def test_arm_summary_reads_mappings_and_refuses_missing_fields() -> None:
     assert out["successes"] == 2
     with pytest.raises(ParameterError):
         stats.arm_summary([{"success": True}], rng=np.random.default_rng(0))
+    # a row of today's runs.csv: trials only
+    old = stats.arm_summary(
+        [{"success": True, "trials": 3}, {"success": True, "trials": 5}],
+        rng=np.random.default_rng(0),
+    )
+    assert old["trials_median"] == 4.0 and old["trials_median_ci"] == [3.0, 5.0]
+    assert old["simulations_median"] is None and "not recorded" in old["simulations_note"]
 
 
 def test_compare_arms_pairs_shared_seeds_only() -> None:

@@ -209,22 +209,28 @@ class SeedRecord:
     """
 
     success: bool
-    simulations: int
-    simulated_seconds: float
+    simulations: int | None
+    simulated_seconds: float | None
     trials: int
 
     @classmethod
     def from_mapping(cls, row: Mapping[str, Any]) -> SeedRecord:
-        """A record from a dict with the four fields (a parsed runs.csv row)."""
+        """A record from a dict (a parsed runs.csv row).
+
+        ``success`` and ``trials`` are required; ``simulations`` and
+        ``simulated_seconds`` may be missing (sweeps from before they were
+        recorded): their statistics are then None with a note.
+        """
         try:
+            sims, secs = row.get("simulations"), row.get("simulated_seconds")
             return cls(
                 success=bool(row["success"]),
-                simulations=int(row["simulations"]),
-                simulated_seconds=float(row["simulated_seconds"]),
+                simulations=None if sims is None else int(sims),
+                simulated_seconds=None if secs is None else float(secs),
                 trials=int(row["trials"]),
             )
         except (KeyError, TypeError, ValueError) as exc:
-            raise ParameterError(f"a seed record needs {', '.join(COSTS)}: {exc!r}") from None
+            raise ParameterError(f"a seed record needs success and trials: {exc!r}") from None
 
 
 def cost_summary(
@@ -285,7 +291,12 @@ def arm_summary(
         "(scipy.stats.trim_mean(x, 0.25))",
     }
     for cost in COSTS:
-        out.update(cost_summary([getattr(r, cost) for r in solved], cost, rng, n_resamples))
+        values = [getattr(r, cost) for r in solved]
+        if any(v is None for v in values):
+            out.update(cost_summary([], cost, rng, n_resamples))
+            out[f"{cost}_note"] = f"{cost} not recorded for every solved seed"
+        else:
+            out.update(cost_summary(values, cost, rng, n_resamples))
     return out
 
 
