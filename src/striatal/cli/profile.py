@@ -10,7 +10,7 @@ from striatal.errors import ParameterError
 from striatal.files import dumps_json
 
 COMMAND = "profile"
-ORDER = 33
+ORDER = 41
 HELP = "fraction of seeds solved against budget, per arm, with 95 %% bands"
 DESCRIPTION = (
     "Performance profiles from the runs.csv of striatal sweep folders: for each arm, the "
