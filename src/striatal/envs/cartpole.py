@@ -33,7 +33,7 @@ def observation_space(task: SwingUpTask) -> spaces.Box:
 
 
 def action_space(task: SwingUpTask) -> spaces.Box:
-    """Box(1): u in [-u_max, u_max] [m/s^2] (eq 13), float64; or [-1, 1] float32 if normalised."""
+    """Box(1): u in [-u_max, u_max], in m/s^2 (eq 13), float64; or [-1, 1] float32 if normalised."""
     if task.normalised_action:
         return spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float32)
     return spaces.Box(-task.u_max, task.u_max, shape=(1,), dtype=np.float64)

@@ -51,7 +51,7 @@ class SwingUpTask:
     plant : the point-mass cart-pole (eqs 7-14); the action is x_ddot = u exactly (eq 13).
     dt : control step [s]; each env step is one RK4 step of the kernel with u held.
     duration : episode length [s]; reaching it is a truncation (Gymnasium's time limit).
-    u_max : actions are clipped to [-u_max, u_max] [m/s^2].
+    u_max : actions are clipped to [-u_max, u_max], in m/s^2.
     observation : ``"trig"`` = [x, x_dot, sin theta, cos theta, theta_dot];
         ``"raw"`` = the kernel state [x, x_dot, theta, theta_dot] (theta unwrapped).
     reward : ``"chapter"`` (sparse eqs 24-25 from ``protocol``) or ``"dense"``
