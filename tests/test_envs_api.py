@@ -280,3 +280,14 @@ def test_human_mode_shows_frames_with_pygame(monkeypatch: pytest.MonkeyPatch) ->
     assert np.array_equal(pixels, env_frame(base.state, base.task, base.t))  # type: ignore[attr-defined]
     env.close()
     assert not pygame.display.get_init()
+
+
+def test_instance_lists_human_only_with_pygame(monkeypatch: pytest.MonkeyPatch) -> None:
+    """check_env makes every listed mode: without pygame an instance does not list "human"."""
+    assert "human" in CartPoleSwingUpEnv.metadata["render_modes"]
+    monkeypatch.setitem(sys.modules, "pygame", None)
+    env = gym.make(ENV_ID)
+    assert env.metadata["render_modes"] == ["rgb_array"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        check_env(env.unwrapped)

@@ -8,6 +8,7 @@ advances a trial, so a policy that returns the kernel's mean action reproduces
 
 from __future__ import annotations
 
+import importlib.util
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -93,6 +94,14 @@ def import_pygame() -> Any:
     return pygame
 
 
+def pygame_available() -> bool:
+    """True if pygame (the ``[render]`` extra) can be imported."""
+    try:
+        return importlib.util.find_spec("pygame") is not None
+    except (ImportError, ValueError):  # ValueError: sys.modules["pygame"] is None
+        return False
+
+
 class HumanWindow:
     """A pygame window that shows frames at the env's frame rate (render_mode="human")."""
 
@@ -149,9 +158,11 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
     1 / dt, real time.
     """
 
-    # Gymnasium reads metadata from the class (a plain dict there too); each
-    # instance gets its own copy with render_fps = 1 / dt (recorded video plays in
-    # real time).
+    # Gymnasium reads metadata from the class (a plain dict there too): "human" is
+    # always listed so that gymnasium.make hands it to __init__ (which names the
+    # extra if pygame is missing). Each instance gets its own copy with
+    # render_fps = 1 / dt (recorded video plays in real time) and only the modes
+    # it can draw (env_checker.check_env makes every listed mode).
     metadata: dict[str, Any] = {  # noqa: RUF012
         "render_modes": ["human", "rgb_array"],
         "render_fps": 100,
@@ -160,7 +171,14 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
     def __init__(self, render_mode: str | None = None, **task_options: Any) -> None:
         check_render_mode(render_mode, self.metadata["render_modes"])
         self.task = SwingUpTask.from_kwargs(**task_options)
-        self.metadata = {**type(self).metadata, "render_fps": self.task.render_fps}
+        modes = [
+            m for m in type(self).metadata["render_modes"] if m != "human" or pygame_available()
+        ]
+        self.metadata = {
+            **type(self).metadata,
+            "render_modes": modes,
+            "render_fps": self.task.render_fps,
+        }
         self.render_mode = render_mode
         self._window = (
             HumanWindow(RENDER_WIDTH, RENDER_HEIGHT, self.task.render_fps)
