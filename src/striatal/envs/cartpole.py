@@ -9,6 +9,7 @@ advances a trial, so a policy that returns the kernel's mean action reproduces
 from __future__ import annotations
 
 import importlib.util
+import os
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -85,6 +86,8 @@ def check_render_mode(render_mode: str | None, modes: list[str]) -> None:
 
 def import_pygame() -> Any:
     """The pygame module, or MissingExtraError naming the ``[render]`` extra."""
+    # pygame greets on stdout when imported, which would mix into a user's output.
+    os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
     try:
         import pygame
     except ImportError:
