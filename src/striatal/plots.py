@@ -30,9 +30,12 @@ if TYPE_CHECKING:
 
 #: The chapter: "each motion snapshot was recorded in every 0.2 second" (section 3).
 SNAPSHOT_EVERY = 0.2
-#: Horizontal drift of the snapshot strip of Figure 5's top panel [m/s]: snapshot k is
-#: drawn at x(t_k) + DRIFT t_k so that successive stick figures do not overlap.
-DRIFT = 0.5
+#: Figure 5's snapshots are laid out in rows of this many seconds each.
+ROW_SECONDS = 10.0
+#: Distance between successive poses along a row of snapshots, in pole lengths.
+POSE_GAP = 0.6
+#: Height of one row of snapshots, in pole lengths (a hanging and an upright pole fit).
+ROW_HEIGHT = 2.6
 #: Runs whose cart leaves |x| <= VIEW_LIMIT [m] (a runaway, e.g. the printed balancing sign)
 #: are drawn clipped to that window, so the part before the runaway stays readable.
 VIEW_LIMIT = 15.0
@@ -114,18 +117,40 @@ def snapshot_indices(traj: Trajectory, every: float = SNAPSHOT_EVERY) -> np.ndar
 
 
 def display_theta(traj: Trajectory) -> np.ndarray:
-    """theta(t) unwrapped, shifted by whole turns so that its last value lies in (-pi, pi]
-    (for a runaway: its last value while |x| <= VIEW_LIMIT).
+    """theta(t) as the kernel records it (unwrapped), shifted by whole turns so that
+    theta(0) lies in (-pi, pi]: the start reads the theta(0) of the run.
 
-    The kernel records the continuous angle; a pole that swings up over the other
-    side ends near 2 pi. The shift makes the final upright read 0 without the
-    +-pi jumps a wrapped angle shows while the pole hangs near pi.
+    A pole that swings up over the other side then ends near +-2 pi, which is upright
+    too: Figure 5 marks the upright of the last turn (:func:`final_upright`).
     """
     theta = traj.column("theta")
-    # A runaway cart spins the pole: take the turns at the last instant still in view.
-    sane = np.nonzero((np.abs(traj.column("x")) <= VIEW_LIMIT) & np.isfinite(theta))[0]
+    first = theta[0] if np.isfinite(theta[0]) else 0.0
+    return theta - 2.0 * np.pi * np.round(first / (2.0 * np.pi))
+
+
+def final_upright(theta: np.ndarray) -> float:
+    """The upright angle 2 pi k [rad] nearest the last finite value of ``theta``
+    (for a runaway: the last value whose size is at most VIEW_LIMIT)."""
+    sane = np.nonzero(np.isfinite(theta) & (np.abs(theta) <= VIEW_LIMIT))[0]
     last = theta[sane[-1]] if len(sane) else 0.0
-    return theta - 2.0 * np.pi * np.round(last / (2.0 * np.pi))
+    return float(2.0 * np.pi * np.round(last / (2.0 * np.pi)))
+
+
+def snapshot_layout(
+    t: np.ndarray, every: float, row_seconds: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(row, slot) of snapshots taken at times ``t`` [s]: row r holds
+    [r row_seconds, (r + 1) row_seconds), slot j is the j-th pose of its row.
+
+    A last snapshot that would start a row of its own (t = 60 s with 10-s rows) ends
+    the row before it instead.
+    """
+    if not (math.isfinite(row_seconds) and row_seconds >= every):
+        raise ParameterError(f"row length must be >= the snapshot interval, got {row_seconds}")
+    n_rows = max(1, int(math.ceil(float(t[-1]) / row_seconds - 1e-9)))
+    row = np.minimum(np.floor(t / row_seconds + 1e-9).astype(int), n_rows - 1)
+    slot = np.rint((t - row * row_seconds) / every).astype(int)
+    return row, slot
 
 
 def pole_tip(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
@@ -136,6 +161,7 @@ def pole_tip(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
 
 
 def gains_title(gains: Sequence[float], theta_c: float) -> str:
+    """``W = [W1, ..., W6],  θ_c = ... rad`` with four decimals."""
     w = ", ".join(f"{g:.4f}" for g in gains)
     return f"W = [{w}],  θ_c = {theta_c:.4g} rad"
 
@@ -149,72 +175,106 @@ class Figure5Parts:
     x_line: object
     theta_line: object
     switch_lines: tuple[object, ...]
+    caption: str
+
+
+def figure5_caption(traj: Trajectory, *, every: float = SNAPSHOT_EVERY) -> str:
+    """The caption of Figure 5 for ``traj``: the run's parameters and how to read the panels."""
+    ctrl = traj.controller
+    o = traj.outcome
+    n = len(snapshot_indices(traj, every))
+    switches = ", ".join(f"{s:.2f}" for s in traj.switch_times[:6])
+    if len(traj.switch_times) > 6:
+        switches += f" ... ({len(traj.switch_times)} in all)"
+    return (
+        f"Figure 5. One run with the mean policy: {gains_title(ctrl.gains, ctrl.theta_c)}; "
+        f"balance sign {ctrl.balance_sign}, {ctrl.switch} switch"
+        + (f" (γ = {ctrl.inhibition:g} /rad)" if ctrl.soft else "")
+        + f"; θ(0) = {traj.sim.theta0:g} rad, dt = {traj.sim.dt:g} s; "
+        f"success test at {traj.sim.duration:g} s: {'passed' if o.success else 'failed'}"
+        + (" (numerical fault: the state blew up)" if o.fault else "")
+        + f". Top: the pole every {every:g} s ({n} poses), one row per {ROW_SECONDS:g} s, "
+        "time running left to right; orange while the swing-up controller acts (eq 23), "
+        "blue while balancing (eq 22); each pose is drawn at its own place in the row, "
+        "the cart's position is in the third panel. Second: the path of the pole tip "
+        "(x + l sin θ, l cos θ). Third: the cart position x(t). Bottom: the pole angle "
+        "θ(t), unwrapped from θ(0); the grey line is the upright the run ends at "
+        "(2π k), the dotted lines ±θ_c about it. Dashed vertical lines: switches "
+        f"between the controllers at {switches or 'none'} s."
+    )
 
 
 def figure5(
     traj: Trajectory,
     *,
     every: float = SNAPSHOT_EVERY,
-    drift: float = DRIFT,
     title: str | None = None,
 ) -> Figure:
-    """The chapter's Figure 5 for one run: three panels.
+    """The chapter's Figure 5 for one run: four panels, and its caption.
 
-    Top: a stick figure (cart and pole) every ``every`` seconds, the cart drawn at
-    x(t) + ``drift`` t so that the strip reads left to right in time; orange while the
-    swing-up controller acts, blue while balancing. Middle: the path of the pole tip
-    (x + l sin theta, l cos theta). Bottom: x(t) and theta(t) (see :func:`display_theta`)
-    with the switch times as vertical lines.
-    The artists are on ``fig.figure5_parts`` (:class:`Figure5Parts`).
+    Top: a stick figure of the pole every ``every`` seconds, in rows of
+    :data:`ROW_SECONDS` (:func:`snapshot_layout`), orange while the swing-up
+    controller acts, blue while balancing. Second: the path of the pole tip
+    (x + l sin theta, l cos theta). Third: x(t). Bottom: theta(t) (see
+    :func:`display_theta`) with +-theta_c about the final upright. The switch times
+    are vertical lines in the last two. The title is short; the parameters of the
+    run are in the caption (:func:`figure5_caption`), on ``fig.figure5_parts``
+    (:class:`Figure5Parts`) with the artists.
     """
     from matplotlib.collections import LineCollection
 
-    fig = _figure(13.0, 9.0)
-    ax_snap, ax_xy, ax_t = fig.subplots(3, 1, height_ratios=[0.8, 1.0, 1.1])
     t = traj.t
     x = traj.column("x")
     theta = traj.column("theta")
     mode = traj.column("mode")
     l = traj.plant.length
     idx = snapshot_indices(traj, every)
+    row, slot = snapshot_layout(t[idx], every, ROW_SECONDS)
+    n_rows = int(row.max()) + 1
+    width_poses = float(slot.max()) * POSE_GAP + 2.4
 
-    base = x[idx] + drift * t[idx]
-    tip_x = base + l * np.sin(theta[idx])
-    tip_y = l * np.cos(theta[idx])
-    segments = np.stack([np.stack([base, np.zeros_like(base)], 1), np.stack([tip_x, tip_y], 1)], 1)
-    colours = [BALANCING_COLOUR if m > 0.5 else SWINGUP_COLOUR for m in mode[idx]]
-    snaps = LineCollection(list(segments), colors=colours, linewidths=0.8, gid="snapshots")
-    ax_snap.add_collection(snaps)
-    ax_snap.plot(base, np.zeros_like(base), "s", ms=2.5, color="0.3", gid="carts")
-    ax_snap.axhline(0.0, color="0.6", lw=0.5)
-    pad = 0.3 * l
-    near = np.abs(x[idx]) <= VIEW_LIMIT
-    near[0] = True
-    ax_snap.set_xlim(
-        min(base[near].min(), tip_x[near].min()) - pad,
-        max(base[near].max(), tip_x[near].max()) + pad,
+    snap_height = 12.2 * n_rows * ROW_HEIGHT / width_poses
+    fig = _figure(13.0, snap_height + 8.2)
+    ax_snap, ax_xy, ax_x, ax_th = fig.subplots(
+        4, 1, height_ratios=[snap_height, 3.2, 1.9, 2.1], gridspec_kw={"hspace": 0.08}
     )
-    ax_snap.set_ylim(-1.15 * l, 1.55 * l)
+
+    # Snapshots: pivot of pose k at (slot POSE_GAP l, -row ROW_HEIGHT l).
+    piv_x = slot * POSE_GAP * l
+    piv_y = -row * ROW_HEIGHT * l
+    tip_x = piv_x + l * np.sin(theta[idx])
+    tip_y = piv_y + l * np.cos(theta[idx])
+    segments = np.stack([np.stack([piv_x, piv_y], 1), np.stack([tip_x, tip_y], 1)], 1)
+    colours = [BALANCING_COLOUR if m > 0.5 else SWINGUP_COLOUR for m in mode[idx]]
+    snaps = LineCollection(list(segments), colors=colours, linewidths=1.1, gid="snapshots")
+    ax_snap.add_collection(snaps)
+    ax_snap.plot(piv_x, piv_y, "s", ms=2.0, color="0.3", gid="carts")
+    for r in range(n_rows):
+        y0 = -r * ROW_HEIGHT * l
+        ax_snap.axhline(y0, color="0.85", lw=0.5, zorder=0)
+        in_row = row == r
+        t_row = t[idx][in_row]
+        ax_snap.text(
+            -1.3 * l,
+            y0,
+            f"{t_row[0]:g}–{t_row[-1]:g} s",
+            ha="right",
+            va="center",
+            fontsize=9,
+            color="0.25",
+        )
+    ax_snap.set_xlim(-1.2 * l, float(slot.max()) * POSE_GAP * l + 1.2 * l)
+    ax_snap.set_ylim(-(n_rows - 1) * ROW_HEIGHT * l - 1.15 * l, 1.3 * l)
     ax_snap.set_aspect("equal", adjustable="box")
-    ax_snap.set_xlabel(f"x(t) + {drift:g} m/s · t  [m]   (snapshot every {every:g} s)")
-    ax_snap.set_ylabel("height [m]")
+    ax_snap.set_xticks([])
+    ax_snap.set_yticks([])
+    for side in ("top", "right", "left", "bottom"):
+        ax_snap.spines[side].set_visible(False)
     ax_snap.set_title(
-        f"motion snapshots every {every:g} s ({len(idx)}); "
-        "orange: swing-up (eq 23), blue: balancing (eq 22)",
+        f"the pole every {every:g} s, one row per {ROW_SECONDS:g} s "
+        f"(orange: swing-up, eq 23; blue: balancing, eq 22)",
         fontsize=10,
     )
-    # Time marks along the strip, every 10 s.
-    for tk in np.arange(0.0, t[-1] + 1e-9, 10.0):
-        k = int(round(tk / traj.sim.dt))
-        if k < len(t):
-            ax_snap.annotate(
-                f"{tk:g} s",
-                (x[k] + drift * t[k], 1.1 * l),
-                ha="center",
-                va="bottom",
-                fontsize=8,
-                color="0.3",
-            )
 
     tx, ty = pole_tip(traj)
     (tip_line,) = ax_xy.plot(tx, ty, lw=0.6, color="tab:purple", gid="tip_path")
@@ -230,68 +290,70 @@ def figure5(
         ax_xy.set_aspect("equal", adjustable="datalim")
     ax_xy.set_xlabel("x + l sin θ  [m]")
     ax_xy.set_ylabel("l cos θ  [m]")
-    ax_xy.set_title("pole tip in the x-y plane", fontsize=10)
+    ax_xy.set_title("path of the pole tip", fontsize=10)
     ax_xy.legend(loc="lower right", fontsize=8)
 
-    th_plot = display_theta(traj)
-    (x_line,) = ax_t.plot(t, x, color="tab:green", label="x [m]", gid="x")
-    (th_line,) = ax_t.plot(t, th_plot, color="tab:purple", label="θ [rad]", gid="theta")
     many = len(traj.switch_times) > 20
-    switch_lines = tuple(
-        ax_t.axvline(
-            ts,
-            color="0.3",
-            ls="--",
-            lw=0.4 if many else 0.8,
-            alpha=0.4 if many else 1.0,
-            gid="switch",
+    switch_lines: list[object] = []
+    for ax in (ax_x, ax_th):
+        switch_lines.extend(
+            ax.axvline(
+                ts,
+                color="0.3",
+                ls="--",
+                lw=0.4 if many else 0.8,
+                alpha=0.4 if many else 1.0,
+                gid="switch",
+            )
+            for ts in traj.switch_times
         )
-        for ts in traj.switch_times
-    )
-    theta_c = traj.controller.theta_c
-    ax_t.axhline(theta_c, color="tab:purple", ls=":", lw=0.7)
-    ax_t.axhline(-theta_c, color="tab:purple", ls=":", lw=0.7)
-    ax_t.axhline(0.0, color="0.6", lw=0.5)
-    ax_t.set_xlim(t[0], t[-1])
-    if runaway or not bool(np.all(np.abs(th_plot) <= VIEW_LIMIT)):
-        ax_t.set_ylim(-VIEW_LIMIT, VIEW_LIMIT)
-        ax_t.text(
-            0.01,
-            0.03,
-            f"clipped to ±{VIEW_LIMIT:g}: max |x| = {np.nanmax(np.abs(x)):.3g} m, "
-            f"max |θ| = {np.nanmax(np.abs(th_plot)):.3g} rad",
-            transform=ax_t.transAxes,
-            fontsize=9,
-            color="tab:red",
-        )
-    ax_t.set_xlabel("time t [s]")
-    ax_t.set_ylabel("x [m],  θ [rad]")
-    n_sw = len(switch_lines)
-    sw_text = ", ".join(f"{s:.2f}" for s in traj.switch_times[:6]) + (" ..." if n_sw > 6 else "")
-    ax_t.set_title(
-        "cart position and pole angle (θ unwrapped, shifted by whole turns so the end reads "
-        f"in (-π, π]; dotted: ±θ_c); dashed: switches at {sw_text or 'none'} s",
-        fontsize=10,
-    )
-    ax_t.legend(loc="upper right", fontsize=8)
+        ax.set_xlim(t[0], t[-1])
 
-    ctrl = traj.controller
+    (x_line,) = ax_x.plot(t, x, color="tab:green", gid="x")
+    ax_x.axhline(0.0, color="0.6", lw=0.5)
+    ax_x.set_ylabel("x [m]")
+    ax_x.tick_params(labelbottom=False)
+    ax_x.sharex(ax_th)
+
+    th_plot = display_theta(traj)
+    (th_line,) = ax_th.plot(t, th_plot, color="tab:purple", gid="theta")
+    upright = final_upright(th_plot)
+    theta_c = traj.controller.theta_c
+    ax_th.axhline(upright, color="0.5", lw=0.8, gid="upright")
+    ax_th.axhline(upright + theta_c, color="tab:purple", ls=":", lw=0.8, gid="theta_c")
+    ax_th.axhline(upright - theta_c, color="tab:purple", ls=":", lw=0.8, gid="theta_c")
+    ax_th.set_ylabel("θ [rad]")
+    ax_th.set_xlabel("time t [s]")
+
+    if np.all(np.isfinite(th_plot)):
+        lo = min(float(th_plot.min()), upright - theta_c)
+        hi = max(float(th_plot.max()), upright + theta_c)
+        ax_th.set_ylim(lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo))
+    for ax, series, unit in ((ax_x, x, "m"), (ax_th, th_plot, "rad")):
+        if runaway or not bool(np.all(np.abs(series) <= VIEW_LIMIT)):
+            ax.set_ylim(-VIEW_LIMIT, VIEW_LIMIT)
+            ax.text(
+                0.01,
+                0.05,
+                f"clipped to ±{VIEW_LIMIT:g} {unit}: max = {np.nanmax(np.abs(series)):.3g} {unit}",
+                transform=ax.transAxes,
+                fontsize=9,
+                color="tab:red",
+            )
+
     o = traj.outcome
     default = (
-        f"Figure 5: {gains_title(ctrl.gains, ctrl.theta_c)}\n"
-        f"balance sign {ctrl.balance_sign}, {ctrl.switch} switch"
-        + (f" (γ = {ctrl.inhibition:g})" if ctrl.soft else "")
-        + f", θ(0) = {traj.sim.theta0:g} rad, dt = {traj.sim.dt:g} s, mean policy; "
-        f"success test at {traj.sim.duration:g} s: {'passed' if o.success else 'failed'}"
-        + (" (numerical fault)" if o.fault else "")
+        "Figure 5: swing-up and balancing, mean policy "
+        f"(success test {'passed' if o.success else 'failed'})"
     )
-    fig.suptitle(title or default, fontsize=11)
+    fig.suptitle(title or default, fontsize=12)
     fig.figure5_parts = Figure5Parts(  # type: ignore[attr-defined]
         snapshots=snaps,
         tip_path=tip_line,
         x_line=x_line,
         theta_line=th_line,
-        switch_lines=switch_lines,
+        switch_lines=tuple(switch_lines),
+        caption=figure5_caption(traj, every=every),
     )
     return fig
 
@@ -421,12 +483,14 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
 
 
 def switch_figure(theta_c: float, gammas: Sequence[float], *, theta_max: float = math.pi) -> Figure:
-    """The cerebellar soft switch of section 4 (NOTES section 4) against |theta|.
+    """The cerebellar soft switch of section 4 against |theta| (docs/paper-notes.md section 4).
 
-    Left: balancing weight clip(gamma (theta_c - |theta|), 0, 1) (solid) and swing-up
-    weight clip(gamma (|theta| - theta_c), 0, 1) (dashed) for each gamma, with the hard
-    switch in black. Right: their sum, which dips below 1 in a dead zone of half-width
-    1/gamma around theta_c where neither pathway fully drives the cart.
+    One column per gamma, so that no two curves lie on each other. Top: balancing
+    weight clip(gamma (theta_c - |theta|), 0, 1) on mu_1 (solid) and swing-up weight
+    clip(gamma (|theta| - theta_c), 0, 1) on mu_2 (dashed); the hard switch of section
+    2.3 hands over at theta_c (dotted). Bottom: their sum, the total drive, which dips
+    below 1 in a dead zone of half-width 1/gamma around theta_c (shaded) where neither
+    pathway fully drives the cart.
     """
     from striatal.control import switch_weights
 
@@ -438,33 +502,39 @@ def switch_figure(theta_c: float, gammas: Sequence[float], *, theta_max: float =
     if not 0.0 < theta_c < math.pi:
         raise ParameterError(f"theta_c must be in (0, pi), got {theta_c}")
     a = np.linspace(0.0, theta_max, 2001)
-    fig = _figure(12.0, 4.8)
-    ax_w, ax_sum = fig.subplots(1, 2, width_ratios=[1.4, 1.0])
-    wb, ws = switch_weights(a, theta_c, False, 1.0)
-    ax_w.plot(a, wb, color="black", lw=2.0, alpha=0.35, label="hard switch (section 2.3)")
-    ax_w.plot(a, ws, color="black", lw=2.0, alpha=0.35, ls="--")
+    n = len(gammas)
+    fig = _figure(max(6.0, 3.2 * n), 5.6)
+    axes = fig.subplots(2, n, sharex=True, sharey="row", height_ratios=[1.6, 1.0], squeeze=False)
     for k, g in enumerate(gammas):
-        colour = f"C{k}"
+        ax_w, ax_sum = axes[0, k], axes[1, k]
         wb, ws = switch_weights(a, theta_c, True, g)
-        ax_w.plot(a, wb, color=colour, lw=1.3, label=f"γ = {g:g} /rad", gid=f"balancing:{g:g}")
-        ax_w.plot(a, ws, color=colour, lw=1.3, ls="--", gid=f"swingup:{g:g}")
-        ax_sum.plot(a, wb + ws, color=colour, lw=1.3, label=f"γ = {g:g} /rad", gid=f"sum:{g:g}")
-    for ax in (ax_w, ax_sum):
-        ax.axvline(theta_c, color="0.4", ls=":", lw=0.8)
-        ax.set_xlabel("|θ| [rad]")
-        ax.set_xlim(0.0, theta_max)
-        ax.set_ylim(-0.05, 1.1)
-    ax_w.set_ylabel("weight")
-    ax_w.set_title(
-        "solid: balancing weight on μ₁, clip(γ(θ_c − |θ|), 0, 1)\n"
-        "dashed: swing-up weight on μ₂, clip(γ(|θ| − θ_c), 0, 1)",
-        fontsize=10,
-    )
-    ax_w.legend(fontsize=8, loc="center right")
-    ax_sum.set_ylabel("balancing + swing-up weight")
-    ax_sum.set_title("total drive: a dead zone of half-width 1/γ at θ_c", fontsize=10)
+        ax_w.plot(
+            a, wb, color=BALANCING_COLOUR, lw=1.6, label="balancing (μ₁)", gid=f"balancing:{g:g}"
+        )
+        ax_w.plot(
+            a,
+            ws,
+            color=SWINGUP_COLOUR,
+            lw=1.6,
+            ls="--",
+            label="swing-up (μ₂)",
+            gid=f"swingup:{g:g}",
+        )
+        total = wb + ws
+        ax_sum.plot(a, total, color="black", lw=1.3, gid=f"sum:{g:g}")
+        ax_sum.fill_between(a, total, 1.0, where=total < 1.0, color="0.8", lw=0, label="dead zone")
+        ax_w.set_title(f"γ = {g:g} /rad (dead zone ±{1.0 / g:.2g} rad)", fontsize=10)
+        for ax in (ax_w, ax_sum):
+            ax.axvline(theta_c, color="0.4", ls=":", lw=0.9, label="hard switch at θ_c")
+            ax.set_xlim(0.0, theta_max)
+        ax_w.set_ylim(-0.05, 1.1)
+        ax_sum.set_ylim(-0.05, 1.1)
+        ax_sum.set_xlabel("|θ| [rad]")
+    axes[0, 0].set_ylabel("weight")
+    axes[1, 0].set_ylabel("total drive")
+    axes[0, 0].legend(fontsize=8, loc="center right")
     fig.suptitle(
-        "Cerebellar soft switch (section 4, labels read swapped: NOTES 4), "
+        "Cerebellar soft switch (section 4): weights of the two controllers, "
         f"θ_c = {theta_c:.4g} rad",
         fontsize=11,
     )
