@@ -14,8 +14,8 @@ import pytest
 from striatal import bench, kernel
 from striatal.cli import main
 from striatal.errors import ParameterError
-from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Plant, Simulation
-from striatal.rollout import Protocol
+from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plant, Simulation
+from striatal.rollout import Protocol, batch_args, trial_args
 
 SIM = Simulation(duration=35.0)  # past the 30-s check of eq 24
 PROTOCOL = Protocol()
@@ -28,76 +28,37 @@ def _positive_finite(x: object) -> bool:
 def _scalar(
     state0: np.ndarray, W: np.ndarray, theta_c: float, noise: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    p = Plant().as_array()
-    trace = np.zeros(6)
-    out = np.empty(kernel.N_OUT)
-    kernel.run_trial(
-        state0,
-        W,
-        theta_c,
-        1.0,
-        False,
-        50.0,
-        p,
-        p,
-        False,
-        SIM.dt,
-        SIM.n_steps,
-        1,
-        noise,
-        np.empty((0, 2)),
-        0.0,
-        0.0,
-        False,
-        0.999,
-        trace,
-        PROTOCOL.check_step(SIM.dt),
-        PROTOCOL.check_x,
-        PROTOCOL.check_theta,
-        PROTOCOL.goal_x,
-        PROTOCOL.goal_theta,
-        PROTOCOL.reward_success,
-        PROTOCOL.reward_failure,
-        np.empty((0, kernel.N_TRAJ)),
-        out,
+    args = trial_args(
+        Plant(),
+        Controller(),
+        SIM,
+        protocol=PROTOCOL,
+        noise=noise,
+        gains=W,
+        theta_c=theta_c,
+        state0=state0,
+        gamma=0.999,
     )
-    return out, trace
+    kernel.run_trial(*args)
+    return args[-1].out, args[-2].trace
 
 
 def _batch(
     states0: np.ndarray, W: np.ndarray, theta_c: np.ndarray, noise: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    p = Plant().as_array()
-    B = states0.shape[0]
-    traces = np.zeros((B, 6))
-    outs = np.empty((B, kernel.N_OUT))
-    kernel.run_trials_batch(
-        states0,
-        W,
-        theta_c,
-        1.0,
-        False,
-        50.0,
-        p,
-        p,
-        False,
-        SIM.dt,
-        SIM.n_steps,
-        1,
-        noise,
-        False,
-        0.999,
-        traces,
-        PROTOCOL.check_step(SIM.dt),
-        PROTOCOL.check_x,
-        PROTOCOL.check_theta,
-        PROTOCOL.goal_x,
-        PROTOCOL.goal_theta,
-        PROTOCOL.reward_success,
-        PROTOCOL.reward_failure,
-        outs,
+    args = batch_args(
+        Plant(),
+        Controller(),
+        SIM,
+        protocol=PROTOCOL,
+        gains=W,
+        theta_c=theta_c,
+        noise=noise,
+        states0=states0,
+        gamma=0.999,
     )
-    return outs, traces
+    kernel.run_trials_batch(*args)
+    return args[-1], args[-2].trace
 
 
 def _mixed_rows(rng: np.random.Generator, B: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -40,11 +40,12 @@ from typing import Any
 
 import numpy as np
 
-from striatal import kernel
+from striatal import kernel, rollout
 from striatal.errors import ParameterError
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
+    Controller,
     Plant,
     Simulation,
 )
@@ -188,19 +189,16 @@ class TrialSetup:
 
     sim: Simulation
     protocol: Protocol
-    plant: np.ndarray
-    W: np.ndarray
-    theta_c: float
+    controller: Controller
+    args: rollout.TrialArgs
 
     @classmethod
     def chapter(cls, duration: float, dt: float, *, check: bool = True) -> TrialSetup:
-        return cls(
-            sim=Simulation(duration=duration, dt=dt),
-            protocol=Protocol() if check else Protocol(check_time=-1.0),
-            plant=Plant().as_array(),
-            W=np.array(CHAPTER_FINAL_W, dtype=float),
-            theta_c=CHAPTER_FINAL_THETA_C,
-        )
+        sim = Simulation(duration=duration, dt=dt)
+        protocol = Protocol() if check else Protocol(check_time=-1.0)
+        controller = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
+        args = rollout.trial_args(Plant(), controller, sim, protocol=protocol, gamma=TRACE_GAMMA)
+        return cls(sim=sim, protocol=protocol, controller=controller, args=args)
 
     @property
     def n_steps(self) -> int:
@@ -214,37 +212,16 @@ def run_scalar_trial(setup: TrialSetup, rng: np.random.Generator, out: np.ndarra
 
 def run_kernel_trial(setup: TrialSetup, noise: np.ndarray, out: np.ndarray) -> int:
     """One trial of the kernel with the given policy noise (empty: the mean policy)."""
-    trace = np.zeros(6)
-    p = setup.protocol
+    state0, gains, plant, control, protocol, noise_args, learning, buffers = setup.args
     kernel.run_trial(
-        setup.sim.initial_state,
-        setup.W,
-        setup.theta_c,
-        1.0,
-        False,
-        50.0,
-        setup.plant,
-        setup.plant,
-        False,
-        setup.sim.dt,
-        setup.n_steps,
-        1,
-        noise,
-        np.empty((0, 2)),
-        0.0,
-        0.0,
-        False,
-        TRACE_GAMMA,
-        trace,
-        p.check_step(setup.sim.dt),
-        p.check_x,
-        p.check_theta,
-        p.goal_x,
-        p.goal_theta,
-        p.reward_success,
-        p.reward_failure,
-        np.empty((0, kernel.N_TRAJ)),
-        out,
+        state0,
+        gains,
+        plant,
+        control,
+        protocol,
+        noise_args._replace(action=noise),
+        learning._replace(trace=np.zeros(6)),
+        buffers._replace(out=out),
     )
     return int(out[kernel.OUT_END_STEP])
 
@@ -260,33 +237,17 @@ def run_batch_trials(
     """``batch_size`` stochastic trials on all cores, noise drawn here; returns steps run."""
     B = batch_size
     noise = rng.standard_normal((B, setup.n_steps)) if stochastic else np.empty((B, 0))
-    p = setup.protocol
-    kernel.run_trials_batch(
-        np.tile(setup.sim.initial_state, (B, 1)),
-        np.tile(setup.W, (B, 1)),
-        np.full(B, setup.theta_c),
-        1.0,
-        False,
-        50.0,
-        setup.plant,
-        setup.plant,
-        False,
-        setup.sim.dt,
-        setup.n_steps,
-        1,
-        noise,
-        False,
-        TRACE_GAMMA,
-        np.zeros((B, 6)),
-        p.check_step(setup.sim.dt),
-        p.check_x,
-        p.check_theta,
-        p.goal_x,
-        p.goal_theta,
-        p.reward_success,
-        p.reward_failure,
-        outs,
+    args = rollout.batch_args(
+        Plant(),
+        setup.controller,
+        setup.sim,
+        protocol=setup.protocol,
+        gains=np.tile(setup.controller.gains, (B, 1)),
+        theta_c=np.full(B, setup.controller.theta_c),
+        noise=noise,
+        gamma=TRACE_GAMMA,
     )
+    kernel.run_trials_batch(*args[:-1], outs)
     return int(outs[:, kernel.OUT_END_STEP].sum())
 
 
