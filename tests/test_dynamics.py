@@ -76,12 +76,27 @@ def test_wrap_angle_range(theta: float) -> None:
     assert -math.pi < w <= math.pi
     assert math.isclose(math.cos(w), math.cos(theta), abs_tol=1e-9)
     assert math.isclose(math.sin(w), math.sin(theta), abs_tol=1e-9)
-    assert float(dynamics.wrap_angle(theta)) == pytest.approx(w, abs=1e-12)
+    # the wrapped angle differs from theta by a whole number of turns
+    turns = (theta - w) / (2.0 * math.pi)
+    assert abs(turns - round(turns)) < 1e-12
 
 
 def test_wrap_angle_boundaries() -> None:
     assert kernel.wrap_angle(math.pi) == math.pi
     assert kernel.wrap_angle(-math.pi) == math.pi
+    assert kernel.wrap_angle(3.0 * math.pi) == math.pi
+    assert kernel.wrap_angle(0.0) == 0.0
+
+
+def test_array_wrap_keeps_shape_and_ends() -> None:
+    """dynamics.wrap_angle (kernel.wrap_angles) on arrays: shapes kept, (-pi, pi] endpoints."""
+    th = np.array([[-math.pi, math.pi], [-3.0 * math.pi, 7.0]])
+    w = dynamics.wrap_angle(th)
+    assert w.shape == (2, 2)
+    np.testing.assert_array_equal(w[0], [math.pi, math.pi])
+    assert w[1, 0] == math.pi
+    assert w[1, 1] == pytest.approx(7.0 - 2.0 * math.pi, abs=1e-15)
+    assert isinstance(dynamics.wrap_angle(1.0), float)
 
 
 @settings(max_examples=25, deadline=None)

@@ -4,9 +4,12 @@ This is the one physics kernel of the project. ``simulate``, the learner, the
 Gymnasium environments, the sweeps and the benchmarks all call these functions;
 :mod:`striatal.reference` re-implements them in plain NumPy for the tests.
 
-Everything here takes plain floats and float64 arrays (Numba ``njit``). Plant
-arrays are ``[M, m, l, g]``. States are ``[x, x_dot, theta, theta_dot]`` in
-``[m, m/s, rad, rad/s]``, theta = 0 upright, clockwise (pole tip at x + l sin theta).
+Everything here takes plain floats, float64 arrays and, for the trial loops,
+the frozen NamedTuples below (Gains, PlantArgs, ControlArgs, ProtocolArgs,
+NoiseArgs, TraceArgs, Buffers), which :mod:`striatal.rollout` builds
+(``trial_args``, ``batch_args``). Plant arrays are ``[M, m, l, g]``. States are
+``[x, x_dot, theta, theta_dot]`` in ``[m, m/s, rad, rad/s]``, theta = 0 upright,
+clockwise (pole tip at x + l sin theta).
 """
 
 from __future__ import annotations
