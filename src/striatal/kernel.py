@@ -136,7 +136,13 @@ class Buffers(NamedTuple):
 
 @njit(cache=True)
 def wrap_angle(theta: float) -> float:
-    """Angle wrapped to (-pi, pi] [rad]."""
+    """Angle wrapped to (-pi, pi] [rad]: theta - 2 pi ceil((theta - pi) / 2 pi).
+
+    For |theta| < 3 the ceil is 0 and the formula returns theta itself, so that case
+    skips the division (bit for bit the same; tests/test_dynamics.py checks it).
+    """
+    if -3.0 < theta < 3.0:
+        return theta
     return theta - TWO_PI * math.ceil((theta - math.pi) / TWO_PI)
 
 
@@ -163,8 +169,23 @@ def accelerations(
     the force of eq 12 computed with the controller's ``model`` parameters, and the
     true ``plant`` answers through eqs 8-9.
     """
-    s = math.sin(theta)
-    c = math.cos(theta)
+    return _accelerations_sc(
+        x_dot, math.sin(theta), math.cos(theta), theta_dot, u, plant, model, mismatch
+    )
+
+
+@njit(cache=True)
+def _accelerations_sc(
+    x_dot: float,
+    s: float,
+    c: float,
+    theta_dot: float,
+    u: float,
+    plant: np.ndarray,
+    model: np.ndarray,
+    mismatch: bool,
+) -> tuple[float, float]:
+    """:func:`accelerations` given s = sin theta and c = cos theta (the same arithmetic)."""
     length = plant[2]
     g = plant[3]
     if mismatch:
@@ -193,7 +214,37 @@ def rk4_step(
     mismatch: bool,
 ) -> tuple[float, float, float, float]:
     """One classical Runge-Kutta step of length dt with u held constant."""
-    a1, b1 = accelerations(x_dot, theta, theta_dot, u, plant, model, mismatch)
+    return _rk4_sc(
+        x,
+        x_dot,
+        theta,
+        theta_dot,
+        math.sin(theta),
+        math.cos(theta),
+        u,
+        dt,
+        plant,
+        model,
+        mismatch,
+    )
+
+
+@njit(cache=True)
+def _rk4_sc(
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    s: float,
+    c: float,
+    u: float,
+    dt: float,
+    plant: np.ndarray,
+    model: np.ndarray,
+    mismatch: bool,
+) -> tuple[float, float, float, float]:
+    """:func:`rk4_step` given s = sin theta and c = cos theta of the first stage."""
+    a1, b1 = _accelerations_sc(x_dot, s, c, theta_dot, u, plant, model, mismatch)
     h = 0.5 * dt
     xd2 = x_dot + h * a1
     thd2 = theta_dot + h * b1
@@ -216,8 +267,12 @@ def rk4_step(
 @njit(cache=True)
 def force(theta: float, theta_dot: float, u: float, plant: np.ndarray) -> float:
     """Cart force f [N] that realises x_ddot = u, eq 12."""
-    s = math.sin(theta)
-    c = math.cos(theta)
+    return _force_sc(math.sin(theta), math.cos(theta), theta_dot, u, plant)
+
+
+@njit(cache=True)
+def _force_sc(s: float, c: float, theta_dot: float, u: float, plant: np.ndarray) -> float:
+    """:func:`force` given s = sin theta and c = cos theta."""
     m = plant[1]
     return (
         (plant[0] + m - m * c * c) * u
@@ -282,40 +337,101 @@ def policy_mean(
 ) -> float:
     """Mean action mu (eq 22 or 23, blended by the switch) and d mu / d W1..W5 into ``grad``.
 
-    Balancing, eq 22 with the sign reading ``sign`` (+1 corrected, -1 printed):
+    ``theta`` is wrapped first. Balancing, eq 22 with the sign reading ``sign``
+    (+1 corrected, -1 printed):
     mu1 = sign ((1 + W1 l) g theta + 2 l sqrt(W1 g) theta_dot) - W2 x - W3 x_dot.
     Swing-up, eq 23: mu2 = W4 E~ theta_dot cos theta - W5^2/4 x - W5 x_dot.
     With ``chapter_eligibility`` the W1 entry is the chapter's printed
     -l (g theta - sqrt(g / W1) theta_dot) instead of the true derivative.
     """
-    length = model[2]
     g = model[3]
     th = wrap_angle(theta)
+    mu, g1, g2, g3, g4, g5 = _policy_wrapped(
+        x,
+        x_dot,
+        th,
+        theta_dot,
+        W,
+        theta_c,
+        sign,
+        soft,
+        inhibition,
+        model,
+        chapter_eligibility,
+        math.sqrt(W[0] * g),
+        _inv_root(W[0], g),
+        0.0,
+        False,
+    )
+    grad[0] = g1
+    grad[1] = g2
+    grad[2] = g3
+    grad[3] = g4
+    grad[4] = g5
+    return mu
+
+
+@njit(cache=True)
+def _inv_root(w1: float, g: float) -> float:
+    """sqrt(g / W1), NaN for W1 = 0 (the balancing law then raises when it is used)."""
+    return math.nan if w1 == 0.0 else math.sqrt(g / w1)
+
+
+@njit(cache=True)
+def _policy_wrapped(
+    x: float,
+    x_dot: float,
+    th: float,
+    theta_dot: float,
+    W: np.ndarray,
+    theta_c: float,
+    sign: float,
+    soft: bool,
+    inhibition: float,
+    model: np.ndarray,
+    chapter_eligibility: bool,
+    root: float,
+    inv_root: float,
+    cos_th: float,
+    have_cos: bool,
+) -> tuple[float, float, float, float, float, float]:
+    """(mu, d mu / d W1..W5) of :func:`policy_mean` for a wrapped ``th``.
+
+    ``root`` = sqrt(W1 g) and ``inv_root`` = sqrt(g / W1) (constant over a trial);
+    ``cos_th`` = cos th when ``have_cos`` (else computed here). The same arithmetic.
+    """
+    length = model[2]
+    g = model[3]
     wb, ws = switch_weights(abs(th), theta_c, soft, inhibition)
     mu = 0.0
-    for i in range(5):
-        grad[i] = 0.0
+    g1 = 0.0
+    g2 = 0.0
+    g3 = 0.0
+    g4 = 0.0
+    g5 = 0.0
     if wb > 0.0:
-        root = math.sqrt(W[0] * g)
+        if W[0] == 0.0:
+            inv_root = math.sqrt(g / W[0])  # raises ZeroDivisionError, as g / W1 always did
         mu += wb * (
             sign * ((1.0 + W[0] * length) * g * th + 2.0 * length * root * theta_dot)
             - W[1] * x
             - W[2] * x_dot
         )
         if chapter_eligibility:
-            d1 = -length * (g * th - math.sqrt(g / W[0]) * theta_dot)
+            d1 = -length * (g * th - inv_root * theta_dot)
         else:
-            d1 = sign * length * (g * th + math.sqrt(g / W[0]) * theta_dot)
-        grad[0] = wb * d1
-        grad[1] = -wb * x
-        grad[2] = -wb * x_dot
+            d1 = sign * length * (g * th + inv_root * theta_dot)
+        g1 = wb * d1
+        g2 = -wb * x
+        g3 = -wb * x_dot
     if ws > 0.0:
-        e_tilde = energy_error(th, theta_dot, model)
-        c = math.cos(th)
+        c = cos_th if have_cos else math.cos(th)
+        m = model[1]
+        e_tilde = 0.5 * m * length * length * theta_dot * theta_dot + m * g * length * (c - 1.0)
         mu += ws * (W[3] * e_tilde * theta_dot * c - 0.25 * W[4] * W[4] * x - W[4] * x_dot)
-        grad[3] = ws * e_tilde * theta_dot * c
-        grad[4] = -ws * (0.5 * W[4] * x + x_dot)
-    return mu
+        g4 = ws * e_tilde * theta_dot * c
+        g5 = -ws * (0.5 * W[4] * x + x_dot)
+    return mu, g1, g2, g3, g4, g5
 
 
 @njit(cache=True)
@@ -416,7 +532,20 @@ def run_trial(
     noisy_sensor = sensor_noise.shape[0] > 0
     record = traj.shape[0] > 0
     sigma = sigma_of(W[5])
-    grad = np.empty(5)
+    sign = control.sign
+    soft = control.soft
+    inhibition = control.inhibition
+    chapter_eligibility = control.chapter_eligibility
+    # constant over the trial: the square roots of the balancing law (eq 22)
+    root = math.sqrt(W[0] * model[3])
+    inv_root = _inv_root(W[0], model[3])
+    # the trace D (eq 3) in registers, written back at the end
+    d0 = trace[0]
+    d1 = trace[1]
+    d2 = trace[2]
+    d3 = trace[3]
+    d4 = trace[4]
+    d5 = trace[5]
     min_swing = math.inf
     min_all = math.inf
     n_switches = 0
@@ -425,6 +554,7 @@ def run_trial(
     max_abs_f = 0.0
     a = 0.0
     draw = 0
+    hold = 0  # steps left before the next action draw (eq 5)
     status = STATUS_RUNNING
     reward = 0.0
     end_step = n_steps
@@ -434,12 +564,17 @@ def run_trial(
             end_step = 0
     if status == STATUS_RUNNING:
         for k in range(n_steps):
+            # sin and cos of theta once a step: the force (eq 12), RK4's first stage
+            # and, without sensor noise, the swing-up law (eq 23) share them
+            s = math.sin(theta)
+            c = math.cos(theta)
             ox = x
             otheta = theta
             if noisy_sensor:
                 ox += noise.sensor_std_x * sensor_noise[k, 0]
                 otheta += noise.sensor_std_theta * sensor_noise[k, 1]
-            abs_th = abs(wrap_angle(otheta))
+            th = wrap_angle(otheta)
+            abs_th = abs(th)
             mode = MODE_BALANCE if abs_th < theta_c else MODE_SWINGUP
             if mode == MODE_SWINGUP and abs_th < min_swing:
                 min_swing = abs_th
@@ -448,31 +583,39 @@ def run_trial(
             if prev_mode >= 0 and mode != prev_mode:
                 n_switches += 1
             prev_mode = mode
-            if k % action_every == 0:
-                mu = policy_mean(
+            if hold == 0:
+                hold = action_every
+                mu, g1, g2, g3, g4, g5 = _policy_wrapped(
                     ox,
                     x_dot,
-                    otheta,
+                    th,
                     theta_dot,
                     W,
                     theta_c,
-                    control.sign,
-                    control.soft,
-                    control.inhibition,
+                    sign,
+                    soft,
+                    inhibition,
                     model,
-                    control.chapter_eligibility,
-                    grad,
+                    chapter_eligibility,
+                    root,
+                    inv_root,
+                    c,
+                    th == theta,
                 )
                 if stochastic:
                     eps = sigma * noise.action[draw]
                     a = mu + eps
-                    for i in range(5):
-                        trace[i] = eps * grad[i] + gamma * trace[i]
-                    trace[5] = (eps * eps - sigma * sigma) * (1.1 - sigma) + gamma * trace[5]
+                    d0 = eps * g1 + gamma * d0
+                    d1 = eps * g2 + gamma * d1
+                    d2 = eps * g3 + gamma * d2
+                    d3 = eps * g4 + gamma * d3
+                    d4 = eps * g5 + gamma * d4
+                    d5 = (eps * eps - sigma * sigma) * (1.1 - sigma) + gamma * d5
                 else:
                     a = mu
                 draw += 1
-            f = force(theta, theta_dot, a, model)
+            hold -= 1
+            f = _force_sc(s, c, theta_dot, a, model)
             if abs(f) > max_abs_f:
                 max_abs_f = abs(f)
             if record:
@@ -484,8 +627,8 @@ def run_trial(
                 traj[k, 5] = a
                 traj[k, 6] = f
                 traj[k, 7] = mode
-            x, x_dot, theta, theta_dot = rk4_step(
-                x, x_dot, theta, theta_dot, a, dt, p, model, mismatch
+            x, x_dot, theta, theta_dot = _rk4_sc(
+                x, x_dot, theta, theta_dot, s, c, a, dt, p, model, mismatch
             )
             status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
             if status == STATUS_FAULT:
@@ -496,6 +639,13 @@ def run_trial(
             if status != STATUS_RUNNING:
                 end_step = k + 1
                 break
+    if stochastic:
+        trace[0] = d0
+        trace[1] = d1
+        trace[2] = d2
+        trace[3] = d3
+        trace[4] = d4
+        trace[5] = d5
     if record:
         traj[end_step, 0] = end_step * dt
         traj[end_step, 1] = x
