@@ -12,13 +12,13 @@ from __future__ import annotations
 import json
 import tempfile
 
-from striatal import bench
+import harness
 
 
 def main() -> None:
-    warm = bench.second_process()
+    warm = harness.second_process()
     with tempfile.TemporaryDirectory(prefix="striatal-numba-") as empty:
-        cold = bench.second_process(cache_dir=empty)
+        cold = harness.second_process(cache_dir=empty)
     print(json.dumps({"cached": warm, "cold": cold}, indent=2))
 
 

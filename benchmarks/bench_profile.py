@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+import harness
 import numpy as np
 
 from striatal import bench, kernel, rollout
@@ -32,7 +33,7 @@ def main() -> None:
     rng = np.random.default_rng(0)
     setup = bench.TrialSetup.chapter(60.0, 0.01)
     out = np.empty(kernel.N_OUT)
-    bench.first_calls(rng)
+    harness.first_calls(rng)
     fixed_noise = rng.standard_normal(setup.n_steps)
 
     def direct(noise: np.ndarray) -> None:

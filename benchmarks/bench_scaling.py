@@ -7,9 +7,8 @@ from __future__ import annotations
 
 import argparse
 
+import harness
 import numpy as np
-
-from striatal import bench
 
 
 def main() -> None:
@@ -18,10 +17,10 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=0.3)
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
-    config = bench.BenchConfig(seconds=args.seconds, repeats=args.repeats, dt=args.dt)
+    config = harness.BenchConfig(seconds=args.seconds, repeats=args.repeats, dt=args.dt)
     rng = np.random.default_rng(0)
-    bench.first_calls(rng)  # warm-up (compile or cache load) outside the timings
-    result = bench.scaling(config, rng)
+    harness.first_calls(rng)  # warm-up (compile or cache load) outside the timings
+    result = harness.scaling(config, rng)
     for row in result["rows"]:
         print(
             f"{row['duration']:>7g} s {row['n_steps']:>8d} steps "

@@ -1,5 +1,7 @@
 """The benchmark runs and reports finite rates; the batched kernel equals the scalar one.
 
+The harness is benchmarks/harness.py, found by :func:`striatal.bench.load_harness`.
+
 No speed thresholds here: timings depend on the machine (docs/performance.md has them).
 """
 
@@ -7,6 +9,8 @@ from __future__ import annotations
 
 import json
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,11 +18,12 @@ import pytest
 from striatal import bench, kernel
 from striatal.cli import main
 from striatal.errors import ParameterError
-from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Plant, Simulation
-from striatal.rollout import Protocol
+from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plant, Simulation
+from striatal.rollout import Protocol, batch_args, trial_args
 
 SIM = Simulation(duration=35.0)  # past the 30-s check of eq 24
 PROTOCOL = Protocol()
+HARNESS = bench.load_harness()  # benchmarks/harness.py
 
 
 def _positive_finite(x: object) -> bool:
@@ -28,76 +33,37 @@ def _positive_finite(x: object) -> bool:
 def _scalar(
     state0: np.ndarray, W: np.ndarray, theta_c: float, noise: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    p = Plant().as_array()
-    trace = np.zeros(6)
-    out = np.empty(kernel.N_OUT)
-    kernel.run_trial(
-        state0,
-        W,
-        theta_c,
-        1.0,
-        False,
-        50.0,
-        p,
-        p,
-        False,
-        SIM.dt,
-        SIM.n_steps,
-        1,
-        noise,
-        np.empty((0, 2)),
-        0.0,
-        0.0,
-        False,
-        0.999,
-        trace,
-        PROTOCOL.check_step(SIM.dt),
-        PROTOCOL.check_x,
-        PROTOCOL.check_theta,
-        PROTOCOL.goal_x,
-        PROTOCOL.goal_theta,
-        PROTOCOL.reward_success,
-        PROTOCOL.reward_failure,
-        np.empty((0, kernel.N_TRAJ)),
-        out,
+    args = trial_args(
+        Plant(),
+        Controller(),
+        SIM,
+        protocol=PROTOCOL,
+        noise=noise,
+        gains=W,
+        theta_c=theta_c,
+        state0=state0,
+        gamma=0.999,
     )
-    return out, trace
+    kernel.run_trial(*args)
+    return args[-1].out, args[-2].trace
 
 
 def _batch(
     states0: np.ndarray, W: np.ndarray, theta_c: np.ndarray, noise: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    p = Plant().as_array()
-    B = states0.shape[0]
-    traces = np.zeros((B, 6))
-    outs = np.empty((B, kernel.N_OUT))
-    kernel.run_trials_batch(
-        states0,
-        W,
-        theta_c,
-        1.0,
-        False,
-        50.0,
-        p,
-        p,
-        False,
-        SIM.dt,
-        SIM.n_steps,
-        1,
-        noise,
-        False,
-        0.999,
-        traces,
-        PROTOCOL.check_step(SIM.dt),
-        PROTOCOL.check_x,
-        PROTOCOL.check_theta,
-        PROTOCOL.goal_x,
-        PROTOCOL.goal_theta,
-        PROTOCOL.reward_success,
-        PROTOCOL.reward_failure,
-        outs,
+    args = batch_args(
+        Plant(),
+        Controller(),
+        SIM,
+        protocol=PROTOCOL,
+        gains=W,
+        theta_c=theta_c,
+        noise=noise,
+        states0=states0,
+        gamma=0.999,
     )
-    return outs, traces
+    kernel.run_trials_batch(*args)
+    return args[-1], args[-2].trace
 
 
 def _mixed_rows(rng: np.random.Generator, B: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -156,14 +122,14 @@ def test_same_seed_same_benchmark_trial() -> None:
 
 def test_linear_fit_recovers_a_line() -> None:
     x = np.array([1.0, 2.0, 4.0, 8.0])
-    fit = bench.linear_fit(x, 3.0 + 0.5 * x)
+    fit = HARNESS.linear_fit(x, 3.0 + 0.5 * x)
     assert fit["slope"] == pytest.approx(0.5)
     assert fit["intercept"] == pytest.approx(3.0)
     assert fit["r2"] == pytest.approx(1.0)
 
 
 def test_timing_rates() -> None:
-    t = bench.Timing("x", (100, 100, 100), (1.0, 0.5, 2.0))
+    t = HARNESS.Timing("x", (100, 100, 100), (1.0, 0.5, 2.0))
     assert t.best_steps_per_second == 200.0
     assert t.median_steps_per_second == 100.0
 
@@ -173,7 +139,19 @@ def test_timing_rates() -> None:
 )
 def test_bad_config_raises(kwargs: dict[str, float]) -> None:
     with pytest.raises(ParameterError):
-        bench.BenchConfig(**kwargs)  # type: ignore[arg-type]
+        HARNESS.BenchConfig(**kwargs)
+
+
+def test_harness_outside_a_checkout_is_one_clear_line(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """No benchmarks/ folder to be found: one line on stderr, exit 2."""
+    monkeypatch.setattr(bench, "__file__", "/nonexistent/src/striatal/bench.py")
+    monkeypatch.setenv(bench.BENCHMARKS_ENV, str(tmp_path))
+    monkeypatch.delitem(sys.modules, "striatal_benchmarks_harness")
+    assert main(["bench", "--quick"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "benchmarks/harness.py" in err
 
 
 def test_cli_bad_batch_size_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
@@ -196,13 +174,13 @@ def test_bench_quick_json_reports_positive_finite_figures(
             comp["reference"]["best_steps_per_second"],
         ):
             assert _positive_finite(value)
-    assert report["batch_vs_gymnasium_vector"]["batch_size"] == bench.QUICK.batch_size
+    assert report["batch_vs_gymnasium_vector"]["batch_size"] == HARNESS.QUICK.batch_size
     fit = report["scaling"]["fit"]
     assert _positive_finite(fit["slope"]) and fit["r2"] <= 1.0
-    assert len(report["scaling"]["rows"]) == len(bench.QUICK.scaling_durations)
+    assert len(report["scaling"]["rows"]) == len(HARNESS.QUICK.scaling_durations)
     train = report["train"]
     assert _positive_finite(train["process_wall_seconds"])
-    assert train["trials"] == bench.QUICK.train_max_trials
+    assert train["trials"] == HARNESS.QUICK.train_max_trials
     for where in ("this_process", "second_process"):
         info = report["compile"][where]
         assert _positive_finite(info["first_run_trial_seconds"])
@@ -213,7 +191,7 @@ def test_bench_quick_json_reports_positive_finite_figures(
 
 
 def test_sweep_measurement_runs_learner_and_control_arm() -> None:
-    info = bench.run_sweep(1, 1, 3)
+    info = HARNESS.run_sweep(1, 1, 3)
     assert info["runs"] == 2  # one seed x (learner + alpha = 0 control arm)
     assert info["command"].startswith("striatal sweep --seeds 1 --workers 1")
     assert _positive_finite(info["wall_seconds"]) and _positive_finite(info["peak_rss_mib"])

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from numba import njit
 
 from striatal import dynamics, kernel
 from striatal.params import Controller, Plant, Simulation
@@ -76,12 +77,50 @@ def test_wrap_angle_range(theta: float) -> None:
     assert -math.pi < w <= math.pi
     assert math.isclose(math.cos(w), math.cos(theta), abs_tol=1e-9)
     assert math.isclose(math.sin(w), math.sin(theta), abs_tol=1e-9)
-    assert float(dynamics.wrap_angle(theta)) == pytest.approx(w, abs=1e-12)
+    # the wrapped angle differs from theta by a whole number of turns
+    turns = (theta - w) / (2.0 * math.pi)
+    assert abs(turns - round(turns)) < 1e-12
 
 
 def test_wrap_angle_boundaries() -> None:
     assert kernel.wrap_angle(math.pi) == math.pi
     assert kernel.wrap_angle(-math.pi) == math.pi
+    assert kernel.wrap_angle(3.0 * math.pi) == math.pi
+    assert kernel.wrap_angle(0.0) == 0.0
+
+
+@njit
+def _wrap_formula(theta: float) -> float:
+    return theta - kernel.TWO_PI * math.ceil((theta - math.pi) / kernel.TWO_PI)
+
+
+def test_wrap_angle_is_the_formula_bit_for_bit() -> None:
+    """The kernel's shortcut for |theta| < 3 returns exactly what the compiled formula gives.
+
+    (Compiled, the formula keeps -0.0 and contracts to a fused multiply-add, so NumPy's
+    evaluation of it differs at -0.0 and for |theta| ~ 1e300: the reference is compiled.)
+    """
+    rng = np.random.default_rng(0)
+    edges = [0.0, -0.0, 3.0, -3.0, math.pi, -math.pi, 5e-324, -5e-324, 1e300, -1e300]
+    edges += [float(np.nextafter(v, d)) for v in (3.0, -3.0, math.pi, -math.pi) for d in (0, 9)]
+    th = np.concatenate([rng.uniform(-10.0, 10.0, 20000), rng.uniform(-3.2, 3.2, 20000), edges])
+    formula = np.array([_wrap_formula(float(t)) for t in th])
+    got = np.array([kernel.wrap_angle(float(t)) for t in th])
+    np.testing.assert_array_equal(got.view(np.int64), formula.view(np.int64))
+    with np.errstate(invalid="ignore"):  # NumPy flags the compiled loop at |theta| = 1e300
+        arr = dynamics.wrap_angle(th)
+    np.testing.assert_array_equal(arr.view(np.int64), formula.view(np.int64))
+
+
+def test_array_wrap_keeps_shape_and_ends() -> None:
+    """dynamics.wrap_angle (kernel.wrap_angles) on arrays: shapes kept, (-pi, pi] endpoints."""
+    th = np.array([[-math.pi, math.pi], [-3.0 * math.pi, 7.0]])
+    w = dynamics.wrap_angle(th)
+    assert w.shape == (2, 2)
+    np.testing.assert_array_equal(w[0], [math.pi, math.pi])
+    assert w[1, 0] == math.pi
+    assert w[1, 1] == pytest.approx(7.0 - 2.0 * math.pi, abs=1e-15)
+    assert isinstance(dynamics.wrap_angle(1.0), float)
 
 
 @settings(max_examples=25, deadline=None)

@@ -172,17 +172,31 @@ def test_chapter_check_at_30s_terminates() -> None:
     assert k == 3000 and info["t"] == pytest.approx(30.0)
 
 
-def test_sparse_reward_matches_kernel_protocol() -> None:
-    """The env's eq-24/25 outcome equals rollout.simulate's for a failing controller."""
-    ctrl = Controller(gains=(0.6813, -0.3795, -0.8318, 0.5028, 0.7095, 0.4289), theta_c=0.6)
-    traj = simulate(Plant(), ctrl, Simulation(), protocol=Protocol())
-    env = CartPoleSwingUpEnv(observation="raw")
-    states, _, rewards, terminated, _ = _rollout(
+@pytest.mark.parametrize(
+    ("gains", "x0", "early"),
+    [
+        # balances, but a near-zero cart-position gain drifts: |x| = 2.5 m at 60 s (eq 25 fails)
+        ((1.1736, -0.001, -0.8027, 0.5, 0.7, 0.4), 1.0, False),
+        # no swing-up energy gain: still hanging at t = 30 s, the eq-24 check ends it
+        ((0.6813, -0.3795, -0.8318, 0.0, 0.7095, 0.4289), 0.0, True),
+    ],
+)
+def test_sparse_reward_matches_kernel_protocol(
+    gains: tuple[float, ...], x0: float, early: bool
+) -> None:
+    """A failing and an early-ended trial: the env's eq-24/25 outcome equals the kernel's."""
+    ctrl = Controller(gains=gains, theta_c=0.6)
+    traj = simulate(Plant(), ctrl, Simulation(x0=x0), protocol=Protocol())
+    assert traj.outcome.reward == -5.0 and traj.outcome.early == early
+    assert not traj.outcome.fault
+    env = CartPoleSwingUpEnv(observation="raw", initial_state=(x0, 0.0, 3.12, 0.0))
+    states, _, rewards, terminated, truncated = _rollout(
         env, SwitchingController.from_controller(ctrl, observation="raw")
     )
     assert np.array_equal(states, traj.states)
-    assert rewards[-1] == traj.outcome.reward
-    assert terminated == traj.outcome.early
+    assert len(rewards) == round(traj.outcome.ended_at / 0.01) == (3000 if early else 6000)
+    assert rewards[-1] == traj.outcome.reward and sum(rewards) == -5.0
+    assert terminated == early and truncated == (not early)
 
 
 def test_blow_up_is_termination() -> None:

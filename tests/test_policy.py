@@ -11,7 +11,7 @@ from striatal import kernel
 from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plant, Simulation
 from striatal.policy import eligibilities, log_prob_of, rescaling
 from striatal.reference import reference_trial
-from striatal.rollout import Protocol, run_trial
+from striatal.rollout import Protocol, run_trial, trial_args
 
 
 def fd_score(
@@ -72,38 +72,18 @@ def test_kernel_eligibility_trace_equals_reference(plant: Plant) -> None:
             plant, c, sim, Protocol(), noise, 0.995, trace0, chapter_form=chapter_form
         )
         trace = trace0.copy()
-        out = np.empty(kernel.N_OUT)
-        p = plant.as_array()
-        kernel.run_trial(
-            sim.initial_state,
-            np.array(c.gains),
-            c.theta_c,
-            c.sign,
-            c.soft,
-            c.inhibition,
-            p,
-            p,
-            False,
-            sim.dt,
-            sim.n_steps,
-            1,
-            noise,
-            np.empty((0, 2)),
-            0.0,
-            0.0,
-            chapter_form,
-            0.995,
-            trace,
-            Protocol().check_step(sim.dt),
-            3.0,
-            np.pi / 6,
-            0.1,
-            np.pi / 9,
-            10.0,
-            -5.0,
-            np.empty((0, 8)),
-            out,
+        args = trial_args(
+            plant,
+            c,
+            sim,
+            protocol=Protocol(),
+            noise=noise,
+            chapter_eligibility=chapter_form,
+            gamma=0.995,
+            trace=trace,
         )
+        kernel.run_trial(*args)
+        out = args[-1].out
         assert out[kernel.OUT_REWARD] == ref[0]
         assert int(out[kernel.OUT_END_STEP]) == ref[1]
         np.testing.assert_allclose(
@@ -130,80 +110,3 @@ def test_same_noise_same_trial(plant: Plant) -> None:
         results.append((o, trace.copy()))
     assert results[0][0] == results[1][0]
     np.testing.assert_array_equal(results[0][1], results[1][1])
-
-
-def test_batch_kernel_equals_scalar_kernel(plant: Plant) -> None:
-    sim = Simulation(duration=35.0)
-    B = 5
-    rng = np.random.default_rng(5)
-    Ws = np.tile(np.array(CHAPTER_INITIAL_W), (B, 1)) + rng.normal(0, 0.05, (B, 6))
-    Ws[:, 0] = np.abs(Ws[:, 0])
-    tcs = np.full(B, 0.7)
-    noise = rng.standard_normal((B, sim.n_steps))
-    traces = np.zeros((B, 6))
-    outs = np.empty((B, kernel.N_OUT))
-    p = plant.as_array()
-    states = np.tile(sim.initial_state, (B, 1))
-    kernel.run_trials_batch(
-        states,
-        Ws,
-        tcs,
-        1.0,
-        False,
-        50.0,
-        p,
-        p,
-        False,
-        sim.dt,
-        sim.n_steps,
-        1,
-        noise,
-        False,
-        0.99,
-        traces,
-        3000,
-        3.0,
-        np.pi / 6,
-        0.1,
-        np.pi / 9,
-        10.0,
-        -5.0,
-        outs,
-    )
-    for b in range(B):
-        c = Controller(tuple(Ws[b]), 0.7)
-        trace = np.zeros(6)
-        out = np.empty(kernel.N_OUT)
-        kernel.run_trial(
-            states[b],
-            Ws[b],
-            0.7,
-            1.0,
-            False,
-            50.0,
-            p,
-            p,
-            False,
-            sim.dt,
-            sim.n_steps,
-            1,
-            noise[b],
-            np.empty((0, 2)),
-            0.0,
-            0.0,
-            False,
-            0.99,
-            trace,
-            3000,
-            3.0,
-            np.pi / 6,
-            0.1,
-            np.pi / 9,
-            10.0,
-            -5.0,
-            np.empty((0, 8)),
-            out,
-        )
-        np.testing.assert_array_equal(outs[b], out)
-        np.testing.assert_array_equal(traces[b], trace)
-        del c

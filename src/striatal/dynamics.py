@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from striatal import kernel
 from striatal.params import Plant
 
 
@@ -77,9 +78,9 @@ def energy_error(state: np.ndarray, plant: Plant) -> np.ndarray:
 
 
 def wrap_angle(theta: np.ndarray | float) -> np.ndarray:
-    """Angle wrapped to (-pi, pi]."""
-    th = np.asarray(theta, dtype=float)
-    return th - 2.0 * np.pi * np.ceil((th - np.pi) / (2.0 * np.pi))
+    """Angle wrapped to (-pi, pi]: :func:`striatal.kernel.wrap_angle` over any shape."""
+    result: np.ndarray = kernel.wrap_angles(np.asarray(theta, dtype=float))
+    return result
 
 
 def linearization(plant: Plant) -> tuple[np.ndarray, np.ndarray]:

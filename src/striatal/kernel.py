@@ -4,17 +4,21 @@ This is the one physics kernel of the project. ``simulate``, the learner, the
 Gymnasium environments, the sweeps and the benchmarks all call these functions;
 :mod:`striatal.reference` re-implements them in plain NumPy for the tests.
 
-Everything here takes plain floats and float64 arrays (Numba ``njit``). Plant
-arrays are ``[M, m, l, g]``. States are ``[x, x_dot, theta, theta_dot]`` in
-``[m, m/s, rad, rad/s]``, theta = 0 upright, clockwise (pole tip at x + l sin theta).
+Everything here takes plain floats, float64 arrays and, for the trial loops,
+the frozen NamedTuples below (Gains, PlantArgs, ControlArgs, ProtocolArgs,
+NoiseArgs, TraceArgs, Buffers), which :mod:`striatal.rollout` builds
+(``trial_args``, ``batch_args``). Plant arrays are ``[M, m, l, g]``. States are
+``[x, x_dot, theta, theta_dot]`` in ``[m, m/s, rad, rad/s]``, theta = 0 upright,
+clockwise (pole tip at x + l sin theta).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any, NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, vectorize
 
 TWO_PI = 2.0 * math.pi
 #: A state component beyond this magnitude counts as a numerical fault.
@@ -43,11 +47,109 @@ N_TRAJ = len(TRAJ_COLUMNS)
 MODE_SWINGUP = 0
 MODE_BALANCE = 1
 
+# Outcome of :func:`judge`.
+STATUS_RUNNING = 0
+STATUS_FAULT = 1
+STATUS_EARLY = 2
+STATUS_SUCCESS = 3
+STATUS_FAILURE = 4
+
+
+# The kernel's arguments, grouped (frozen, Numba-compatible NamedTuples). Build them
+# with the functions of :mod:`striatal.rollout` (trial_args, batch_args, ...), never
+# by hand, so that every call site names what it passes.
+
+
+class Gains(NamedTuple):
+    """The learned parameters: W1..W6 (eqs 22-23) and the switching threshold theta_c (eq 21).
+
+    For :func:`run_trials_batch`, W is (B, 6) and theta_c (B,).
+    """
+
+    W: np.ndarray
+    theta_c: Any
+
+
+class PlantArgs(NamedTuple):
+    """The true plant and the controller's model of it, each [M, m, l, g]; the RK4 step [s]."""
+
+    plant: np.ndarray
+    model: np.ndarray
+    mismatch: bool
+    dt: float
+
+
+class ControlArgs(NamedTuple):
+    """The controller's readings: eq-20 sign (+1 corrected, -1 printed), switch, action rate.
+
+    ``inhibition``: gamma of the soft switch; ``action_every``: steps an action is held;
+    ``chapter_eligibility``: the printed e1 instead of the score (docs/paper-notes.md section 2).
+    """
+
+    sign: float
+    soft: bool
+    inhibition: float
+    action_every: int
+    chapter_eligibility: bool
+
+
+class ProtocolArgs(NamedTuple):
+    """The trial protocol of eqs 24-25 in steps: see :func:`judge`. check_step -1: never."""
+
+    n_steps: int
+    check_step: int
+    check_x: float
+    check_theta: float
+    goal_x: float
+    goal_theta: float
+    reward_success: float
+    reward_failure: float
+
+
+class NoiseArgs(NamedTuple):
+    """Standard normals of the action draws (n_draws,), empty for the mean policy; of the
+    sensor (n_steps, 2), empty for none, with the stds of x [m] and theta [rad]."""
+
+    action: np.ndarray
+    sensor: np.ndarray
+    sensor_std_x: float
+    sensor_std_theta: float
+
+
+class TraceArgs(NamedTuple):
+    """The eligibility trace D (6,) updated in place (eq 3) and its decay gamma.
+
+    For :func:`run_trials_batch`, trace is (B, 6).
+    """
+
+    gamma: float
+    trace: np.ndarray
+
+
+class Buffers(NamedTuple):
+    """Output buffers: the summary row (N_OUT,); the trajectory (n_steps + 1, N_TRAJ) or none
+    (0, N_TRAJ)."""
+
+    out: np.ndarray
+    traj: np.ndarray
+
 
 @njit(cache=True)
 def wrap_angle(theta: float) -> float:
-    """Angle wrapped to (-pi, pi] [rad]."""
+    """Angle wrapped to (-pi, pi] [rad]: theta - 2 pi ceil((theta - pi) / 2 pi).
+
+    For |theta| < 3 the ceil is 0 and the formula returns theta itself, so that case
+    skips the division (bit for bit the same; tests/test_dynamics.py checks it).
+    """
+    if -3.0 < theta < 3.0:
+        return theta
     return theta - TWO_PI * math.ceil((theta - math.pi) / TWO_PI)
+
+
+@vectorize(["float64(float64)"], cache=True)
+def wrap_angles(theta: float) -> float:
+    """:func:`wrap_angle` as a NumPy ufunc: any array shape, the same formula bit for bit."""
+    return wrap_angle(theta)
 
 
 @njit(cache=True)
@@ -67,8 +169,23 @@ def accelerations(
     the force of eq 12 computed with the controller's ``model`` parameters, and the
     true ``plant`` answers through eqs 8-9.
     """
-    s = math.sin(theta)
-    c = math.cos(theta)
+    return _accelerations_sc(
+        x_dot, math.sin(theta), math.cos(theta), theta_dot, u, plant, model, mismatch
+    )
+
+
+@njit(cache=True)
+def _accelerations_sc(
+    x_dot: float,
+    s: float,
+    c: float,
+    theta_dot: float,
+    u: float,
+    plant: np.ndarray,
+    model: np.ndarray,
+    mismatch: bool,
+) -> tuple[float, float]:
+    """:func:`accelerations` given s = sin theta and c = cos theta (the same arithmetic)."""
     length = plant[2]
     g = plant[3]
     if mismatch:
@@ -97,7 +214,37 @@ def rk4_step(
     mismatch: bool,
 ) -> tuple[float, float, float, float]:
     """One classical Runge-Kutta step of length dt with u held constant."""
-    a1, b1 = accelerations(x_dot, theta, theta_dot, u, plant, model, mismatch)
+    return _rk4_sc(
+        x,
+        x_dot,
+        theta,
+        theta_dot,
+        math.sin(theta),
+        math.cos(theta),
+        u,
+        dt,
+        plant,
+        model,
+        mismatch,
+    )
+
+
+@njit(cache=True)
+def _rk4_sc(
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    s: float,
+    c: float,
+    u: float,
+    dt: float,
+    plant: np.ndarray,
+    model: np.ndarray,
+    mismatch: bool,
+) -> tuple[float, float, float, float]:
+    """:func:`rk4_step` given s = sin theta and c = cos theta of the first stage."""
+    a1, b1 = _accelerations_sc(x_dot, s, c, theta_dot, u, plant, model, mismatch)
     h = 0.5 * dt
     xd2 = x_dot + h * a1
     thd2 = theta_dot + h * b1
@@ -120,8 +267,12 @@ def rk4_step(
 @njit(cache=True)
 def force(theta: float, theta_dot: float, u: float, plant: np.ndarray) -> float:
     """Cart force f [N] that realises x_ddot = u, eq 12."""
-    s = math.sin(theta)
-    c = math.cos(theta)
+    return _force_sc(math.sin(theta), math.cos(theta), theta_dot, u, plant)
+
+
+@njit(cache=True)
+def _force_sc(s: float, c: float, theta_dot: float, u: float, plant: np.ndarray) -> float:
+    """:func:`force` given s = sin theta and c = cos theta."""
     m = plant[1]
     return (
         (plant[0] + m - m * c * c) * u
@@ -148,7 +299,7 @@ def switch_weights(
     """(balancing weight, swing-up weight).
 
     Hard switch (section 2.3): balancing while |theta| < theta_c. Soft switch
-    (section 4, read as in NOTES section 4): clip(gamma (theta_c - |theta|), 0, 1)
+    (section 4, read as in docs/paper-notes.md section 4): clip(gamma (theta_c - |theta|), 0, 1)
     and clip(gamma (|theta| - theta_c), 0, 1).
     """
     if not soft:
@@ -162,7 +313,10 @@ def switch_weights(
 
 @njit(cache=True)
 def sigma_of(w6: float) -> float:
-    """Policy standard deviation sigma = 0.1 + 1 / (1 + exp(-W6)), eqs 22-23 (NOTES section 3)."""
+    """Policy standard deviation sigma = 0.1 + 1 / (1 + exp(-W6)), eqs 22-23.
+
+    Reading: docs/paper-notes.md section 3.
+    """
     return 0.1 + 1.0 / (1.0 + math.exp(-w6))
 
 
@@ -183,98 +337,215 @@ def policy_mean(
 ) -> float:
     """Mean action mu (eq 22 or 23, blended by the switch) and d mu / d W1..W5 into ``grad``.
 
-    Balancing, eq 22 with the sign reading ``sign`` (+1 corrected, -1 printed):
+    ``theta`` is wrapped first. Balancing, eq 22 with the sign reading ``sign``
+    (+1 corrected, -1 printed):
     mu1 = sign ((1 + W1 l) g theta + 2 l sqrt(W1 g) theta_dot) - W2 x - W3 x_dot.
     Swing-up, eq 23: mu2 = W4 E~ theta_dot cos theta - W5^2/4 x - W5 x_dot.
     With ``chapter_eligibility`` the W1 entry is the chapter's printed
     -l (g theta - sqrt(g / W1) theta_dot) instead of the true derivative.
     """
-    length = model[2]
     g = model[3]
     th = wrap_angle(theta)
+    mu, g1, g2, g3, g4, g5 = _policy_wrapped(
+        x,
+        x_dot,
+        th,
+        theta_dot,
+        W,
+        theta_c,
+        sign,
+        soft,
+        inhibition,
+        model,
+        chapter_eligibility,
+        math.sqrt(W[0] * g),
+        _inv_root(W[0], g),
+        0.0,
+        False,
+    )
+    grad[0] = g1
+    grad[1] = g2
+    grad[2] = g3
+    grad[3] = g4
+    grad[4] = g5
+    return mu
+
+
+@njit(cache=True)
+def _inv_root(w1: float, g: float) -> float:
+    """sqrt(g / W1), NaN for W1 = 0 (the balancing law then raises when it is used)."""
+    return math.nan if w1 == 0.0 else math.sqrt(g / w1)
+
+
+@njit(cache=True)
+def _policy_wrapped(
+    x: float,
+    x_dot: float,
+    th: float,
+    theta_dot: float,
+    W: np.ndarray,
+    theta_c: float,
+    sign: float,
+    soft: bool,
+    inhibition: float,
+    model: np.ndarray,
+    chapter_eligibility: bool,
+    root: float,
+    inv_root: float,
+    cos_th: float,
+    have_cos: bool,
+) -> tuple[float, float, float, float, float, float]:
+    """(mu, d mu / d W1..W5) of :func:`policy_mean` for a wrapped ``th``.
+
+    ``root`` = sqrt(W1 g) and ``inv_root`` = sqrt(g / W1) (constant over a trial);
+    ``cos_th`` = cos th when ``have_cos`` (else computed here). The same arithmetic.
+    """
+    length = model[2]
+    g = model[3]
     wb, ws = switch_weights(abs(th), theta_c, soft, inhibition)
     mu = 0.0
-    for i in range(5):
-        grad[i] = 0.0
+    g1 = 0.0
+    g2 = 0.0
+    g3 = 0.0
+    g4 = 0.0
+    g5 = 0.0
     if wb > 0.0:
-        root = math.sqrt(W[0] * g)
+        if W[0] == 0.0:
+            inv_root = math.sqrt(g / W[0])  # raises ZeroDivisionError, as g / W1 always did
         mu += wb * (
             sign * ((1.0 + W[0] * length) * g * th + 2.0 * length * root * theta_dot)
             - W[1] * x
             - W[2] * x_dot
         )
         if chapter_eligibility:
-            d1 = -length * (g * th - math.sqrt(g / W[0]) * theta_dot)
+            d1 = -length * (g * th - inv_root * theta_dot)
         else:
-            d1 = sign * length * (g * th + math.sqrt(g / W[0]) * theta_dot)
-        grad[0] = wb * d1
-        grad[1] = -wb * x
-        grad[2] = -wb * x_dot
+            d1 = sign * length * (g * th + inv_root * theta_dot)
+        g1 = wb * d1
+        g2 = -wb * x
+        g3 = -wb * x_dot
     if ws > 0.0:
-        e_tilde = energy_error(th, theta_dot, model)
-        c = math.cos(th)
+        c = cos_th if have_cos else math.cos(th)
+        m = model[1]
+        e_tilde = 0.5 * m * length * length * theta_dot * theta_dot + m * g * length * (c - 1.0)
         mu += ws * (W[3] * e_tilde * theta_dot * c - 0.25 * W[4] * W[4] * x - W[4] * x_dot)
-        grad[3] = ws * e_tilde * theta_dot * c
-        grad[4] = -ws * (0.5 * W[4] * x + x_dot)
-    return mu
+        g4 = ws * e_tilde * theta_dot * c
+        g5 = -ws * (0.5 * W[4] * x + x_dot)
+    return mu, g1, g2, g3, g4, g5
+
+
+@njit(cache=True)
+def judge(
+    x: float, x_dot: float, theta: float, theta_dot: float, step: int, protocol: ProtocolArgs
+) -> tuple[int, float]:
+    """(status, reward) of a state reached after ``step`` steps: the trial rules, eqs 24-25.
+
+    The one statement of the chapter's sparse-reward protocol (docs/paper-notes.md
+    section 5), shared by :func:`run_trial` and the Gymnasium task
+    (:func:`striatal.envs.task.outcome`). In order: a non-finite state or one with a
+    component beyond :data:`BLOW_UP` is a numerical fault (STATUS_FAULT, failure
+    reward); at ``step == protocol.check_step`` (t = 30 s) before the last step, eq 24
+    ends the trial (STATUS_EARLY, failure reward) if |x| > check_x or |theta| >
+    check_theta; at ``step >= protocol.n_steps`` the trial ends with eq 25's reward
+    (STATUS_SUCCESS if |x| < goal_x and |theta| < goal_theta, else STATUS_FAILURE).
+    Otherwise STATUS_RUNNING and reward 0.
+    """
+    if not (
+        abs(x) < BLOW_UP
+        and abs(x_dot) < BLOW_UP
+        and abs(theta) < BLOW_UP
+        and abs(theta_dot) < BLOW_UP
+    ):
+        return STATUS_FAULT, protocol.reward_failure
+    if (
+        step == protocol.check_step
+        and step < protocol.n_steps
+        and (abs(x) > protocol.check_x or abs(wrap_angle(theta)) > protocol.check_theta)
+    ):
+        return STATUS_EARLY, protocol.reward_failure
+    if step >= protocol.n_steps:
+        if abs(x) < protocol.goal_x and abs(wrap_angle(theta)) < protocol.goal_theta:
+            return STATUS_SUCCESS, protocol.reward_success
+        return STATUS_FAILURE, protocol.reward_failure
+    return STATUS_RUNNING, 0.0
+
+
+@njit(cache=True)
+def judge_batch(
+    states: np.ndarray,
+    steps: np.ndarray,
+    protocol: ProtocolArgs,
+    status: np.ndarray,
+    reward: np.ndarray,
+) -> None:
+    """:func:`judge` for each row of ``states`` (B, 4) reached after ``steps[b]`` steps."""
+    for b in range(states.shape[0]):
+        status[b], reward[b] = judge(
+            states[b, 0], states[b, 1], states[b, 2], states[b, 3], steps[b], protocol
+        )
 
 
 @njit(cache=True)
 def run_trial(
     state0: np.ndarray,
-    W: np.ndarray,
-    theta_c: float,
-    sign: float,
-    soft: bool,
-    inhibition: float,
-    plant: np.ndarray,
-    model: np.ndarray,
-    mismatch: bool,
-    dt: float,
-    n_steps: int,
-    action_every: int,
-    noise: np.ndarray,
-    sensor_noise: np.ndarray,
-    sensor_std_x: float,
-    sensor_std_theta: float,
-    chapter_eligibility: bool,
-    gamma: float,
-    trace: np.ndarray,
-    check_step: int,
-    check_x: float,
-    check_theta: float,
-    goal_x: float,
-    goal_theta: float,
-    reward_success: float,
-    reward_failure: float,
-    traj: np.ndarray,
-    out: np.ndarray,
+    gains: Gains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
+    noise: NoiseArgs,
+    learning: TraceArgs,
+    buffers: Buffers,
 ) -> None:
     """Run one trial of the chapter's protocol (eqs 1-5, 13-14, 21-25) in place.
 
-    A new action a = mu + sigma * noise[j] is drawn every ``action_every`` steps
+    Build the arguments with :func:`striatal.rollout.trial_args`. A new action
+    a = mu + sigma * noise.action[j] is drawn every ``control.action_every`` steps
     (eq 5) and held; at each draw the eligibility e (score of the Gaussian policy
-    with the chapter's rescaling, NOTES section 2) enters the trace
-    D = e + gamma D (eq 3), updated in ``trace``. An empty ``noise`` runs the mean
-    policy (no trace update). ``sensor_noise`` (n_steps, 2) of standard normals,
-    scaled by the two stds, corrupts the x and theta the controller sees; empty
-    for none. At step ``check_step`` (t = 30 s; -1 for never) the trial ends with
-    ``reward_failure`` if |x| > check_x or |theta| > check_theta (eq 24);
-    otherwise at the end the reward is ``reward_success`` if |x| < goal_x and
-    |theta| < goal_theta, else ``reward_failure`` (eq 25). A non-finite or blown-up
-    state ends the trial as a failure with OUT_FAULT = 1. Results go to ``out``
-    (layout OUT_*); ``traj`` of shape (n_steps + 1, 8) records t, state (theta
-    unwrapped), u, force, mode when it has rows.
+    with the chapter's rescaling, docs/paper-notes.md section 2) enters the trace
+    D = e + gamma D (eq 3), updated in ``learning.trace``. An empty
+    ``noise.action`` runs the mean policy (no trace update). ``noise.sensor``
+    (n_steps, 2) of standard normals, scaled by the two stds, corrupts the x and
+    theta the controller sees; empty for none. The trial ends by the rules of
+    :func:`judge` (eq 24 check, eq 25 reward, numerical fault), applied to the
+    state after every step. Results go to ``buffers.out`` (layout OUT_*);
+    ``buffers.traj`` of shape (n_steps + 1, 8) records t, state (theta unwrapped),
+    u, force, mode when it has rows.
     """
+    W = gains.W
+    theta_c = gains.theta_c
+    p = plant.plant
+    model = plant.model
+    mismatch = plant.mismatch
+    dt = plant.dt
+    action_every = control.action_every
+    trace = learning.trace
+    gamma = learning.gamma
+    sensor_noise = noise.sensor
+    out = buffers.out
+    traj = buffers.traj
+    n_steps = protocol.n_steps
     x = state0[0]
     x_dot = state0[1]
     theta = state0[2]
     theta_dot = state0[3]
-    stochastic = noise.shape[0] > 0
+    stochastic = noise.action.shape[0] > 0
     noisy_sensor = sensor_noise.shape[0] > 0
     record = traj.shape[0] > 0
     sigma = sigma_of(W[5])
-    grad = np.empty(5)
+    sign = control.sign
+    soft = control.soft
+    inhibition = control.inhibition
+    chapter_eligibility = control.chapter_eligibility
+    # constant over the trial: the square roots of the balancing law (eq 22)
+    root = math.sqrt(W[0] * model[3])
+    inv_root = _inv_root(W[0], model[3])
+    # the trace D (eq 3) in registers, written back at the end
+    d0 = trace[0]
+    d1 = trace[1]
+    d2 = trace[2]
+    d3 = trace[3]
+    d4 = trace[4]
+    d5 = trace[5]
     min_swing = math.inf
     min_all = math.inf
     n_switches = 0
@@ -283,89 +554,98 @@ def run_trial(
     max_abs_f = 0.0
     a = 0.0
     draw = 0
+    hold = 0  # steps left before the next action draw (eq 5)
+    status = STATUS_RUNNING
     reward = 0.0
-    fault = 0
-    early = 0
     end_step = n_steps
-    ended = False
-    for k in range(n_steps):
-        if k == check_step and (abs(x) > check_x or abs(wrap_angle(theta)) > check_theta):
-            reward = reward_failure
-            early = 1
-            end_step = k
-            ended = True
-            break
-        ox = x
-        otheta = theta
-        if noisy_sensor:
-            ox += sensor_std_x * sensor_noise[k, 0]
-            otheta += sensor_std_theta * sensor_noise[k, 1]
-        abs_th = abs(wrap_angle(otheta))
-        mode = MODE_BALANCE if abs_th < theta_c else MODE_SWINGUP
-        if mode == MODE_SWINGUP and abs_th < min_swing:
-            min_swing = abs_th
-        if abs_th < min_all:
-            min_all = abs_th
-        if prev_mode >= 0 and mode != prev_mode:
-            n_switches += 1
-        prev_mode = mode
-        if k % action_every == 0:
-            mu = policy_mean(
-                ox,
-                x_dot,
-                otheta,
-                theta_dot,
-                W,
-                theta_c,
-                sign,
-                soft,
-                inhibition,
-                model,
-                chapter_eligibility,
-                grad,
+    if protocol.check_step == 0:
+        status, reward = judge(x, x_dot, theta, theta_dot, 0, protocol)
+        if status != STATUS_RUNNING:
+            end_step = 0
+    if status == STATUS_RUNNING:
+        for k in range(n_steps):
+            # sin and cos of theta once a step: the force (eq 12), RK4's first stage
+            # and, without sensor noise, the swing-up law (eq 23) share them
+            s = math.sin(theta)
+            c = math.cos(theta)
+            ox = x
+            otheta = theta
+            if noisy_sensor:
+                ox += noise.sensor_std_x * sensor_noise[k, 0]
+                otheta += noise.sensor_std_theta * sensor_noise[k, 1]
+            th = wrap_angle(otheta)
+            abs_th = abs(th)
+            mode = MODE_BALANCE if abs_th < theta_c else MODE_SWINGUP
+            if mode == MODE_SWINGUP and abs_th < min_swing:
+                min_swing = abs_th
+            if abs_th < min_all:
+                min_all = abs_th
+            if prev_mode >= 0 and mode != prev_mode:
+                n_switches += 1
+            prev_mode = mode
+            if hold == 0:
+                hold = action_every
+                mu, g1, g2, g3, g4, g5 = _policy_wrapped(
+                    ox,
+                    x_dot,
+                    th,
+                    theta_dot,
+                    W,
+                    theta_c,
+                    sign,
+                    soft,
+                    inhibition,
+                    model,
+                    chapter_eligibility,
+                    root,
+                    inv_root,
+                    c,
+                    th == theta,
+                )
+                if stochastic:
+                    eps = sigma * noise.action[draw]
+                    a = mu + eps
+                    d0 = eps * g1 + gamma * d0
+                    d1 = eps * g2 + gamma * d1
+                    d2 = eps * g3 + gamma * d2
+                    d3 = eps * g4 + gamma * d3
+                    d4 = eps * g5 + gamma * d4
+                    d5 = (eps * eps - sigma * sigma) * (1.1 - sigma) + gamma * d5
+                else:
+                    a = mu
+                draw += 1
+            hold -= 1
+            f = _force_sc(s, c, theta_dot, a, model)
+            if abs(f) > max_abs_f:
+                max_abs_f = abs(f)
+            if record:
+                traj[k, 0] = k * dt
+                traj[k, 1] = x
+                traj[k, 2] = x_dot
+                traj[k, 3] = theta
+                traj[k, 4] = theta_dot
+                traj[k, 5] = a
+                traj[k, 6] = f
+                traj[k, 7] = mode
+            x, x_dot, theta, theta_dot = _rk4_sc(
+                x, x_dot, theta, theta_dot, s, c, a, dt, p, model, mismatch
             )
-            if stochastic:
-                eps = sigma * noise[draw]
-                a = mu + eps
-                for i in range(5):
-                    trace[i] = eps * grad[i] + gamma * trace[i]
-                trace[5] = (eps * eps - sigma * sigma) * (1.1 - sigma) + gamma * trace[5]
-            else:
-                a = mu
-            draw += 1
-        f = force(theta, theta_dot, a, model)
-        if abs(f) > max_abs_f:
-            max_abs_f = abs(f)
-        if record:
-            traj[k, 0] = k * dt
-            traj[k, 1] = x
-            traj[k, 2] = x_dot
-            traj[k, 3] = theta
-            traj[k, 4] = theta_dot
-            traj[k, 5] = a
-            traj[k, 6] = f
-            traj[k, 7] = mode
-        x, x_dot, theta, theta_dot = rk4_step(
-            x, x_dot, theta, theta_dot, a, dt, plant, model, mismatch
-        )
-        if not (
-            abs(x) < BLOW_UP
-            and abs(x_dot) < BLOW_UP
-            and abs(theta) < BLOW_UP
-            and abs(theta_dot) < BLOW_UP
-        ):
-            reward = reward_failure
-            fault = 1
-            end_step = k + 1
-            ended = True
-            break
-        if abs(x) > max_abs_x:
-            max_abs_x = abs(x)
-    if not ended:
-        if abs(x) < goal_x and abs(wrap_angle(theta)) < goal_theta:
-            reward = reward_success
-        else:
-            reward = reward_failure
+            status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
+            if status == STATUS_FAULT:
+                end_step = k + 1
+                break
+            if abs(x) > max_abs_x:
+                max_abs_x = abs(x)
+            if status != STATUS_RUNNING:
+                end_step = k + 1
+                break
+    if stochastic:
+        trace[0] = d0
+        trace[1] = d1
+        trace[2] = d2
+        trace[3] = d3
+        trace[4] = d4
+        trace[5] = d5
     if record:
         traj[end_step, 0] = end_step * dt
         traj[end_step, 1] = x
@@ -383,8 +663,8 @@ def run_trial(
     out[OUT_THETA_DOT] = theta_dot
     out[OUT_MIN_ABS_THETA_SWINGUP] = min_swing
     out[OUT_MIN_ABS_THETA] = min_all
-    out[OUT_FAULT] = fault
-    out[OUT_EARLY] = early
+    out[OUT_FAULT] = 1.0 if status == STATUS_FAULT else 0.0
+    out[OUT_EARLY] = 1.0 if status == STATUS_EARLY else 0.0
     out[OUT_N_SWITCHES] = n_switches
     out[OUT_MAX_ABS_X] = max_abs_x
     out[OUT_MAX_ABS_FORCE] = max_abs_f
@@ -393,68 +673,34 @@ def run_trial(
 @njit(cache=True, parallel=True)
 def run_trials_batch(
     states0: np.ndarray,
-    W: np.ndarray,
-    theta_c: np.ndarray,
-    sign: float,
-    soft: bool,
-    inhibition: float,
-    plant: np.ndarray,
-    model: np.ndarray,
-    mismatch: bool,
-    dt: float,
-    n_steps: int,
-    action_every: int,
+    gains: Gains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
     noise: np.ndarray,
-    chapter_eligibility: bool,
-    gamma: float,
-    traces: np.ndarray,
-    check_step: int,
-    check_x: float,
-    check_theta: float,
-    goal_x: float,
-    goal_theta: float,
-    reward_success: float,
-    reward_failure: float,
+    learning: TraceArgs,
     outs: np.ndarray,
 ) -> None:
     """:func:`run_trial` for B independent trials at once, parallel over cores.
 
-    Row b of ``states0`` (B, 4), ``W`` (B, 6), ``theta_c`` (B,), ``noise`` (B, n_draws)
-    (or (B, 0) for the mean policy), ``traces`` (B, 6) and ``outs`` (B, N_OUT) belongs
-    to trial b; the result of each row equals the scalar kernel's bit for bit.
+    Build the arguments with :func:`striatal.rollout.batch_args`. Row b of
+    ``states0`` (B, 4), ``gains.W`` (B, 6), ``gains.theta_c`` (B,), ``noise``
+    (B, n_draws) (or (B, 0) for the mean policy), ``learning.trace`` (B, 6) and
+    ``outs`` (B, N_OUT) belongs to trial b; no sensor noise, nothing recorded.
+    The result of each row equals the scalar kernel's bit for bit.
     """
     no_sensor = np.empty((0, 2))
     no_traj = np.empty((0, N_TRAJ))
     for b in prange(states0.shape[0]):
         run_trial(
             states0[b],
-            W[b],
-            theta_c[b],
-            sign,
-            soft,
-            inhibition,
+            Gains(gains.W[b], gains.theta_c[b]),
             plant,
-            model,
-            mismatch,
-            dt,
-            n_steps,
-            action_every,
-            noise[b],
-            no_sensor,
-            0.0,
-            0.0,
-            chapter_eligibility,
-            gamma,
-            traces[b],
-            check_step,
-            check_x,
-            check_theta,
-            goal_x,
-            goal_theta,
-            reward_success,
-            reward_failure,
-            no_traj,
-            outs[b],
+            control,
+            protocol,
+            NoiseArgs(noise[b], no_sensor, 0.0, 0.0),
+            TraceArgs(learning.gamma, learning.trace[b]),
+            Buffers(outs[b], no_traj),
         )
 
 

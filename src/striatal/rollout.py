@@ -21,7 +21,7 @@ from striatal.params import Controller, Plant, Simulation, require_finite, requi
 class Protocol:
     """The chapter's trial protocol and sparse reward, eqs 24-25.
 
-    ``check_time``: the one check of eq 24 (NOTES section 5) [s]; a negative value
+    ``check_time``: the one check of eq 24 (docs/paper-notes.md section 5) [s]; a negative value
     disables it. Rewards: +10 / -5 as printed.
     """
 
@@ -163,59 +163,169 @@ def _noise_arrays(
     return noise, sensor_noise
 
 
-def _call_kernel(
+# ------------------------------------------------------------------ kernel arguments
+# The one place where the kernel's grouped arguments (kernel.Gains, PlantArgs, ...)
+# are built from the frozen settings; every caller and test goes through these.
+
+#: The arguments of kernel.run_trial, in its order.
+TrialArgs = tuple[
+    np.ndarray,
+    kernel.Gains,
+    kernel.PlantArgs,
+    kernel.ControlArgs,
+    kernel.ProtocolArgs,
+    kernel.NoiseArgs,
+    kernel.TraceArgs,
+    kernel.Buffers,
+]
+#: The arguments of kernel.run_trials_batch, in its order.
+BatchArgs = tuple[
+    np.ndarray,
+    kernel.Gains,
+    kernel.PlantArgs,
+    kernel.ControlArgs,
+    kernel.ProtocolArgs,
+    np.ndarray,
+    kernel.TraceArgs,
+    np.ndarray,
+]
+
+
+def plant_args(plant: Plant, dt: float, model: Plant | None = None) -> kernel.PlantArgs:
+    """The true ``plant``, the controller's ``model`` of it (default: the same) and dt [s]."""
+    model_plant = plant if model is None else model
+    return kernel.PlantArgs(
+        plant=plant.as_array(),
+        model=model_plant.as_array(),
+        mismatch=model_plant != plant,
+        dt=dt,
+    )
+
+
+def control_args(
+    controller: Controller, *, action_every: int = 1, chapter_eligibility: bool = False
+) -> kernel.ControlArgs:
+    """The controller's readings (sign, switch) and the action rate, validated."""
+    if int(action_every) != action_every or action_every < 1:
+        raise ParameterError(f"action_every must be a whole number >= 1, got {action_every}")
+    return kernel.ControlArgs(
+        sign=controller.sign,
+        soft=controller.soft,
+        inhibition=controller.inhibition,
+        action_every=int(action_every),
+        chapter_eligibility=chapter_eligibility,
+    )
+
+
+def protocol_args(protocol: Protocol, dt: float, n_steps: int) -> kernel.ProtocolArgs:
+    """``protocol`` counted in steps of ``dt``, for a trial of ``n_steps`` steps."""
+    return kernel.ProtocolArgs(
+        n_steps=n_steps,
+        check_step=protocol.check_step(dt),
+        check_x=protocol.check_x,
+        check_theta=protocol.check_theta,
+        goal_x=protocol.goal_x,
+        goal_theta=protocol.goal_theta,
+        reward_success=protocol.reward_success,
+        reward_failure=protocol.reward_failure,
+    )
+
+
+def trial_args(
     plant: Plant,
     controller: Controller,
     sim: Simulation,
     *,
     protocol: Protocol,
-    noise: np.ndarray,
-    sensor_noise: np.ndarray,
-    sensor: SensorNoise,
-    model: Plant | None,
-    action_every: int,
-    gamma: float,
-    chapter_eligibility: bool,
-    trace: np.ndarray,
-    gains: np.ndarray | None,
-    traj: np.ndarray,
-) -> np.ndarray:
-    if int(action_every) != action_every or action_every < 1:
-        raise ParameterError(f"action_every must be a whole number >= 1, got {action_every}")
-    model_plant = plant if model is None else model
+    noise: np.ndarray | None = None,
+    sensor_noise: np.ndarray | None = None,
+    sensor: SensorNoise = SensorNoise(),
+    gains: np.ndarray | None = None,
+    theta_c: float | None = None,
+    state0: np.ndarray | None = None,
+    model: Plant | None = None,
+    action_every: int = 1,
+    chapter_eligibility: bool = False,
+    gamma: float = 0.0,
+    trace: np.ndarray | None = None,
+    record: bool = False,
+) -> TrialArgs:
+    """The arguments of :func:`striatal.kernel.run_trial`, in its order.
+
+    ``noise``: standard normals of the action draws (None: the mean policy);
+    ``sensor_noise`` (n_steps, 2): standard normals scaled by ``sensor``'s stds;
+    ``gains`` / ``theta_c`` / ``state0`` override the controller's W, theta_c and
+    the simulation's start state; ``trace`` (6,) is updated in place (default
+    zeros); ``record`` allocates the (n_steps + 1, N_TRAJ) trajectory. The kernel
+    writes ``args[-1].out`` and ``args[-1].traj``.
+    """
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
-    out = np.empty(kernel.N_OUT)
-    kernel.run_trial(
-        sim.initial_state,
-        W,
-        controller.theta_c,
-        controller.sign,
-        controller.soft,
-        controller.inhibition,
-        plant.as_array(),
-        model_plant.as_array(),
-        model_plant != plant,
-        sim.dt,
-        sim.n_steps,
-        action_every,
-        noise,
-        sensor_noise,
-        sensor.x_std,
-        sensor.theta_std,
-        chapter_eligibility,
-        gamma,
-        trace,
-        protocol.check_step(sim.dt),
-        protocol.check_x,
-        protocol.check_theta,
-        protocol.goal_x,
-        protocol.goal_theta,
-        protocol.reward_success,
-        protocol.reward_failure,
-        traj,
-        out,
+    return (
+        sim.initial_state if state0 is None else np.asarray(state0, dtype=float),
+        kernel.Gains(W=W, theta_c=controller.theta_c if theta_c is None else float(theta_c)),
+        plant_args(plant, sim.dt, model),
+        control_args(
+            controller, action_every=action_every, chapter_eligibility=chapter_eligibility
+        ),
+        protocol_args(protocol, sim.dt, sim.n_steps),
+        kernel.NoiseArgs(
+            action=np.empty(0) if noise is None else noise,
+            sensor=np.empty((0, 2)) if sensor_noise is None else sensor_noise,
+            sensor_std_x=sensor.x_std,
+            sensor_std_theta=sensor.theta_std,
+        ),
+        kernel.TraceArgs(gamma=gamma, trace=np.zeros(6) if trace is None else trace),
+        kernel.Buffers(
+            out=np.empty(kernel.N_OUT),
+            traj=np.zeros((sim.n_steps + 1 if record else 0, kernel.N_TRAJ)),
+        ),
     )
-    return out
+
+
+def batch_args(
+    plant: Plant,
+    controller: Controller,
+    sim: Simulation,
+    *,
+    protocol: Protocol,
+    gains: np.ndarray,
+    theta_c: np.ndarray,
+    noise: np.ndarray | None = None,
+    states0: np.ndarray | None = None,
+    model: Plant | None = None,
+    action_every: int = 1,
+    chapter_eligibility: bool = False,
+    gamma: float = 0.0,
+    traces: np.ndarray | None = None,
+) -> BatchArgs:
+    """The arguments of :func:`striatal.kernel.run_trials_batch`, in its order.
+
+    B trials: ``gains`` (B, 6) and ``theta_c`` (B,) per trial; ``noise`` (B, n_draws)
+    action normals (None: the mean policy); ``states0`` (B, 4) (default: the
+    simulation's start state on every row); ``traces`` (B, 6) updated in place
+    (default zeros). ``controller`` gives the readings (sign, switch) only. The
+    kernel writes ``args[-1]`` (B, N_OUT).
+    """
+    W = np.ascontiguousarray(gains, dtype=float)
+    B = W.shape[0]
+    if W.shape != (B, 6):
+        raise ParameterError(f"gains must be (B, 6), got {W.shape}")
+    tc = np.ascontiguousarray(theta_c, dtype=float)
+    if tc.shape != (B,):
+        raise ParameterError(f"theta_c must be (B,) = ({B},), got {tc.shape}")
+    s0 = np.tile(sim.initial_state, (B, 1)) if states0 is None else states0
+    return (
+        np.ascontiguousarray(s0, dtype=float),
+        kernel.Gains(W=W, theta_c=tc),
+        plant_args(plant, sim.dt, model),
+        control_args(
+            controller, action_every=action_every, chapter_eligibility=chapter_eligibility
+        ),
+        protocol_args(protocol, sim.dt, sim.n_steps),
+        np.empty((B, 0)) if noise is None else noise,
+        kernel.TraceArgs(gamma=gamma, trace=np.zeros((B, 6)) if traces is None else traces),
+        np.empty((B, kernel.N_OUT)),
+    )
 
 
 def simulate(
@@ -236,8 +346,7 @@ def simulate(
     controller believes in (default: the true ``plant``).
     """
     noise, sensor_noise = _noise_arrays(sim, action_every, rng, sensor)
-    traj = np.zeros((sim.n_steps + 1, kernel.N_TRAJ))
-    out = _call_kernel(
+    args = trial_args(
         plant,
         controller,
         sim,
@@ -247,12 +356,10 @@ def simulate(
         sensor=sensor,
         model=model,
         action_every=action_every,
-        gamma=0.0,
-        chapter_eligibility=False,
-        trace=np.zeros(6),
-        gains=None,
-        traj=traj,
+        record=True,
     )
+    kernel.run_trial(*args)
+    out, traj = args[-1]
     outcome = TrialOutcome.from_row(out, sim)
     end = int(out[kernel.OUT_END_STEP])
     return Trajectory(
@@ -359,8 +466,7 @@ def _trial(
     record: bool,
 ) -> tuple[TrialOutcome, np.ndarray]:
     noise, sensor_noise = _noise_arrays(sim, action_every, rng, sensor, mean_policy)
-    traj = np.zeros((sim.n_steps + 1 if record else 0, kernel.N_TRAJ))
-    out = _call_kernel(
+    args = trial_args(
         plant,
         controller,
         sim,
@@ -368,13 +474,15 @@ def _trial(
         noise=noise,
         sensor_noise=sensor_noise,
         sensor=sensor,
+        gains=gains,
         model=model,
         action_every=action_every,
-        gamma=gamma,
         chapter_eligibility=chapter_eligibility,
+        gamma=gamma,
         trace=trace,
-        gains=gains,
-        traj=traj,
+        record=record,
     )
+    kernel.run_trial(*args)
+    out, traj = args[-1]
     end = int(out[kernel.OUT_END_STEP])
     return TrialOutcome.from_row(out, sim), traj[: end + 1]

@@ -1,12 +1,17 @@
-"""``striatal bench``: the kernel's speed beside Gymnasium's cart-pole, in one process."""
+"""``striatal bench``: the kernel's speed beside Gymnasium's cart-pole, in one process.
+
+A thin entry: the harness is benchmarks/harness.py of the source checkout.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
 from dataclasses import replace
+from types import ModuleType
+from typing import Any
 
-from striatal.bench import QUICK, BenchConfig, format_report, run_all
+from striatal.bench import load_harness
 from striatal.files import dumps_json
 from striatal.params import check_seed
 
@@ -59,9 +64,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the policy noise")
 
 
-def config_from(args: argparse.Namespace) -> BenchConfig:
-    """The benchmark configuration the options ask for (validated)."""
-    base = QUICK if args.quick else BenchConfig()
+def config_from(args: argparse.Namespace, harness: ModuleType) -> Any:
+    """The harness's BenchConfig the options ask for (validated)."""
+    base = harness.QUICK if args.quick else harness.BenchConfig()
     return replace(
         base,
         batch_size=base.batch_size if args.batch_size is None else args.batch_size,
@@ -74,11 +79,12 @@ def config_from(args: argparse.Namespace) -> BenchConfig:
 
 
 def run(args: argparse.Namespace) -> int:
-    config = config_from(args)
+    harness = load_harness()  # benchmarks/harness.py of the checkout
+    config = config_from(args, harness)
     seed = check_seed(args.seed)
-    report = run_all(config, seed=seed)
+    report = harness.run_all(config, seed=seed)
     if args.json:
         sys.stdout.write(dumps_json(report.to_dict()))
     else:
-        sys.stdout.write(format_report(report) + "\n")
+        sys.stdout.write(harness.format_report(report) + "\n")
     return 0

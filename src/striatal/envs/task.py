@@ -25,7 +25,7 @@ from striatal.params import (
     require_finite,
     require_finite_positive,
 )
-from striatal.rollout import Protocol
+from striatal.rollout import Protocol, protocol_args
 
 ObservationKind = Literal["trig", "raw"]
 RewardKind = Literal["chapter", "dense"]
@@ -209,8 +209,9 @@ def start_state(
 
 
 def wrap(theta: np.ndarray) -> np.ndarray:
-    """Angles wrapped to (-pi, pi], the formula of :func:`striatal.kernel.wrap_angle`."""
-    return theta - kernel.TWO_PI * np.ceil((theta - math.pi) / kernel.TWO_PI)
+    """Angles wrapped to (-pi, pi]: :func:`striatal.kernel.wrap_angle` over an array."""
+    result: np.ndarray = kernel.wrap_angles(np.asarray(theta, dtype=float))
+    return result
 
 
 def observe(states: np.ndarray, kind: ObservationKind) -> np.ndarray:
@@ -253,30 +254,29 @@ def outcome(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(reward, terminated, truncated, fault) for states (B, 4) just reached after ``steps`` steps.
 
-    Mirrors :func:`striatal.kernel.run_trial`: a non-finite or blown-up state ends the
-    episode (termination, failure reward); at the check step (t = 30 s) the eq-24
-    test |x| > check_x or |theta| > check_theta terminates with the failure reward;
-    at the last step the time limit truncates and the chapter reward is eq 25's
-    success or failure. The dense reward is 0 on a fault.
+    The trial rules are the kernel's own compiled :func:`striatal.kernel.judge`
+    (eqs 24-25, docs/paper-notes.md section 5), the function
+    :func:`striatal.kernel.run_trial` applies after every step: a non-finite or
+    blown-up state ends the episode (termination, failure reward); at the check step
+    (t = 30 s) the eq-24 test |x| > check_x or |theta| > check_theta terminates with
+    the failure reward; at the last step the time limit truncates and the chapter
+    reward is eq 25's success or failure. The dense reward replaces the chapter's
+    (0 on a fault); the t = 30 s check terminates in both modes.
     """
-    proto = task.protocol
-    with np.errstate(invalid="ignore"):
-        fault = ~np.all(np.abs(states) < kernel.BLOW_UP, axis=1)
-        th = np.abs(wrap(states[:, 2]))
-        x = np.abs(states[:, 0])
-        at_check = (steps == task.check_step) & (steps < task.n_steps)
-        check_failed = at_check & ((x > proto.check_x) | (th > proto.check_theta)) & ~fault
-        terminated = fault | check_failed
-        truncated = (steps >= task.n_steps) & ~terminated
-        if task.reward == "chapter":
-            goal = (x < proto.goal_x) & (th < proto.goal_theta)
-            reward = np.where(
-                terminated,
-                proto.reward_failure,
-                np.where(
-                    truncated, np.where(goal, proto.reward_success, proto.reward_failure), 0.0
-                ),
-            )
-        else:
+    states = np.ascontiguousarray(states, dtype=float)
+    B = states.shape[0]
+    status = np.empty(B, dtype=np.int64)
+    chapter_reward = np.empty(B)
+    protocol = protocol_args(task.protocol, task.dt, task.n_steps)
+    kernel.judge_batch(
+        states, np.ascontiguousarray(steps, dtype=np.int64), protocol, status, chapter_reward
+    )
+    fault = status == kernel.STATUS_FAULT
+    terminated = fault | (status == kernel.STATUS_EARLY)
+    truncated = (status == kernel.STATUS_SUCCESS) | (status == kernel.STATUS_FAILURE)
+    if task.reward == "chapter":
+        reward = chapter_reward
+    else:
+        with np.errstate(invalid="ignore", over="ignore"):
             reward = np.where(fault, 0.0, dense_reward(states, u, task.u_max))
     return reward.astype(float), terminated, truncated, fault
