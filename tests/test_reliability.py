@@ -38,7 +38,8 @@ import pytest
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError, StriatalError
 from striatal.files import read_json
-from striatal.learn import LearnerConfig, gain_update, initial_state, learning_step
+from striatal.learners import LearnerConfig, initial_state, learning_step
+from striatal.learners.chapter import gain_update
 from striatal.params import CHAPTER_INITIAL_W, Controller, Plant, Simulation
 from striatal.rollout import Protocol, SensorNoise, run_trial
 
@@ -389,7 +390,19 @@ def learner_fault(tmp: Path) -> tuple[bool, str]:
 def nan_trace(tmp: Path) -> tuple[bool, str]:
     W = np.array(CHAPTER_INITIAL_W)
     same = all(
-        np.array_equal(gain_update(W, np.array([1, bad, 0, 0, 0, 0.0]), -5.0, LearnerConfig()), W)
+        np.array_equal(
+            gain_update(
+                W,
+                np.array([1, bad, 0, 0, 0, 0.0]),
+                -5.0,
+                alpha=5.0,
+                gamma=0.999,
+                baseline=0.0,
+                max_step=1.0,
+                w1_floor=1e-3,
+            ),
+            W,
+        )
         for bad in (math.nan, math.inf, -math.inf)
     )
     return same, f"W unchanged for NaN, +inf, -inf: {same}"
@@ -520,7 +533,7 @@ def interrupt_inside_sweep_run(tmp: Path) -> tuple[bool, str]:
     """KeyboardInterrupt (what SIGINT raises) from inside one run's learning loop."""
     from unittest import mock
 
-    import striatal.learn as learn_module
+    import striatal.learners.loop as learn_module
 
     want = sweep_reference(tmp)
     real = learn_module.learning_step
@@ -572,7 +585,7 @@ def interrupt_before_history_row(tmp: Path) -> tuple[bool, str]:
     """
     from unittest import mock
 
-    import striatal.cli.train as train_cli
+    import striatal.rundir as train_cli
 
     real = train_cli.csv_text
     calls = {"rows": 0}
