@@ -343,3 +343,53 @@ def test_learner_layer_has_no_import_cycle() -> None:
 
     cycles = [m for m in ours if reaches(m, m)]
     assert cycles == []
+
+
+# --------------------------------------------------------------------------- run folders
+
+
+def test_resume_refuses_changed_settings_but_extends_max_trials(tmp_path: Path) -> None:
+    import striatal
+    from striatal.errors import DataFileError
+
+    out = tmp_path / "run"
+    first = striatal.train(seed=1, max_trials=20, out=out)
+    assert first.trials == 20 and not first.success
+    with pytest.raises(
+        ParameterError, match=r"--seed \(the run has 1\), --alpha \(the run has 5.0\)"
+    ):
+        striatal.train(out=out, resume=True, alpha=3.0, seed=4)
+    with pytest.raises(ParameterError, match="may only raise --max-trials"):
+        striatal.train(out=out, resume=True, max_trials=10)
+    with pytest.raises(ParameterError, match="checkpoint-every"):
+        striatal.train(out=out, resume=True, checkpoint_every=0)
+    longer = striatal.train(out=out, resume=True, seed=1, max_trials=40)
+    assert (longer.trials, longer.success) == (32, True)  # README: seed 1 succeeds after 32
+    assert longer.run_id == first.run_id == json.loads((out / "result.json").read_text())["run_id"]
+    with striatal.rundir.RunDir(out).lock(), pytest.raises(DataFileError, match="in use"):
+        striatal.train(out=out, resume=True)
+
+
+def test_fresh_start_replaces_the_old_runs_files(tmp_path: Path) -> None:
+    import striatal
+
+    out = tmp_path / "run"
+    striatal.train(seed=1, max_trials=5, out=out)
+    old = (out / "result.json").read_text()
+    r = striatal.train(seed=2, max_trials=3, out=out, checkpoint_every=100)
+    assert (out / "result.json").read_text() != old
+    ck = json.loads((out / "checkpoint.json").read_text())
+    assert ck["run_id"] == r.run_id and ck["state"]["trials_done"] == 3
+    assert r.run_id != json.loads(old)["run_id"]
+
+
+@pytest.mark.parametrize("mask", [0o022, 0o077])
+def test_written_files_follow_the_umask(tmp_path: Path, mask: int) -> None:
+    from striatal.files import write_json
+
+    old = os.umask(mask)
+    try:
+        write_json(tmp_path / "a.json", {"x": 1})
+    finally:
+        os.umask(old)
+    assert (tmp_path / "a.json").stat().st_mode & 0o777 == 0o666 & ~mask

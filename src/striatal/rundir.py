@@ -4,23 +4,33 @@ One place owns the file formats of a run, so ``striatal train``, the Python API
 (:func:`striatal.train`) and every command that reads a result (``simulate
 --result``, ``figure``, ``interpret``, ``robustness``) agree on them:
 
-- ``checkpoint.json``: {"version", "run_id", "settings", "state"} (:class:`LearnerState`);
+- ``checkpoint.json``: {"version", "run_id", "settings", "state", "history_sha256"}
+  (:class:`LearnerState`; the hash of the history.csv rows it covers);
 - ``history.csv``: one row per trial, header :func:`striatal.learners.state.history_columns`
   of the learner's own columns ("sigma" for chapter and rpe, "explore" for pgpe);
 - ``result.json``: the run's outcome, its settings and run id (:func:`read_result`
   is the one reader).
 
 Every file is written atomically (:mod:`striatal.files`); the settings carry a
-schema version (:data:`SETTINGS_SCHEMA`).
+schema version (:data:`SETTINGS_SCHEMA`). A run's id (:func:`run_id`, a hash of its
+starting settings) is stored in checkpoint.json and result.json, and the checkpoint
+holds the hash of the history rows it covers, so a resume proves that the three
+files belong to one run. :meth:`RunDir.lock` keeps a second process out of a folder
+in use.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
+import hashlib
+import json
 import math
-from collections.abc import Mapping, Sequence
+import os
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any
 
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import atomic_write_text, csv_text, read_csv, read_json, write_json
@@ -46,10 +56,13 @@ __all__ = [
     "ResultFile",
     "RunDir",
     "Setup",
+    "history_line",
     "read_history",
     "read_result",
     "result_of",
+    "run_id",
     "run_settings",
+    "setup_of",
 ]
 
 CHECKPOINT = "checkpoint.json"
@@ -106,6 +119,12 @@ def run_settings(
     }
 
 
+def run_id(settings: Mapping[str, Any]) -> str:
+    """The id of a run: a hash of its starting settings (a run is determined by them)."""
+    text = json.dumps(settings, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+
+
 def setup_of(settings: Any, where: str) -> Setup:
     """The run that ``settings`` describe; DataFileError naming ``where`` if they do not."""
     if not isinstance(settings, dict):
@@ -116,7 +135,10 @@ def setup_of(settings: Any, where: str) -> Setup:
             f"schema {SETTINGS_SCHEMA} (start a fresh run)"
         )
     try:
-        config = check_config(LearnerConfig(**settings["config"]))
+        fields = dict(settings["config"])
+        if "max_step" in fields and fields["max_step"] is None:
+            fields["max_step"] = math.inf  # JSON has no inf: null is "no bound"
+        config = check_config(LearnerConfig(**fields))
         template = Controller(
             gains=settings["W0"], theta_c=settings["theta_c0"], **settings["controller"]
         )
@@ -136,6 +158,8 @@ class RunDir:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
+        self._history: Any = None
+        self._hash = hashlib.sha256()
 
     @property
     def checkpoint_path(self) -> Path:
@@ -149,15 +173,54 @@ class RunDir:
     def result_path(self) -> Path:
         return self.path / RESULT
 
+    # -- one process at a time
+    @contextlib.contextmanager
+    def lock(self) -> Iterator[None]:
+        """Hold an exclusive lock on the folder (``fcntl.flock``) or raise DataFileError.
+
+        The lock is on the folder itself (no lock file is left behind) and goes away
+        with the process, even after SIGKILL.
+        """
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+            fd = os.open(self.path, os.O_RDONLY)
+        except OSError as exc:
+            raise DataFileError(f"cannot use output folder {self.path}: {exc.strerror}") from None
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                raise DataFileError(
+                    f"output folder {self.path} is in use by another striatal process"
+                ) from None
+            yield
+        finally:
+            os.close(fd)
+
+    def clear(self) -> None:
+        """Remove a previous run's checkpoint and result (a fresh start over an old run)."""
+        for p in (self.checkpoint_path, self.result_path):
+            with contextlib.suppress(FileNotFoundError):
+                p.unlink()
+
     # -- checkpoint
-    def write_checkpoint(self, settings: Mapping[str, Any], state: LearnerState) -> None:
+    def write_checkpoint(self, run: str, settings: Mapping[str, Any], state: LearnerState) -> None:
+        """checkpoint.json for ``state``: flushes history.csv first, so it covers its rows."""
+        if self._history is not None:
+            self._history.flush()
         write_json(
             self.checkpoint_path,
-            {"version": CHECKPOINT_VERSION, "settings": settings, "state": state.to_dict()},
+            {
+                "version": CHECKPOINT_VERSION,
+                "run_id": run,
+                "settings": settings,
+                "state": state.to_dict(),
+                "history_sha256": self._hash.hexdigest(),
+            },
         )
 
-    def read_checkpoint(self) -> tuple[dict[str, Any], LearnerState]:
-        """(settings, state) of checkpoint.json, both checked; else DataFileError."""
+    def read_checkpoint(self) -> tuple[str, dict[str, Any], LearnerState, str]:
+        """(run id, settings, state, history hash) of checkpoint.json; else DataFileError."""
         path = self.checkpoint_path
         data = read_json(path, what="checkpoint")
         if not isinstance(data, dict) or data.get("version") != CHECKPOINT_VERSION:
@@ -168,38 +231,68 @@ class RunDir:
         try:
             state = LearnerState.from_dict(data["state"])
             settings = data["settings"]
+            run = str(data["run_id"])
+            digest = str(data["history_sha256"])
         except (KeyError, TypeError, ParameterError) as exc:
             raise DataFileError(f"checkpoint {path} is corrupted: {exc}") from None
         if not isinstance(settings, dict):
             raise DataFileError(f"checkpoint {path} is corrupted: its settings are not an object")
-        return settings, state
+        return run, settings, state, digest
 
     # -- history
     def start_history(self, columns: Sequence[str]) -> None:
-        """An empty history.csv with ``columns``."""
-        atomic_write_text(self.history_path, csv_text(columns, []))
+        """An empty history.csv with ``columns``, opened for appending."""
+        header = csv_text(columns, [])
+        atomic_write_text(self.history_path, header)
+        self._hash = hashlib.sha256(header.encode("utf-8"))
+        self._open()
 
-    def keep_history(self, n_rows: int, columns: Sequence[str]) -> None:
-        """Keep the header and the first ``n_rows`` rows (those a checkpoint covers)."""
+    def keep_history(self, n_rows: int, columns: Sequence[str], digest: str) -> None:
+        """Keep the header and the first ``n_rows`` rows (those a checkpoint covers).
+
+        DataFileError unless they hash to ``digest`` (the checkpoint's): history.csv
+        belongs to another run, or was edited.
+        """
         path = self.history_path
-        if not path.exists():
-            if n_rows:
-                raise DataFileError(
-                    f"history {path} is missing but the checkpoint has {n_rows} trials"
-                )
-            self.start_history(columns)
-            return
-        lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+        try:
+            lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+        except FileNotFoundError:
+            raise DataFileError(
+                f"history {path} is missing but the checkpoint has {n_rows} trials"
+            ) from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise DataFileError(f"history {path} cannot be read: {exc}") from None
         if len(lines) < 1 + n_rows or lines[0].strip() != ",".join(columns):
             raise DataFileError(
                 f"history {path} has fewer rows than the checkpoint's {n_rows} trials "
                 "or another header"
             )
-        atomic_write_text(path, "".join(lines[: 1 + n_rows]))
+        kept = "".join(lines[: 1 + n_rows])
+        h = hashlib.sha256(kept.encode("utf-8"))
+        if h.hexdigest() != digest:
+            raise DataFileError(
+                f"history {path} does not belong to the run in {self.checkpoint_path} "
+                "(its rows differ from the checkpointed ones)"
+            )
+        if len(lines) > 1 + n_rows:
+            atomic_write_text(path, kept)
+        self._hash = h
+        self._open()
 
-    def open_history(self) -> TextIO:
-        """history.csv opened for appending rows (:func:`history_line`)."""
-        return self.history_path.open("a", encoding="utf-8", newline="")
+    def _open(self) -> None:
+        self._history = self.history_path.open("a", encoding="utf-8", newline="")
+
+    def append(self, record: TrialRecord) -> None:
+        """One row of history.csv (buffered; flushed at each checkpoint and at close)."""
+        line = history_line(record)
+        if self._history is not None:
+            self._history.write(line)
+        self._hash.update(line.encode("utf-8"))
+
+    def close_history(self) -> None:
+        if self._history is not None:
+            self._history.close()
+            self._history = None
 
     def read_history(self) -> History:
         return read_history(self.history_path)
@@ -210,6 +303,18 @@ class RunDir:
 
     def read_result(self) -> ResultFile:
         return read_result(self.result_path)
+
+    def check_result_run(self, run: str) -> None:
+        """DataFileError if a result.json in the folder belongs to another run than ``run``."""
+        if not self.result_path.exists():
+            return
+        data = read_json(self.result_path, what="result")
+        other = data.get("run_id") if isinstance(data, dict) else None
+        if other != run:
+            raise DataFileError(
+                f"result {self.result_path} belongs to another run ({other}) than the "
+                f"checkpoint ({run}); move it away to resume"
+            )
 
 
 def history_line(record: TrialRecord) -> str:

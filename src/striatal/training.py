@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from striatal.errors import ParameterError
+from striatal.errors import DataFileError, ParameterError
 from striatal.files import check_out_dir
 from striatal.learners import (
     History,
@@ -40,9 +40,16 @@ from striatal.params import (
 )
 from striatal.rollout import Trajectory
 from striatal.rollout import simulate as _simulate
-from striatal.rundir import RunDir, Setup, history_line, rule_columns, run_settings, setup_of
+from striatal.rundir import RunDir, Setup, rule_columns, run_id, run_settings, setup_of
 
-__all__ = ["DEFAULT_CHECKPOINT_EVERY", "Run", "initial_gains", "simulate", "train"]
+__all__ = [
+    "DEFAULT_CHECKPOINT_EVERY",
+    "RESUME_MAY_CHANGE",
+    "Run",
+    "initial_gains",
+    "simulate",
+    "train",
+]
 
 #: Trials between checkpoints when a run writes to a folder.
 DEFAULT_CHECKPOINT_EVERY = 50
@@ -70,6 +77,7 @@ class Run:
     settings: dict[str, Any]
     mean_policy_success: bool
     mean_policy_final_state: tuple[float, ...]
+    run_id: str = ""
     out: Path | None = None
 
     @property
@@ -98,6 +106,7 @@ class Run:
         payload["mean_policy_success"] = self.mean_policy_success
         payload["mean_policy_final_state"] = list(self.mean_policy_final_state)
         payload["positive_rewards"] = self.state.n_positive
+        payload["run_id"] = self.run_id
         return payload
 
 
@@ -141,18 +150,74 @@ def _fresh_setup(
     return settings, setup_of(settings, "the options")
 
 
+#: Options that may differ on resume: where the files go, how often to checkpoint,
+#: and a larger max_trials (to extend a run).
+RESUME_MAY_CHANGE = ("out", "checkpoint_every", "max_trials")
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _resume_changes(
+    settings: dict[str, Any], setup: Setup, state: LearnerState, given: dict[str, Any]
+) -> dict[str, Any]:
+    """The settings of a resumed run: ParameterError naming every given option that
+    differs from the checkpoint's (only a larger max_trials may)."""
+    have: dict[str, Any] = {
+        "learner": setup.config.learner,
+        "init": settings.get("init"),
+        "init_gains": tuple(setup.template.gains) if settings.get("init") == "gains" else None,
+        "theta_c0": setup.template.theta_c,
+        "seed": setup.seed,
+        "plant": setup.plant,
+        "sim": setup.sim,
+        "balance_sign": setup.template.balance_sign,
+        "switch": setup.template.switch,
+        "inhibition": setup.template.inhibition,
+        **setup.config.to_dict(),
+    }
+    differ = []
+    for name, value in given.items():
+        if name == "max_trials":
+            continue
+        if name not in have:
+            differ.append(f"{_flag(name)} (no such setting)")
+        elif name == "init_gains":
+            if have[name] is None or tuple(float(w) for w in value) != have[name]:
+                differ.append(f"{_flag(name)}")
+        elif value != have[name]:
+            differ.append(f"{_flag(name)} (the run has {have[name]!r})")
+    if differ:
+        raise ParameterError(
+            "--resume continues the run in its checkpoint; these options differ from it: "
+            + ", ".join(differ)
+            + " (only --max-trials may grow, --checkpoint-every may change)"
+        )
+    new = dict(settings)
+    if "max_trials" in given:
+        m = given["max_trials"]
+        if m < state.trials_done or m < setup.config.max_trials:
+            raise ParameterError(
+                f"--resume may only raise --max-trials (the run has "
+                f"{setup.config.max_trials}, {state.trials_done} done), got {m}"
+            )
+        new["config"] = {**settings["config"], "max_trials": m}
+    return new
+
+
 def train(
-    learner: str = "chapter",
+    learner: str | None = None,
     *,
-    init: str = "chapter",
+    init: str | None = None,
     init_gains: Sequence[float] | None = None,
-    theta_c0: float = CHAPTER_INITIAL_THETA_C,
-    seed: int = 0,
+    theta_c0: float | None = None,
+    seed: int | None = None,
     plant: Plant | None = None,
     sim: Simulation | None = None,
-    balance_sign: str = "corrected",
-    switch: str = "hard",
-    inhibition: float = 50.0,
+    balance_sign: str | None = None,
+    switch: str | None = None,
+    inhibition: float | None = None,
     out: str | Path | None = None,
     resume: bool = False,
     checkpoint_every: int = DEFAULT_CHECKPOINT_EVERY,
@@ -162,64 +227,114 @@ def train(
 ) -> Run:
     """Train a learner from W(0) until the success test holds or ``max_trials``.
 
-    ``learner``: a key of :data:`striatal.learners.RULES`; ``**options``: any
-    :class:`striatal.learners.LearnerConfig` field (``max_trials``, ``alpha``,
-    ``eligibility="chapter"``...), applied over the learner's tuned preset.
-    ``init``: "chapter" (W(0) of the chapter) or "random" (uniform in [-1, 1]^6
-    from ``seed``), unless ``init_gains`` gives W(0). With ``out`` the run writes
-    history.csv, checkpoint.json (every ``checkpoint_every`` trials) and
-    result.json there; ``resume=True`` continues the run checkpointed in ``out``
-    (the other arguments are then taken from its settings). ``on_trial`` is
-    called after each trial's row is recorded; ``should_stop`` is asked after it
-    (True: stop there, the result is ``interrupted``). Ctrl-C stops likewise.
+    ``learner``: a key of :data:`striatal.learners.RULES` (default "chapter");
+    ``**options``: any :class:`striatal.learners.LearnerConfig` field
+    (``max_trials``, ``alpha``, ``eligibility="chapter"``...), applied over the
+    learner's tuned preset. ``init``: "chapter" (W(0) of the chapter, the default)
+    or "random" (uniform in [-1, 1]^6 from ``seed``, default 0), unless
+    ``init_gains`` gives W(0); ``theta_c0`` default 0.6. ``plant``, ``sim`` and the
+    controller readings default to the chapter's. With ``out`` the run writes
+    history.csv, checkpoint.json (every ``checkpoint_every`` trials) and result.json
+    there, holding an exclusive lock on the folder; a fresh run first removes an
+    older run's checkpoint and result. ``resume=True`` continues the run
+    checkpointed in ``out``: every other argument given must equal the run's
+    (ParameterError naming those that differ), except a larger ``max_trials``.
+    ``on_trial`` is called after each trial's row is recorded; ``should_stop`` is
+    asked after it (True: stop there, the result is ``interrupted``). Ctrl-C
+    stops likewise.
     """
     if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, int):
         raise ParameterError(f"checkpoint_every must be a whole number, got {checkpoint_every!r}")
     if checkpoint_every < 1:
         raise ParameterError(f"--checkpoint-every must be >= 1, got {checkpoint_every}")
-    rundir = None
-    if out is not None:
-        rundir = RunDir(check_out_dir(out))
-    past = None
+    given = {
+        k: v
+        for k, v in {
+            "learner": learner,
+            "init": init,
+            "init_gains": init_gains,
+            "theta_c0": theta_c0,
+            "seed": seed,
+            "plant": plant,
+            "sim": sim,
+            "balance_sign": balance_sign,
+            "switch": switch,
+            "inhibition": inhibition,
+            **options,
+        }.items()
+        if v is not None
+    }
     if resume:
-        if rundir is None:
+        if out is None:
             raise ParameterError("--resume needs --out DIR holding a checkpoint")
-        settings, state = rundir.read_checkpoint()
-        setup = setup_of(settings, f"checkpoint {rundir.checkpoint_path}")
-        columns = rule_columns(setup.config)
-        rundir.keep_history(state.trials_done, columns)
-        past = rundir.read_history() if state.trials_done else None
-    else:
-        settings, setup = _fresh_setup(
-            learner,
-            init,
-            init_gains,
-            theta_c0,
-            seed,
-            plant,
-            sim,
-            {"balance_sign": balance_sign, "switch": switch, "inhibition": inhibition},
-            options,
+        rundir = RunDir(check_out_dir(out))
+        if not rundir.checkpoint_path.exists():
+            raise DataFileError(f"checkpoint {rundir.checkpoint_path} does not exist")
+        with rundir.lock():
+            run, settings, state, digest = rundir.read_checkpoint()
+            setup = setup_of(settings, f"checkpoint {rundir.checkpoint_path}")
+            settings = _resume_changes(settings, setup, state, given)
+            setup = setup_of(settings, f"checkpoint {rundir.checkpoint_path}")
+            rundir.check_result_run(run)
+            rundir.keep_history(state.trials_done, rule_columns(setup.config), digest)
+            past = rundir.read_history() if state.trials_done else None
+            return _run(
+                run, settings, setup, state, rundir, past, checkpoint_every, on_trial, should_stop
+            )
+    settings, setup = _fresh_setup(
+        learner or "chapter",
+        init or "chapter",
+        init_gains,
+        CHAPTER_INITIAL_THETA_C if theta_c0 is None else theta_c0,
+        0 if seed is None else seed,
+        plant,
+        sim,
+        {
+            "balance_sign": balance_sign or "corrected",
+            "switch": switch or "hard",
+            "inhibition": 50.0 if inhibition is None else inhibition,
+        },
+        options,
+    )
+    state = initial_state(setup.template.gains, setup.template.theta_c, setup.seed)
+    run = run_id(settings)
+    if out is None:
+        return _run(
+            run, settings, setup, state, None, None, checkpoint_every, on_trial, should_stop
         )
-        state = initial_state(setup.template.gains, setup.template.theta_c, setup.seed)
-        columns = rule_columns(setup.config)
-        if rundir is not None:
-            rundir.start_history(columns)
+    rundir = RunDir(check_out_dir(out))
+    with rundir.lock():
+        rundir.clear()
+        rundir.start_history(rule_columns(setup.config))
+        return _run(
+            run, settings, setup, state, rundir, None, checkpoint_every, on_trial, should_stop
+        )
+
+
+def _run(
+    run: str,
+    settings: dict[str, Any],
+    setup: Setup,
+    state: LearnerState,
+    rundir: RunDir | None,
+    past: History | None,
+    checkpoint_every: int,
+    on_trial: Callable[[LearnerState, TrialRecord], None] | None,
+    should_stop: Callable[[], bool] | None,
+) -> Run:
+    """The learning loop of :func:`train` with its files (``rundir``, set up and locked)."""
     config = setup.config
     records: list[TrialRecord] = []
     recorded = state  # the state after the last trial whose history row is written
-    history_file = rundir.open_history() if rundir is not None else None
 
     def checkpoint(s: LearnerState) -> None:
         if rundir is not None:
-            if history_file is not None:
-                history_file.flush()
-            rundir.write_checkpoint(settings, s)
+            rundir.write_checkpoint(run, settings, s)
 
     def record(s: LearnerState, rec: TrialRecord) -> None:
         nonlocal recorded
-        if history_file is not None:
-            history_file.write(history_line(rec))
+        if rundir is not None:
+            rundir.append(rec)
         records.append(rec)
         recorded = s
         if s.trials_done % checkpoint_every == 0:
@@ -241,31 +356,31 @@ def train(
             state=state,
             on_trial=record,
         )
+        if result.interrupted and result.state is not recorded:
+            # stopped between a trial's update and its history row: that trial is not kept
+            result = replace(
+                result,
+                success=recorded.success,
+                trials=recorded.trials_done,
+                W=recorded.W,
+                theta_c=recorded.theta_c,
+                state=recorded,
+            )
+        checkpoint(result.state)
     finally:
-        if history_file is not None:
-            history_file.flush()
-    if result.interrupted and result.state is not recorded:
-        # stopped between a trial's update and its history row: that trial is not kept
-        result = replace(
-            result,
-            success=recorded.success,
-            trials=recorded.trials_done,
-            W=recorded.W,
-            theta_c=recorded.theta_c,
-            state=recorded,
-        )
-    checkpoint(result.state)
-    if history_file is not None:
-        history_file.close()
-    reward_kind = config.reward
+        if rundir is not None:
+            rundir.close_history()
+    columns = rule_columns(config)
     history = (
-        past.plus(records) if past is not None else History.of(config.learner, records, reward_kind)
+        past.plus(records)
+        if past is not None
+        else History.of(config.learner, records, config.reward)
     )
     if not history.columns:
-        history = History(config.learner, columns, (), reward_kind)
+        history = History(config.learner, columns, (), config.reward)
     learned = setup.template.with_gains(result.W, result.theta_c)
     check = _simulate(setup.plant, learned, setup.sim).outcome
-    run = Run(
+    out = Run(
         success=result.success,
         trials=result.trials,
         W=result.W,
@@ -279,11 +394,12 @@ def train(
         settings=settings,
         mean_policy_success=check.success,
         mean_policy_final_state=tuple(check.final_state),
+        run_id=run,
         out=rundir.path if rundir is not None else None,
     )
     if rundir is not None:
-        rundir.write_result(run.to_dict())
-    return run
+        rundir.write_result(out.to_dict())
+    return out
 
 
 def simulate(

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from striatal.cli import options
 from striatal.errors import ParameterError
 from striatal.rundir import read_history
 
@@ -23,7 +24,9 @@ DESCRIPTION = (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("history", type=Path, help="history.csv of striatal train")
-    parser.add_argument("--out", type=Path, default=Path("curves.png"), help="PNG (or .pdf/.svg)")
+    parser.add_argument(
+        "--out", type=options.out_path, default=Path("curves.png"), help="PNG (or .pdf/.svg)"
+    )
     parser.add_argument("--window", type=int, default=50, help="trials in the running fractions")
     parser.add_argument("--dpi", type=int, default=120, help="resolution of a PNG")
 

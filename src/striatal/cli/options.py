@@ -22,6 +22,13 @@ from striatal.params import (
 from striatal.rundir import read_result
 
 
+def out_path(text: str) -> Path:
+    """The ``--out`` option type of every command: a path, never the empty string."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("--out must name a file or folder, got an empty string")
+    return Path(text)
+
+
 def add_plant_arguments(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("plant (section 2.1)")
     g.add_argument("--cart-mass", type=float, default=1.0, help="M [kg]")

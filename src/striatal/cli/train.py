@@ -17,7 +17,8 @@ from striatal.cli import EXIT_INTERRUPTED, learner_options, options
 from striatal.errors import ParameterError
 from striatal.files import check_out_dir, dumps_json
 from striatal.learners import LearnerState, TrialRecord, default_config
-from striatal.params import CHAPTER_INITIAL_THETA_C, Simulation
+from striatal.params import CHAPTER_INITIAL_THETA_C, Plant, Simulation
+from striatal.rundir import RunDir
 from striatal.training import DEFAULT_CHECKPOINT_EVERY, train
 
 COMMAND = "train"
@@ -56,7 +57,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     rg.add_argument("--duration", type=float, default=60.0, help="trial length T_f [s]")
     options.add_plant_arguments(parser)
     og = parser.add_argument_group("output")
-    og.add_argument("--out", type=Path, default=None, help="write result.json, history.csv here")
+    og.add_argument(
+        "--out", type=options.out_path, default=None, help="write result.json, history.csv here"
+    )
     og.add_argument("--json", action="store_true", help="print result.json on stdout")
     og.add_argument(
         "--checkpoint-every",
@@ -64,7 +67,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=DEFAULT_CHECKPOINT_EVERY,
         help="checkpoint every N trials (with --out)",
     )
-    og.add_argument("--resume", action="store_true", help="continue the run checkpointed in --out")
+    og.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the run checkpointed in --out; its settings come from the checkpoint: "
+        "other options given must equal them (refused otherwise), except a larger "
+        "--max-trials (extends the run) and --checkpoint-every",
+    )
     og.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -99,16 +108,53 @@ class _StopRequest:
             signal.signal(s, old)
 
 
+_PLANT = ("cart_mass", "pole_mass", "length", "gravity")
+_TRIAL = ("dt", "duration")
+_READINGS = ("balance_sign", "switch", "inhibition")
+_START = ("learner", "init", "init_gains", "theta_c0", "seed")
+
+
+def _explicit(args: argparse.Namespace) -> set[str]:
+    """The options given on the command line (those that differ from their defaults)."""
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    defaults = vars(parser.parse_args([]))
+    return {k for k, v in vars(args).items() if k in defaults and v != defaults[k]}
+
+
+def _train_arguments(args: argparse.Namespace) -> dict[str, Any]:
+    """Keyword arguments of :func:`striatal.train`: every option for a fresh run; on
+    ``--resume`` only those given, which train checks against the checkpoint."""
+    if not args.resume:
+        return {
+            **{k: getattr(args, k) for k in (*_START, *_READINGS)},
+            "plant": options.plant_from(args),
+            "sim": Simulation(duration=args.duration, dt=args.dt),
+            **learner_options.learner_changes(args),
+        }
+    given = _explicit(args)
+    kwargs: dict[str, Any] = {k: getattr(args, k) for k in (*_START, *_READINGS) if k in given}
+    kwargs.update(learner_options.learner_changes(args))
+    if given & {*_PLANT, *_TRIAL}:
+        # compare only the fields given: the rest are taken from the checkpoint
+        _, settings, _, _ = RunDir(args.out).read_checkpoint()
+        if given & set(_PLANT):
+            plant = dict(settings["plant"], **{k: getattr(args, k) for k in _PLANT if k in given})
+            kwargs["plant"] = Plant(**plant)
+        if given & set(_TRIAL):
+            trial = dict(settings["trial"], **{k: getattr(args, k) for k in _TRIAL if k in given})
+            kwargs["sim"] = Simulation(**trial)
+    return kwargs
+
+
 def run(args: argparse.Namespace) -> int:
     """A thin layer over :func:`striatal.train`: options in, progress bar, printout."""
     if args.out is not None:
         check_out_dir(args.out)
     if args.resume and args.out is None:
         raise ParameterError("--resume needs --out DIR holding a checkpoint")
-    options_ = {} if args.resume else learner_options.learner_changes(args)
-    plant = None if args.resume else options.plant_from(args)
-    sim = None if args.resume else Simulation(duration=args.duration, dt=args.dt)
-    max_trials = options_.get("max_trials") or default_config(args.learner).max_trials
+    kwargs = _train_arguments(args)
+    max_trials = kwargs.get("max_trials") or default_config(args.learner).max_trials
 
     from tqdm import tqdm
 
@@ -130,22 +176,12 @@ def run(args: argparse.Namespace) -> int:
     try:
         with stop:
             result = train(
-                args.learner,
-                init=args.init,
-                init_gains=args.init_gains,
-                theta_c0=args.theta_c0,
-                seed=args.seed,
-                plant=plant,
-                sim=sim,
-                balance_sign=args.balance_sign,
-                switch=args.switch,
-                inhibition=args.inhibition,
                 out=args.out,
                 resume=args.resume,
                 checkpoint_every=args.checkpoint_every,
                 on_trial=on_trial,
                 should_stop=lambda: stop.requested,
-                **options_,
+                **kwargs,
             )
     finally:
         bar.close()

@@ -10,6 +10,7 @@ history row and build the next state. :func:`learn` repeats it until success or
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -23,7 +24,7 @@ from striatal.learners.common import shaped_reward as shaped_reward
 from striatal.learners.config import LearnerConfig
 from striatal.learners.pgpe import PGPE
 from striatal.learners.rpe import RPE
-from striatal.learners.rule import Rule
+from striatal.learners.rule import Rule, Update
 from striatal.learners.state import LearnerState, TrainResult, TrialRecord
 from striatal.params import Controller, Plant, Simulation
 from striatal.rollout import Protocol, recorded_trial, run_trial
@@ -51,6 +52,21 @@ def check_config(config: LearnerConfig) -> LearnerConfig:
     """``config`` if its rule accepts it (ParameterError otherwise)."""
     rule_of(config).check(config)
     return config
+
+
+def _finite(update: Update, state: LearnerState) -> Update:
+    """``update``, or the parts of ``state`` it would replace by a non-finite number.
+
+    The rules keep non-finite numbers out themselves; this is the loop's backstop, so a
+    numerical fault never reaches a checkpoint, a history row or a result.
+    """
+    W = update.W if all(math.isfinite(w) for w in update.W) else state.W
+    theta_c = update.theta_c if math.isfinite(update.theta_c) else state.theta_c
+    old = dict(state.memory)
+    memory = tuple(
+        (k, v if all(math.isfinite(x) for x in v) else old.get(k, ())) for k, v in update.memory
+    )
+    return Update(W=W, theta_c=theta_c, memory=memory)
 
 
 def learning_step(
@@ -105,7 +121,7 @@ def learning_step(
                 )
                 for corner in jitter_corners(plant, config.plant_jitter)
             )
-    update = rule.update(state, config, plan, outcome, reward, success)
+    update = _finite(rule.update(state, config, plan, outcome, reward, success), state)
     record = TrialRecord(
         trial=state.trials_done + 1,
         reward=reward,
