@@ -6,6 +6,7 @@ import json
 import sys
 import types
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -238,6 +239,35 @@ def test_curves_cli(tmp_path: Path) -> None:
     assert main(["curves", str(h), "--out", str(out)]) == 0
     assert out.stat().st_size > 1000
     assert main(["curves", str(tmp_path / "missing.csv"), "--out", str(out)]) == 2
+
+
+def _labels(fig: Any) -> list[str]:
+    return [str(ln.get_label()) for ax in fig.axes for ln in ax.get_lines()]
+
+
+def test_learning_curves_label_each_learner_correctly(tmp_path: Path) -> None:
+    """pgpe: its exploration std, its shaped reward, no +10 panel; reward 0 is not '< 0'."""
+    import striatal
+
+    run = striatal.train(learner="pgpe", init="random", seed=0, max_trials=4, out=tmp_path / "p")
+    for h in (run.history, plots.read_history(tmp_path / "p" / "history.csv")):
+        assert h.learner == "pgpe" and h.reward_kind == "shaped"
+        fig = plots.learning_curves(h, window=2)
+        ax_r, _ax_w, _ax_c, ax_e, _ax_rate = fig.axes
+        titles = " ".join(ax.get_title() for ax in fig.axes) + fig.texts[0].get_text()
+        assert "exploration std s of pgpe" in ax_e.get_title() and "σ" not in titles
+        assert "+10" not in titles and "reward > 0" not in " ".join(_labels(fig))
+        assert ax_r.get_ylabel() == "shaped reward"
+        assert "W6 (unused)" in _labels(fig)
+        np.testing.assert_array_equal(ax_e.get_lines()[0].get_ydata(), np.ones(4))
+    sparse = plots.read_history(
+        _history_csv(tmp_path / "h.csv", [0.0, -5.0, 10.0], np.ones((3, 6)))
+    )
+    fig = plots.learning_curves(sparse, window=2)
+    by_label = {ln.get_label(): ln for ln in fig.axes[0].get_lines()}
+    assert list(by_label["reward 0"].get_ydata()) == [0.0]
+    assert list(by_label["reward < 0"].get_ydata()) == [-5.0]
+    assert fig.axes[3].get_title().startswith("policy std σ")
 
 
 # --------------------------------------------------------------------------- soft switch

@@ -21,6 +21,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
+from striatal.learners import History
+from striatal.rundir import read_history as read_history
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -361,58 +363,6 @@ def figure5(
 # --------------------------------------------------------------------------- curves
 
 
-HISTORY_NUMERIC = ("trial", "reward", "W1", "W2", "W3", "W4", "W5", "W6", "theta_c", "sigma")
-HISTORY_FLAGS = ("success", "fault", "early")
-
-
-@dataclass(frozen=True)
-class History:
-    """history.csv of ``striatal train`` as arrays; W (n, 6) are the gains USED in each trial."""
-
-    trial: np.ndarray
-    reward: np.ndarray
-    W: np.ndarray
-    theta_c: np.ndarray
-    sigma: np.ndarray
-    success: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.trial)
-
-
-def read_history(path: Path) -> History:
-    """Parse history.csv (header of striatal.learn.HISTORY_COLUMNS) or raise DataFileError."""
-    from striatal.files import read_csv
-
-    rows = read_csv(path, what="history")
-    if not rows:
-        raise DataFileError(f"history {path} has no trials")
-    missing = [c for c in (*HISTORY_NUMERIC, "success") if c not in rows[0]]
-    if missing:
-        raise DataFileError(f"history {path} lacks the column(s) {', '.join(missing)}")
-    cols: dict[str, list[float]] = {c: [] for c in (*HISTORY_NUMERIC, "success")}
-    for line, row in enumerate(rows, start=2):
-        for c in cols:
-            cell = row.get(c)
-            try:
-                v = float(cell)  # type: ignore[arg-type]
-            except (TypeError, ValueError):
-                raise DataFileError(
-                    f"history {path} line {line}: column {c} is not a number ({cell!r})"
-                ) from None
-            if not math.isfinite(v):
-                raise DataFileError(f"history {path} line {line}: column {c} is not finite")
-            cols[c].append(v)
-    return History(
-        trial=np.array(cols["trial"]),
-        reward=np.array(cols["reward"]),
-        W=np.array([cols[f"W{i}"] for i in range(1, 7)]).T,
-        theta_c=np.array(cols["theta_c"]),
-        sigma=np.array(cols["sigma"]),
-        success=np.array(cols["success"]) > 0.5,
-    )
-
-
 def running_mean(values: np.ndarray, window: int) -> np.ndarray:
     """Mean of the last ``window`` values at each index (fewer at the start)."""
     v = np.asarray(values, dtype=float)
@@ -422,29 +372,54 @@ def running_mean(values: np.ndarray, window: int) -> np.ndarray:
     return (c[i] - c[lo]) / (i - lo)
 
 
-def learning_curves(history: History, *, window: int = 50, title: str | None = None) -> Figure:
-    """Reward per trial with running rates, the six gains, theta_c and sigma over trials.
+#: Panel of each learner-specific history column: (y label, title).
+RULE_PANELS = {
+    "sigma": ("σ [m/s²]", "policy std σ = 0.1 + sigmoid(W6) of eq 5 (per step)"),
+    "explore": ("s (W1..W5)", "parameter-exploration std s of pgpe (per trial)"),
+}
 
-    Axes (in ``fig.axes`` order): reward, gains, theta_c, sigma, then the twin axis of
-    the running rates (fraction of +10 rewards, fraction passing the success test).
+
+def learning_curves(history: History, *, window: int = 50, title: str | None = None) -> Figure:
+    """Reward per trial with running rates, the six gains, theta_c and the learner's own columns.
+
+    Axes (in ``fig.axes`` order): reward, gains, theta_c, one per learner column
+    (sigma for chapter and rpe, explore for pgpe: :data:`RULE_PANELS`), then the
+    twin axis of the running rates. The sparse reward (eqs 24-25) is drawn as +10,
+    0 and -5 with the running fraction of +10; the shaped reward as its values and
+    running mean. W1..W5 are what the controller acted with (pgpe: the mean of its
+    exploration), W6 sets the per-step sigma (not used by pgpe).
     """
     if window < 1:
         raise ParameterError(f"window must be >= 1, got {window}")
-    fig = _figure(11.0, 10.0)
-    ax_r, ax_w, ax_c, ax_s = fig.subplots(4, 1, sharex=True, height_ratios=[1.0, 1.4, 0.8, 0.8])
+    extra = [c for c in history.rule_columns if c in RULE_PANELS]
+    fig = _figure(11.0, 7.6 + 1.2 * len(extra))
+    axes = fig.subplots(
+        3 + len(extra), 1, sharex=True, height_ratios=[1.0, 1.4, 0.8] + [0.8] * len(extra)
+    )
+    ax_r, ax_w, ax_c = axes[0], axes[1], axes[2]
     n = history.trial
-    pos = history.reward > 0
-    ax_r.plot(n[pos], history.reward[pos], ".", color="tab:green", ms=3, label="reward > 0")
-    ax_r.plot(n[~pos], history.reward[~pos], ".", color="tab:red", ms=3, label="reward < 0")
-    ax_r.set_ylabel("reward (eqs 24-25)")
+    reward = history.reward
+    success = history.success
+    sparse = history.reward_kind == "sparse"
+    ax_rate = ax_r.twinx()
+    if sparse:
+        pos, zero, neg = reward > 0, reward == 0, reward < 0
+        ax_r.plot(n[pos], reward[pos], ".", color="tab:green", ms=3, label="reward > 0")
+        if zero.any():
+            ax_r.plot(n[zero], reward[zero], ".", color="0.5", ms=3, label="reward 0")
+        ax_r.plot(n[neg], reward[neg], ".", color="tab:red", ms=3, label="reward < 0")
+        ax_r.set_ylabel("reward (eqs 24-25)")
+        ax_rate.plot(n, running_mean(pos, window), color="tab:green", lw=1.2, label="fraction > 0")
+    else:
+        ax_r.plot(n, reward, ".", color="tab:blue", ms=3, label="shaped reward")
+        ax_r.plot(n, running_mean(reward, window), color="tab:blue", lw=1.0, label="running mean")
+        ax_r.set_ylabel("shaped reward")
     ax_r.set_title(
         f"reward per trial; running fractions over the last {window} trials", fontsize=10
     )
-    ax_rate = ax_r.twinx()
-    ax_rate.plot(n, running_mean(pos, window), color="tab:green", lw=1.2, label="fraction +10")
     ax_rate.plot(
         n,
-        running_mean(history.success, window),
+        running_mean(success, window),
         color="black",
         lw=1.2,
         label="fraction passing success test",
@@ -457,8 +432,11 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
         h1 + h2, l1 + l2, loc="upper left", bbox_to_anchor=(1.07, 1.0), fontsize=8, frameon=False
     )
 
+    W = history.W
+    w6_unused = "explore" in history.rule_columns  # pgpe acts with the mean policy
     for i in range(6):
-        ax_w.plot(n, history.W[:, i], lw=1.0, label=f"W{i + 1}")
+        label = f"W{i + 1}" + (" (unused)" if i == 5 and w6_unused else "")
+        ax_w.plot(n, W[:, i], lw=1.0, label=label)
     ax_w.axhline(0.0, color="0.6", lw=0.5)
     ax_w.set_ylabel("gain (used in the trial)")
     ax_w.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
@@ -466,14 +444,17 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
     ax_c.plot(n, history.theta_c, color="tab:purple", lw=1.0)
     ax_c.set_ylabel("θ_c [rad]")
     ax_c.set_title("switching threshold (eq 21)", fontsize=10)
-    ax_s.plot(n, history.sigma, color="tab:brown", lw=1.0)
-    ax_s.set_ylabel("σ [m/s²]")
-    ax_s.set_title("exploration σ = 0.1 + sigmoid(W6)", fontsize=10)
-    ax_s.set_xlabel("trial")
+    for ax, name in zip(axes[3:], extra, strict=True):
+        label, panel_title = RULE_PANELS[name]
+        ax.plot(n, history.column(name), color="tab:brown", lw=1.0)
+        ax.set_ylabel(label)
+        ax.set_title(panel_title, fontsize=10)
+    axes[-1].set_xlabel("trial")
+    counted = f"{int((reward > 0).sum())} with reward > 0, " if sparse else ""
     fig.suptitle(
         title
-        or f"Learning curves: {len(history)} trials, {int(pos.sum())} with reward +10, "
-        f"{int(history.success.sum())} passing the success test",
+        or f"Learning curves ({history.learner}): {len(history)} trials, {counted}"
+        f"{int(success.sum())} passing the success test",
         fontsize=11,
     )
     return fig
