@@ -371,6 +371,11 @@ def read_history(path: str | Path, *, learner: str | None = None) -> History:
                 raise DataFileError(f"history {p} line {line}: column {c} is not finite")
             values.append(v)
         out.append(tuple(values))
+    if settings is None and "reward" in columns:
+        # no settings beside it: the sparse reward takes only the values of eqs 24-25
+        i = columns.index("reward")
+        if any(r[i] not in (10.0, 0.0, -5.0) for r in out):
+            reward_kind = "shaped"
     return History(learner=learner, columns=columns, rows=tuple(out), reward_kind=reward_kind)
 
 

@@ -154,12 +154,19 @@ class TrialRecord:
         ]
 
 
+def _cell(v: Any) -> float:
+    """A history value as history.csv gives it back: non-finite numbers become NaN."""
+    x = float(v)
+    return x if math.isfinite(x) else math.nan
+
+
 @dataclass(frozen=True)
 class History:
     """A run's history, one row per trial (in memory, or read from history.csv).
 
     ``columns``: the header (:func:`history_columns` of the learner's own columns);
-    ``rows``: the numbers (NaN where history.csv holds an empty cell).
+    ``rows``: the numbers; NaN where history.csv holds an empty cell (a non-finite
+    value, e.g. min_abs_theta_swingup of a trial that never swung up).
     """
 
     learner: str
@@ -209,7 +216,7 @@ class History:
     ) -> History:
         """The history of in-memory records (all of one learner)."""
         columns = records[0].columns if records else ()
-        rows = tuple(tuple(float(v) for v in r.row()) for r in records)
+        rows = tuple(tuple(_cell(v) for v in r.row()) for r in records)
         return cls(learner=learner, columns=columns, rows=rows, reward_kind=reward_kind)
 
     def plus(self, records: Sequence[TrialRecord]) -> History:
