@@ -87,6 +87,7 @@ class BenchConfig:
     sweep_max_trials: int | None = None
     memory_runs: int = 0
     memory_max_trials: int = 20
+    anchors: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.seconds) and self.seconds > 0):
@@ -550,6 +551,7 @@ class BenchReport:
     sweep_memory: dict[str, Any] | None
     not_measured: dict[str, str]
     total_seconds: float
+    anchors: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -564,11 +566,29 @@ class BenchReport:
             "sweep_memory": self.sweep_memory,
             "not_measured": self.not_measured,
             "total_seconds": self.total_seconds,
+            "anchors": self.anchors,
         }
 
 
+def load_anchors() -> Any:
+    """benchmarks/anchors.py (gymnax and EnvPool anchors), imported from this folder."""
+    import importlib.util
+
+    name = "striatal_benchmarks_anchors"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, HERE / "anchors.py")
+        if spec is None or spec.loader is None:
+            raise ParameterError(f"cannot import {HERE / 'anchors.py'}")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return sys.modules[name]
+
+
 def run_all(config: BenchConfig, seed: int = 0) -> BenchReport:
-    """Every measurement in one process, in the order compile, 1, 2, 4, 3."""
+    """Every measurement in one process, in the order compile, 1, 2, 4, 3, anchors."""
+    if config.anchors:
+        load_anchors().check_installed()  # before anything is timed
     t_start = time.perf_counter()
     rng = np.random.default_rng(seed)
     here = first_calls(rng)
@@ -588,7 +608,10 @@ def run_all(config: BenchConfig, seed: int = 0) -> BenchReport:
     memory = (
         sweep_memory(config.memory_runs, config.memory_max_trials) if config.memory_runs else None
     )
+    anchors = load_anchors().measure(config, rng, compare, Comparison) if config.anchors else None
     not_measured: dict[str, str] = {}
+    if anchors is None:
+        not_measured["anchors"] = "skipped (no --anchors)"
     if train is None:
         not_measured["train"] = "skipped (--no-train)"
     if sweep is None:
@@ -607,6 +630,7 @@ def run_all(config: BenchConfig, seed: int = 0) -> BenchReport:
         sweep_memory=memory,
         not_measured=not_measured,
         total_seconds=time.perf_counter() - t_start,
+        anchors=anchors,
     )
 
 
@@ -684,6 +708,17 @@ def format_report(report: BenchReport) -> str:
             lines.append(
                 f"memory: `{r['command']}` {r['runs']} runs, peak RSS {r['peak_rss_mib']:.0f} MiB"
             )
+    if report.anchors is not None:
+        for key, comp in report.anchors.items():
+            if key == "versions":
+                continue
+            lines.append(
+                f"anchor {key}: {comp['kernel']['best_steps_per_second']:,.0f} steps/s vs "
+                f"{comp['reference']['best_steps_per_second']:,.0f} steps/s = "
+                f"{comp['ratio']:.1f}x (median {comp['median_ratio']:.1f}x)"
+            )
+            lines.append(f"  kernel:    {comp['kernel']['name']}")
+            lines.append(f"  reference: {comp['reference']['name']}")
     for name, why in report.not_measured.items():
         lines.append(f"not measured: {name}: {why}")
     lines.append(f"total {report.total_seconds:.1f} s")
