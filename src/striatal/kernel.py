@@ -825,12 +825,15 @@ def _lockstep_block(
 ) -> None:
     """Trials lo..hi-1 of :func:`run_trials_lockstep`, advanced step by step together.
 
-    The block always has LOCKSTEP_BLOCK lanes (a compile-time size, so the loops over
-    lanes vectorise without run-time alias checks); lanes past hi - lo are idle copies
-    of the first trial, inactive from the start.
+    The state array always has LOCKSTEP_BLOCK lanes (a compile-time row stride, so the
+    loops over lanes vectorise without run-time alias checks); the loops step the
+    trials rounded up to a multiple of 4, the extra lanes idle copies of the first
+    trial, inactive from the start.
     """
-    L = LOCKSTEP_BLOCK
     n = hi - lo
+    # lanes actually stepped: the trials rounded up to a multiple of 4 (one AVX2
+    # vector); the array keeps LOCKSTEP_BLOCK lanes so its row stride is a constant
+    L = min(LOCKSTEP_BLOCK, (n + 3) // 4 * 4)
     S = np.zeros((_N_FIELDS, LOCKSTEP_BLOCK))
     status = np.full(LOCKSTEP_BLOCK, STATUS_RUNNING)
     end_step = np.full(LOCKSTEP_BLOCK, protocol.n_steps)
