@@ -8,11 +8,12 @@ What is measured (``striatal bench``; the table is docs/performance.md):
    ``np.random.Generator`` each trial, against Gymnasium's ``CartPole-v1`` step loop
    (``gymnasium.make("CartPole-v1").unwrapped``: Euler physics only, a fixed action,
    reset on termination).
-2. ``batch_vs_gymnasium_vector``: :func:`striatal.kernel.run_trials_batch` (Numba
-   ``prange`` over trials, all cores) against Gymnasium's ``CartPoleVectorEnv`` (NumPy
-   over the batch, autoreset) at the same batch size. Steps are env-steps summed over
-   the batch. The kernel does four derivative evaluations per step (RK4), the
-   reference one (Euler).
+2. ``batch_vs_gymnasium_vector``: :func:`striatal.kernel.run_trials_lockstep` (blocks
+   of 64 trials advancing in lockstep, vectorised over trials, blocks over all cores)
+   against Gymnasium's ``CartPoleVectorEnv`` (NumPy over the batch, autoreset) at the
+   same batch size, and against :func:`striatal.kernel.run_trials_batch` (``prange``
+   over scalar trials). Steps are env-steps summed over the batch. The kernel does
+   four derivative evaluations per step (RK4), the reference one (Euler).
 3. ``train``: wall seconds of ``striatal train --init chapter`` (a fresh process).
 4. ``scaling``: seconds per trial against n_steps = duration / dt, with a least-squares
    line (slope [s/step], intercept [s], R^2).
@@ -86,6 +87,7 @@ class BenchConfig:
     sweep_max_trials: int | None = None
     memory_runs: int = 0
     memory_max_trials: int = 20
+    anchors: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.seconds) and self.seconds > 0):
@@ -255,7 +257,7 @@ def scalar_vs_gymnasium(config: BenchConfig, rng: np.random.Generator) -> Compar
     return Comparison(
         kernel=k,
         reference=r,
-        target_ratio=50.0,
+        target_ratio=75.0,
         notes=(
             f"one {config.duration:g}-s trial = {setup.n_steps} RK4 steps per call, chapter final "
             "W and theta_c, stochastic policy; drawing its noise from np.random.Generator is "
@@ -266,7 +268,11 @@ def scalar_vs_gymnasium(config: BenchConfig, rng: np.random.Generator) -> Compar
 
 
 def batch_vs_gymnasium_vector(config: BenchConfig, rng: np.random.Generator) -> Comparison:
-    """Item 2: run_trials_batch vs CartPoleVectorEnv at the same batch size."""
+    """Item 2: run_trials_lockstep vs CartPoleVectorEnv at the same batch size.
+
+    ``extra`` also has the lockstep kernel against run_trials_batch (prange over
+    scalar trials, the previous batch kernel), timed alternately in the same way.
+    """
     import numba
     from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
@@ -278,24 +284,36 @@ def batch_vs_gymnasium_vector(config: BenchConfig, rng: np.random.Generator) -> 
     actions = np.ones(B, dtype=np.int64)
     block = setup.n_steps
     k, r = compare(
-        f"kernel.run_trials_batch (B={B}) + rng.standard_normal",
+        f"kernel.run_trials_lockstep (B={B}) + rng.standard_normal",
         lambda: run_batch_trials(setup, B, rng, outs),
         f"gymnasium CartPoleVectorEnv (num_envs={B})",
         lambda: gymnasium_vector_steps(env, actions, block),
         config,
     )
     env.close()
+    lk, pk = compare(
+        f"kernel.run_trials_lockstep (B={B}) + rng.standard_normal",
+        lambda: run_batch_trials(setup, B, rng, outs),
+        f"kernel.run_trials_batch (B={B}, prange over scalar trials) + rng.standard_normal",
+        lambda: run_batch_trials(setup, B, rng, outs, lockstep=False),
+        config,
+    )
+    versus_prange = Comparison(kernel=lk, reference=pk, target_ratio=3.0)
     return Comparison(
         kernel=k,
         reference=r,
-        target_ratio=1.0,
+        target_ratio=12.0,
         notes=(
             "steps = env-steps summed over the batch; the kernel does 4 derivative "
             "evaluations per step (RK4), the reference 1 (Euler); kernel noise generation "
-            "timed (one thread); kernel parallel over trials with "
+            "timed (one thread); kernel blocks of 64 trials parallel over "
             f"{numba.get_num_threads()} Numba threads"
         ),
-        extra={"batch_size": B, "numba_threads": numba.get_num_threads()},
+        extra={
+            "batch_size": B,
+            "numba_threads": numba.get_num_threads(),
+            "lockstep_vs_prange": versus_prange.to_dict(),
+        },
     )
 
 
@@ -533,6 +551,7 @@ class BenchReport:
     sweep_memory: dict[str, Any] | None
     not_measured: dict[str, str]
     total_seconds: float
+    anchors: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -547,11 +566,29 @@ class BenchReport:
             "sweep_memory": self.sweep_memory,
             "not_measured": self.not_measured,
             "total_seconds": self.total_seconds,
+            "anchors": self.anchors,
         }
 
 
+def load_anchors() -> Any:
+    """benchmarks/anchors.py (gymnax and EnvPool anchors), imported from this folder."""
+    import importlib.util
+
+    name = "striatal_benchmarks_anchors"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, HERE / "anchors.py")
+        if spec is None or spec.loader is None:
+            raise ParameterError(f"cannot import {HERE / 'anchors.py'}")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return sys.modules[name]
+
+
 def run_all(config: BenchConfig, seed: int = 0) -> BenchReport:
-    """Every measurement in one process, in the order compile, 1, 2, 4, 3."""
+    """Every measurement in one process, in the order compile, 1, 2, 4, 3, anchors."""
+    if config.anchors:
+        load_anchors().check_installed()  # before anything is timed
     t_start = time.perf_counter()
     rng = np.random.default_rng(seed)
     here = first_calls(rng)
@@ -571,7 +608,10 @@ def run_all(config: BenchConfig, seed: int = 0) -> BenchReport:
     memory = (
         sweep_memory(config.memory_runs, config.memory_max_trials) if config.memory_runs else None
     )
+    anchors = load_anchors().measure(config, rng, compare, Comparison) if config.anchors else None
     not_measured: dict[str, str] = {}
+    if anchors is None:
+        not_measured["anchors"] = "skipped (no --anchors)"
     if train is None:
         not_measured["train"] = "skipped (--no-train)"
     if sweep is None:
@@ -590,6 +630,7 @@ def run_all(config: BenchConfig, seed: int = 0) -> BenchReport:
         sweep_memory=memory,
         not_measured=not_measured,
         total_seconds=time.perf_counter() - t_start,
+        anchors=anchors,
     )
 
 
@@ -605,7 +646,7 @@ def format_report(report: BenchReport) -> str:
     second = report.compile["second_process"]
     lines.append(
         "compile/warm-up (excluded from all rates): first run_trial "
-        f"{here['first_run_trial_seconds']:.3f} s, first run_trials_batch "
+        f"{here['first_run_trial_seconds']:.3f} s, first run_trials_lockstep "
         f"{here['first_run_trials_batch_seconds']:.3f} s "
         f"({'compile included' if here['compile_included'] else 'loaded from cache'}); "
         f"second process {second['first_run_trial_seconds']:.3f} s + "
@@ -616,7 +657,7 @@ def format_report(report: BenchReport) -> str:
     if cold is not None:
         lines.append(
             "cold start (empty Numba cache, compile included): first run_trial "
-            f"{cold['first_run_trial_seconds']:.2f} s, first run_trials_batch "
+            f"{cold['first_run_trial_seconds']:.2f} s, first run_trials_lockstep "
             f"{cold['first_run_trials_batch_seconds']:.2f} s"
         )
     for key, comp in (
@@ -630,6 +671,12 @@ def format_report(report: BenchReport) -> str:
         )
         lines.append(f"  kernel:    {comp.kernel.name}")
         lines.append(f"  reference: {comp.reference.name}")
+    vp = report.batch_vs_gymnasium_vector.extra["lockstep_vs_prange"]
+    lines.append(
+        f"lockstep_vs_prange: {vp['kernel']['best_steps_per_second']:,.0f} steps/s vs "
+        f"{vp['reference']['best_steps_per_second']:,.0f} steps/s = {vp['ratio']:.1f}x "
+        f"(median {vp['median_ratio']:.1f}x; target >= {vp['target_ratio']:g}x)"
+    )
     fit = report.scaling["fit"]
     lines.append(
         f"scaling: time per trial = {fit['intercept'] * 1e6:.1f} us + "
@@ -661,6 +708,17 @@ def format_report(report: BenchReport) -> str:
             lines.append(
                 f"memory: `{r['command']}` {r['runs']} runs, peak RSS {r['peak_rss_mib']:.0f} MiB"
             )
+    if report.anchors is not None:
+        for key, comp in report.anchors.items():
+            if key == "versions":
+                continue
+            lines.append(
+                f"anchor {key}: {comp['kernel']['best_steps_per_second']:,.0f} steps/s vs "
+                f"{comp['reference']['best_steps_per_second']:,.0f} steps/s = "
+                f"{comp['ratio']:.1f}x (median {comp['median_ratio']:.1f}x)"
+            )
+            lines.append(f"  kernel:    {comp['kernel']['name']}")
+            lines.append(f"  reference: {comp['reference']['name']}")
     for name, why in report.not_measured.items():
         lines.append(f"not measured: {name}: {why}")
     lines.append(f"total {report.total_seconds:.1f} s")

@@ -154,6 +154,24 @@ def test_harness_outside_a_checkout_is_one_clear_line(
     assert err.count("\n") == 1 and "benchmarks/harness.py" in err
 
 
+def test_anchors_without_the_extra_is_one_clear_line(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--anchors without jax/gymnax/envpool: what to install, one line, exit 2, nothing run."""
+    import importlib.util
+
+    real = importlib.util.find_spec
+
+    def no_envpool(name: str, *args: object) -> object:
+        return None if name == "envpool" else real(name, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(importlib.util, "find_spec", no_envpool)
+    assert main(["bench", "--quick", "--anchors"]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1 and "pip install -e '.[bench]'" in captured.err
+    assert "envpool" in captured.err and captured.out == ""
+
+
 def test_cli_bad_batch_size_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["bench", "--quick", "--batch-size", "0"]) == 2
     err = capsys.readouterr().err

@@ -50,7 +50,10 @@ def test_eligibilities_equal_rescaled_finite_difference_score(
 
 
 def test_chapter_printed_e1_differs_from_the_score(plant: Plant) -> None:
-    """NOTES section 2: the printed e1 is the derivative of neither sign of the mean."""
+    """The printed e1 is the derivative of neither sign of the mean.
+
+    Reading: docs/paper-notes.md section 2.
+    """
     c = Controller()
     s = np.array([0.1, 0.2, 0.3, 0.4])
     W = np.array(c.gains)

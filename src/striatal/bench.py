@@ -87,8 +87,13 @@ def run_batch_trials(
     outs: np.ndarray,
     *,
     stochastic: bool = True,
+    lockstep: bool = True,
 ) -> int:
-    """``batch_size`` stochastic trials on all cores, noise drawn here; returns steps run."""
+    """``batch_size`` stochastic trials on all cores, noise drawn here; returns steps run.
+
+    ``lockstep``: :func:`striatal.kernel.run_trials_lockstep` (vectorised over trials);
+    else :func:`striatal.kernel.run_trials_batch` (one scalar trial per core at a time).
+    """
     B = batch_size
     noise = rng.standard_normal((B, setup.n_steps)) if stochastic else np.empty((B, 0))
     args = rollout.batch_args(
@@ -101,14 +106,15 @@ def run_batch_trials(
         noise=noise,
         gamma=TRACE_GAMMA,
     )
-    kernel.run_trials_batch(*args[:-1], outs)
+    run = kernel.run_trials_lockstep if lockstep else kernel.run_trials_batch
+    run(*args[:-1], outs)
     return int(outs[:, kernel.OUT_END_STEP].sum())
 
 
 def cache_misses() -> int:
-    """Numba on-disk cache misses (compilations) of the two trial kernels in this process."""
+    """Numba on-disk cache misses (compilations) of the trial kernels in this process."""
     total = 0
-    for fn in (kernel.run_trial, kernel.run_trials_batch):
+    for fn in (kernel.run_trial, kernel.run_trials_batch, kernel.run_trials_lockstep):
         total += sum(fn.stats.cache_misses.values())
     return total
 

@@ -61,6 +61,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="peak memory of a sweep of this many runs on one worker, trials capped at 20 "
         "(0: skip; the docs use 1000)",
     )
+    parser.add_argument(
+        "--anchors",
+        action="store_true",
+        help="also time gymnax CartPole-v1 (1 env and the batch size) and EnvPool CartPole-v1 "
+        "and DMC CartpoleSwingup-v1 beside the kernel (needs the [bench] extra)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed of the policy noise")
 
 
@@ -75,6 +81,7 @@ def config_from(args: argparse.Namespace, harness: ModuleType) -> Any:
         train=base.train and not args.no_train,
         sweep_seeds=args.sweep_seeds,
         memory_runs=args.memory_runs,
+        anchors=args.anchors,
     )
 
 
