@@ -132,10 +132,12 @@ def usage_error(
     *,
     process: bool = False,
     prepare: Callable[[Path], None] | None = None,
+    says: str = "",
 ) -> Callable[[Path], tuple[bool, str]]:
     """Expect exit 2, nothing on stdout, one line on stderr, no traceback, no file touched.
 
-    ``OUT`` in argv stands for a fresh folder under the test's tmp dir.
+    ``OUT`` in argv stands for a fresh folder under the test's tmp dir; ``says``, when
+    given, must appear in the line (the error names the real problem).
     """
 
     def run(tmp: Path) -> tuple[bool, str]:
@@ -151,12 +153,24 @@ def usage_error(
             r.rc == 2 and r.out == "" and len(lines) == 1 and "Traceback" not in r.err and untouched
         )
         line = one_line(r.err).replace(str(out), "OUT")
+        ok = ok and says in line
         # where and why the JSON parser stopped depends on the file's layout, not on striatal
         line = re.sub(r"\(truncated or corrupted\?\): .*", "(truncated or corrupted?): ...", line)
         if "Traceback" in r.err:
             return ok, f"exit {r.rc}, a Python traceback ending `{line}`"
         written = "nothing written" if untouched else "FILES CHANGED"
         return ok, f"exit {r.rc}, {len(lines)} line: `{line}`; {written}"
+
+    return run
+
+
+def runs(argv: tuple[str, ...], says: str) -> Callable[[Path], tuple[bool, str]]:
+    """Expect exit 0 and ``says`` in what is printed."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        r = cli_in_process(*argv)
+        line = next((s for s in r.out.splitlines() if says in s), one_line(r.err or r.out))
+        return r.rc == 0 and says in r.out, f"exit {r.rc}: `{line}`"
 
     return run
 
@@ -814,6 +828,21 @@ SCENARIOS: tuple[Scenario, ...] = (
     S("figure-random", "bad file", "`striatal figure --result FILE`, FILE 600 random bytes",
       "exit 2, one line", usage_error(("figure", "--result", "OUT/result.json", "--out",
                                        "OUT/f.png"), prepare=_random_result)),
+    # ---- negative values (issue 16, item 19): read as values, never as options
+    S("neg-exponent", "bad input", "`striatal simulate --gains 1 -2e-1 0 0 0 0 --theta-c 0.5 "
+      "--duration 5`", "runs (-2e-1 is W2, not an option)",
+      runs(("simulate", "--gains", "1", "-2e-1", "0", "0", "0", "0", "--theta-c", "0.5",
+            "--duration", "5"), "success: ")),
+    S("neg-inf", "bad input", "`striatal simulate --x0 -inf`",
+      "exit 2, one line naming x0 (not \"expected one argument\")",
+      usage_error(("simulate", "--x0", "-inf", "--out", "OUT"), says="x0 must be")),
+    S("neg-nan", "bad input", "`striatal simulate --theta0 -nan`",
+      "exit 2, one line naming theta0",
+      usage_error(("simulate", "--theta0", "-nan", "--out", "OUT"), says="theta0 must be")),
+    S("neg-list", "bad input", "`striatal sweep --alpha-grid -1,2`",
+      "exit 2, one line naming alpha (-1,2 is the grid, not an option)",
+      usage_error(("sweep", "--alpha-grid", "-1,2", "--seeds", "1", "--out", "OUT"),
+                  says="alpha must be")),
     # ---- the library's typed errors
     S("lib-seed", "bad input", "`learn.initial_state(CHAPTER_INITIAL_W, 0.6, seed=-1)`",
       "ParameterError",

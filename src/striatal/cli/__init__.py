@@ -11,10 +11,11 @@ import argparse
 import importlib
 import os
 import pkgutil
+import re
 import sys
 from collections.abc import Sequence
 from types import ModuleType
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from striatal.errors import StriatalError
 
@@ -24,8 +25,23 @@ EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141
 
 
+_NUMBER = r"(?:(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?|inf(?:inity)?|nan)"
+#: A value, not an option: a negative number as ``float`` reads it (``-2e-1``, ``-.5``,
+#: ``-inf``, ``-nan``) or a comma-separated list starting with one (``-1,2``).
+NEGATIVE_VALUE = re.compile(rf"^-{_NUMBER}(?:\s*,\s*[-+]?{_NUMBER})*$", re.IGNORECASE)
+
+
 class OneLineParser(argparse.ArgumentParser):
-    """argparse that reports a usage error as one line on stderr and exits 2."""
+    """argparse that reports a usage error as one line on stderr and exits 2.
+
+    Every command's parser is one of these, so a negative value reads as a value
+    everywhere: argparse's own test knows only ``-1`` and ``-1.5`` and takes
+    ``-2e-1``, ``-inf`` or ``-1,2`` for an unknown option.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_VALUE
 
     def error(self, message: str) -> NoReturn:
         sys.stderr.write(f"{self.prog}: error: {message}\n")
