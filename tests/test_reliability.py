@@ -101,6 +101,19 @@ def cli_process(*argv: str) -> Ran:
     return Ran(r.returncode, r.stdout, r.stderr)
 
 
+def cli_process_env(env: dict[str, str], *argv: str) -> Ran:
+    """:func:`cli_process` with ``env`` added to the environment; output read as bytes."""
+    r = subprocess.run(
+        [sys.executable, "-m", "striatal", *argv],
+        capture_output=True,
+        timeout=300,
+        env={**os.environ, **env},
+        preexec_fn=_default_sigint,
+    )
+    decode = env.get("PYTHONIOENCODING", "utf-8")
+    return Ran(r.returncode, r.stdout.decode(decode), r.stderr.decode(decode))
+
+
 def snapshot(folder: Path) -> dict[str, bytes]:
     if not folder.exists():
         return {}
@@ -171,6 +184,18 @@ def runs(argv: tuple[str, ...], says: str) -> Callable[[Path], tuple[bool, str]]
         r = cli_in_process(*argv)
         line = next((s for s in r.out.splitlines() if says in s), one_line(r.err or r.out))
         return r.rc == 0 and says in r.out, f"exit {r.rc}: `{line}`"
+
+    return run
+
+
+def non_utf8_stdout(encoding: str) -> Callable[[Path], tuple[bool, str]]:
+    """``striatal interpret`` prints theta as a Greek letter; a stdout that cannot hold it."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        r = cli_process_env({"PYTHONIOENCODING": encoding}, "interpret", "--chapter-final")
+        line = next((s for s in r.out.splitlines() if s.startswith("mu_1")), "")
+        ok = r.rc == 0 and r.err == "" and "\\u03b8" in line
+        return ok, f"exit {r.rc}, stderr {'empty' if not r.err else repr(one_line(r.err))}; `{line}`"
 
     return run
 
@@ -485,6 +510,32 @@ def sweep_reference(tmp: Path) -> dict[str, Any]:
             "runs": _runs_without_wall(ref / "runs.csv"),
         }
     return _REFERENCE["sweep"]
+
+
+def interrupt_at_start(delays: tuple[float, ...]) -> Callable[[Path], tuple[bool, str]]:
+    """SIGINT ``delay`` seconds after ``python -m striatal train ...`` starts: while the
+    interpreter, NumPy, Numba and the kernels load (about 1.5 s), or just after."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        seen = []
+        for delay in delays:
+            proc = subprocess.Popen(
+                [sys.executable, "-m", "striatal", "train", *TRAIN_LONG],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.PIPE,
+                text=True,
+                preexec_fn=_default_sigint,
+            )
+            time.sleep(delay)
+            proc.send_signal(signal.SIGINT)
+            _, err = proc.communicate(timeout=120)
+            seen.append((delay, proc.returncode, "Traceback" in err))
+        ok = all(rc == 130 and not tb for _, rc, tb in seen)
+        return ok, "; ".join(
+            f"after {d:g} s: exit {rc}{', a traceback' if tb else ''}" for d, rc, tb in seen
+        )
+
+    return run
 
 
 def interrupted_sweep(sig: signal.Signals) -> Callable[[Path], tuple[bool, str]]:
@@ -843,6 +894,11 @@ SCENARIOS: tuple[Scenario, ...] = (
       "exit 2, one line naming alpha (-1,2 is the grid, not an option)",
       usage_error(("sweep", "--alpha-grid", "-1,2", "--seeds", "1", "--out", "OUT"),
                   says="alpha must be")),
+    # ---- a stdout that is not UTF-8 (issue 16, item 13)
+    S("latin-1", "bad input", "`PYTHONIOENCODING=latin-1 striatal interpret --chapter-final`",
+      "exit 0; what latin-1 cannot hold printed as an escape", non_utf8_stdout("latin-1")),
+    S("ascii", "bad input", "`PYTHONIOENCODING=ascii striatal interpret --chapter-final`",
+      "exit 0; what ASCII cannot hold printed as an escape", non_utf8_stdout("ascii")),
     # ---- the library's typed errors
     S("lib-seed", "bad input", "`learn.initial_state(CHAPTER_INITIAL_W, 0.6, seed=-1)`",
       "ParameterError",
@@ -928,6 +984,10 @@ INTERRUPTIONS: tuple[Scenario, ...] = (
     S("determinism", "interruption",
       "`striatal train --seed 3 --max-trials 200` in two processes, and with `--seed 6`",
       "same seed, same files; another seed, another run", same_seed_same_run),
+    S("int-start", "interruption",
+      f"`striatal train {' '.join(TRAIN_LONG)}`, SIGINT (Ctrl-C) 0.15, 0.3, 0.6, 1 and 1.5 s "
+      "after it starts (while the libraries load)", "exit 130, no traceback",
+      interrupt_at_start((0.15, 0.3, 0.6, 1.0, 1.5))),
     S("broken-pipe", "interruption",
       "`striatal simulate --chapter-final` writing into a pipe whose reader has gone "
       "(as `| head` does)", "no traceback", broken_pipe),

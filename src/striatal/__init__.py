@@ -2,28 +2,92 @@
 
 The physics, the controllers and the learning step exist once, in
 :mod:`striatal.kernel`; everything else is a front end to it.
+
+The names below are loaded on first use (PEP 562), so that ``import striatal``
+costs milliseconds and the command line can start, and be interrupted with
+Ctrl-C, before NumPy and Numba load (docs/reliability.md).
 """
 
 from __future__ import annotations
 
-from striatal.params import (
-    CHAPTER_FINAL_THETA_C,
-    CHAPTER_FINAL_W,
-    CHAPTER_INITIAL_THETA_C,
-    CHAPTER_INITIAL_W,
-    Controller,
-    Plant,
-    Simulation,
-    SuccessTest,
-)
-from striatal.rollout import Protocol, Trajectory, TrialOutcome, run_trial, simulate
+import importlib
+import importlib.util
+import sys
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+    from importlib.machinery import ModuleSpec
+    from types import ModuleType
 
 __version__ = "0.1.0"
 
-# Gymnasium id striatal/CartPoleSwingUp-v0 (and its vector entry point); idempotent.
-from striatal.envs import register_envs as _register_envs
+_FROM = {
+    "CHAPTER_FINAL_THETA_C": "striatal.params",
+    "CHAPTER_FINAL_W": "striatal.params",
+    "CHAPTER_INITIAL_THETA_C": "striatal.params",
+    "CHAPTER_INITIAL_W": "striatal.params",
+    "Controller": "striatal.params",
+    "Plant": "striatal.params",
+    "Simulation": "striatal.params",
+    "SuccessTest": "striatal.params",
+    "Protocol": "striatal.rollout",
+    "Trajectory": "striatal.rollout",
+    "TrialOutcome": "striatal.rollout",
+    "run_trial": "striatal.rollout",
+    "simulate": "striatal.rollout",
+}
 
-_register_envs()
+
+def __getattr__(name: str) -> Any:
+    if name in _FROM:
+        value = getattr(importlib.import_module(_FROM[name]), name)
+        globals()[name] = value
+        return value
+    if importlib.util.find_spec(f"{__name__}.{name}") is not None:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_FROM})
+
+
+def _register_env() -> None:
+    from striatal.envs import register_envs
+
+    register_envs()
+
+
+class _RegisterAfterGymnasium:
+    """Registers the Gymnasium env id as soon as Gymnasium is imported, then steps aside."""
+
+    def find_spec(
+        self, fullname: str, path: Sequence[str] | None, target: ModuleType | None = None
+    ) -> ModuleSpec | None:
+        if fullname != "gymnasium":
+            return None
+        if self in sys.meta_path:
+            sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(fullname)
+        if spec is None or spec.loader is None:
+            return spec
+        exec_module = spec.loader.exec_module
+
+        def exec_then_register(module: ModuleType) -> None:
+            exec_module(module)
+            _register_env()
+
+        spec.loader.exec_module = exec_then_register  # type: ignore[method-assign]
+        return spec
+
+
+# ``import striatal`` registers the Gymnasium id striatal/CartPoleSwingUp-v0 (and its
+# vector entry point): now if Gymnasium is loaded, else the moment it is.
+if "gymnasium" in sys.modules:
+    _register_env()
+elif not any(isinstance(f, _RegisterAfterGymnasium) for f in sys.meta_path):
+    sys.meta_path.insert(0, _RegisterAfterGymnasium())
 
 __all__ = [
     "CHAPTER_FINAL_THETA_C",

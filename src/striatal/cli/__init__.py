@@ -79,10 +79,31 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def tolerate_any_encoding() -> None:
+    """Make stdout and stderr print what they cannot encode as an escape, not raise.
+
+    Under ``PYTHONIOENCODING=latin-1`` or an ASCII locale a theta or a minus sign would
+    otherwise stop a command with UnicodeEncodeError; every command prints through these.
+    """
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None and (stream.encoding or "").lower() not in ("utf-8", "utf8"):
+            reconfigure(errors="backslashreplace")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``striatal`` and ``python -m striatal``; returns the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Entry point of ``striatal`` and ``python -m striatal``; returns the exit code.
+
+    Ctrl-C at any point, while the libraries load too (they load here, when the
+    parser imports the commands, not when ``striatal.cli`` is imported), exits 130
+    without a traceback.
+    """
+    tolerate_any_encoding()
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+    except KeyboardInterrupt:
+        return EXIT_INTERRUPTED
     try:
         return int(args._run(args))
     except StriatalError as exc:
