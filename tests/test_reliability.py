@@ -195,7 +195,8 @@ def non_utf8_stdout(encoding: str) -> Callable[[Path], tuple[bool, str]]:
         r = cli_process_env({"PYTHONIOENCODING": encoding}, "interpret", "--chapter-final")
         line = next((s for s in r.out.splitlines() if s.startswith("mu_1")), "")
         ok = r.rc == 0 and r.err == "" and "\\u03b8" in line
-        return ok, f"exit {r.rc}, stderr {'empty' if not r.err else repr(one_line(r.err))}; `{line}`"
+        err = "empty" if not r.err else repr(one_line(r.err))
+        return ok, f"exit {r.rc}, stderr {err}; `{line}`"
 
     return run
 
