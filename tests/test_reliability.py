@@ -239,6 +239,24 @@ def _random_result(out: Path) -> None:
     _random_bytes(out / "result.json")
 
 
+def _fifo(out: Path) -> None:
+    out.mkdir(parents=True)
+    os.mkfifo(out / "result.json")
+
+
+def _folder_result(out: Path) -> None:
+    (out / "result.json").mkdir(parents=True)
+
+
+def _huge_result(out: Path) -> None:
+    """A sparse file one byte over the limit: refused by its size, never read."""
+    from striatal.files import MAX_INPUT_BYTES
+
+    out.mkdir(parents=True)
+    with (out / "result.json").open("wb") as fh:
+        fh.truncate(MAX_INPUT_BYTES + 1)
+
+
 def _random_history(out: Path) -> None:
     out.mkdir(parents=True)
     _random_bytes(out / "history.csv")
@@ -900,6 +918,24 @@ SCENARIOS: tuple[Scenario, ...] = (
       "exit 0; what latin-1 cannot hold printed as an escape", non_utf8_stdout("latin-1")),
     S("ascii", "bad input", "`PYTHONIOENCODING=ascii striatal interpret --chapter-final`",
       "exit 0; what ASCII cannot hold printed as an escape", non_utf8_stdout("ascii")),
+    # ---- inputs that are not regular files, or too big (issue 16, item 14)
+    S("read-dev-zero", "bad file", "`striatal simulate --result /dev/zero`",
+      "exit 2, one line, nothing read",
+      usage_error(("simulate", "--result", "/dev/zero"), process=True, says="not a regular")),
+    S("curves-dev-zero", "bad file", "`striatal curves /dev/zero`",
+      "exit 2, one line, nothing read",
+      usage_error(("curves", "/dev/zero", "--out", "OUT/c.png"), says="not a regular")),
+    S("read-fifo", "bad file", "`striatal simulate --result FIFO` (no writer: a read would "
+      "wait for ever)", "exit 2, one line, no hang",
+      usage_error(("simulate", "--result", "OUT/result.json"), process=True, prepare=_fifo,
+                  says="not a regular")),
+    S("read-folder", "bad file", "`striatal figure --result DIR` where DIR is a folder",
+      "exit 2, one line", usage_error(("figure", "--result", "OUT/result.json", "--out",
+                                       "OUT/f.png"), prepare=_folder_result, says="folder")),
+    S("read-huge", "bad file", "`striatal interpret FILE`, FILE 256 MiB + 1 byte",
+      "exit 2, one line, nothing read",
+      usage_error(("interpret", "OUT/result.json"), prepare=_huge_result,
+                  says="larger than 256 MiB")),
     # ---- the library's typed errors
     S("lib-seed", "bad input", "`learn.initial_state(CHAPTER_INITIAL_W, 0.6, seed=-1)`",
       "ParameterError",

@@ -11,6 +11,7 @@ import io
 import json
 import math
 import os
+import stat
 import tempfile
 from collections.abc import Iterable, Sequence
 from pathlib import Path
@@ -94,15 +95,54 @@ def _finite_float(token: str) -> float:
     return v
 
 
-def read_json(path: str | os.PathLike[str], *, what: str = "file") -> Any:
-    """Read a JSON file or raise DataFileError naming the file and the problem."""
+#: Largest file striatal reads as input [bytes]: 256 MiB. Its own files are far smaller
+#: (history.csv of 100,000 trials: about 25 MB); anything bigger is not one of them.
+MAX_INPUT_BYTES = 256 * 2**20
+
+
+def read_text(path: str | os.PathLike[str], *, what: str = "file") -> str:
+    """The UTF-8 text of a regular file of at most :data:`MAX_INPUT_BYTES`.
+
+    Every JSON and CSV input goes through here. A folder, a device (``/dev/zero``),
+    a FIFO or a socket, or a file that is too big, raises DataFileError before a
+    byte is read: none can hang or exhaust memory.
+    """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        st = os.stat(p)  # stat, unlike open, does not wait for a FIFO's writer
+        if stat.S_ISDIR(st.st_mode):
+            raise DataFileError(f"{what} {p} is a folder, not a file")
+        _check_regular(p, st, what)
+        # O_NONBLOCK: if a FIFO took the file's place since the stat, open does not wait
+        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK)
+        with os.fdopen(fd, "rb") as fh:
+            _check_regular(p, os.fstat(fh.fileno()), what)
+            data = fh.read(MAX_INPUT_BYTES + 1)
+        _check_size(p, len(data), what)
+        return data.decode("utf-8")
     except FileNotFoundError:
         raise DataFileError(f"{what} {p} does not exist") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise DataFileError(f"{what} {p} cannot be read: {exc}") from None
+
+
+def _check_regular(p: Path, st: os.stat_result, what: str) -> None:
+    if not stat.S_ISREG(st.st_mode):
+        raise DataFileError(f"{what} {p} is not a regular file (a device, FIFO or socket?)")
+    _check_size(p, st.st_size, what)
+
+
+def _check_size(p: Path, size: int, what: str) -> None:
+    if size > MAX_INPUT_BYTES:
+        raise DataFileError(
+            f"{what} {p} is larger than {MAX_INPUT_BYTES // 2**20} MiB, the most striatal reads"
+        )
+
+
+def read_json(path: str | os.PathLike[str], *, what: str = "file") -> Any:
+    """Read a JSON file (through :func:`read_text`) or raise DataFileError naming it."""
+    p = Path(path)
+    text = read_text(p, what=what)
     try:
         return json.loads(text, parse_constant=_reject_constant, parse_float=_finite_float)
     except json.JSONDecodeError as exc:
@@ -138,13 +178,10 @@ def write_csv(
 
 
 def read_csv(path: str | os.PathLike[str], *, what: str = "file") -> list[dict[str, str]]:
-    """Read a CSV file with a header into dicts, or raise DataFileError."""
+    """Read a CSV file (through :func:`read_text`) with a header into dicts."""
     p = Path(path)
+    text = read_text(p, what=what)
     try:
-        with p.open(encoding="utf-8", newline="") as fh:
-            rows = list(csv.DictReader(fh))
-    except FileNotFoundError:
-        raise DataFileError(f"{what} {p} does not exist") from None
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        return list(csv.DictReader(io.StringIO(text, newline="")))
+    except csv.Error as exc:
         raise DataFileError(f"{what} {p} cannot be read as CSV: {exc}") from None
-    return rows
