@@ -146,11 +146,13 @@ def usage_error(
     process: bool = False,
     prepare: Callable[[Path], None] | None = None,
     says: str = "",
+    untouched_too: bool = True,
 ) -> Callable[[Path], tuple[bool, str]]:
     """Expect exit 2, nothing on stdout, one line on stderr, no traceback, no file touched.
 
     ``OUT`` in argv stands for a fresh folder under the test's tmp dir; ``says``, when
     given, must appear in the line (the error names the real problem).
+    ``untouched_too=False``: only the message is checked, not the files.
     """
 
     def run(tmp: Path) -> tuple[bool, str]:
@@ -162,6 +164,7 @@ def usage_error(
         r = cli_process(*args) if process else cli_in_process(*args)
         lines = r.err.strip().splitlines()
         untouched = snapshot(out) == before and (prepare is not None or not out.exists())
+        untouched = untouched or not untouched_too
         ok = (
             r.rc == 2 and r.out == "" and len(lines) == 1 and "Traceback" not in r.err and untouched
         )
@@ -255,6 +258,18 @@ def _huge_result(out: Path) -> None:
     out.mkdir(parents=True)
     with (out / "result.json").open("wb") as fh:
         fh.truncate(MAX_INPUT_BYTES + 1)
+
+
+def _dangling(out: Path) -> None:
+    out.mkdir(parents=True)
+    (out / "link").symlink_to(out / "nowhere" / "x")
+
+
+def _folder_at(name: str) -> Callable[[Path], None]:
+    def prepare(out: Path) -> None:
+        (out / name).mkdir(parents=True)
+
+    return prepare
 
 
 def _random_history(out: Path) -> None:
@@ -936,6 +951,28 @@ SCENARIOS: tuple[Scenario, ...] = (
       "exit 2, one line, nothing read",
       usage_error(("interpret", "OUT/result.json"), prepare=_huge_result,
                   says="larger than 256 MiB")),
+    # ---- outputs that cannot be written, said before computing (issue 16, item 18)
+    S("out-dangling-sim", "bad file", "`striatal simulate --out LINK`, LINK a symbolic link "
+      "to a path that does not exist", "exit 2, one line naming the link, before the run",
+      usage_error(("simulate", "--out", "OUT/link"), prepare=_dangling, says="symbolic link")),
+    S("out-dangling-train", "bad file", "`striatal train --out LINK/run`, LINK as above",
+      "exit 2, one line naming the link, before the run",
+      usage_error(("train", "--max-trials", "2", "--out", "OUT/link/run"), prepare=_dangling,
+                  says="symbolic link")),
+    S("out-dangling-figure", "bad file", "`striatal figure --out LINK/f.png`, LINK as above",
+      "exit 2, one line naming the link, before the run",
+      usage_error(("figure", "--out", "OUT/link/f.png"), prepare=_dangling,
+                  says="symbolic link")),
+    S("result-is-folder", "bad file", "`striatal train --out DIR`, DIR/result.json a folder",
+      "exit 2, one line naming result.json (not a hidden temporary file)",
+      usage_error(("train", "--max-trials", "2", "--out", "OUT"),
+                  prepare=_folder_at("result.json"), untouched_too=False,
+                  says="cannot write OUT/result.json: it is a folder")),
+    S("summary-is-folder", "bad file", "`striatal simulate --out DIR`, DIR/summary.json a "
+      "folder", "exit 2, one line naming summary.json, before the run; nothing written",
+      usage_error(("simulate", "--duration", "5", "--out", "OUT"),
+                  prepare=_folder_at("summary.json"),
+                  says="cannot write OUT/summary.json: it is a folder")),
     # ---- the library's typed errors
     S("lib-seed", "bad input", "`learn.initial_state(CHAPTER_INITIAL_W, 0.6, seed=-1)`",
       "ParameterError",

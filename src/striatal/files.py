@@ -20,14 +20,19 @@ from typing import Any
 from striatal.errors import DataFileError
 
 
-def check_out_dir(path: str | os.PathLike[str]) -> Path:
+def check_out_dir(path: str | os.PathLike[str], files: Sequence[str] = ()) -> Path:
     """``path`` as a Path if it is, or can be made, a writable folder; creates nothing.
 
-    Raises DataFileError otherwise, so a command can refuse before it computes.
+    ``files``: the names the command will write there; none may be a folder. Raises
+    DataFileError otherwise, so a command can refuse before it computes.
     """
     p = Path(path)
+    check_no_dangling_link(p)
     if p.exists() and not p.is_dir():
         raise DataFileError(f"output folder {p} exists and is not a folder")
+    for name in files:
+        if (p / name).is_dir():
+            raise DataFileError(f"cannot write {p / name}: it is a folder")
     probe = p
     while not probe.exists() and probe != probe.parent:
         probe = probe.parent
@@ -38,12 +43,38 @@ def check_out_dir(path: str | os.PathLike[str]) -> Path:
     return p
 
 
+def check_no_dangling_link(path: str | os.PathLike[str]) -> None:
+    """Raise DataFileError if ``path`` or a folder above it is a link to nothing.
+
+    Such a path cannot be created (mkdir says "File exists"), so a command checks it
+    before it computes, not after.
+    """
+    p = Path(path)
+    for probe in (p, *p.parents):
+        if probe.is_symlink() and not probe.exists():
+            raise DataFileError(
+                f"output {p}: {probe} is a symbolic link to {os.readlink(probe)}, "
+                "which does not exist"
+            )
+
+
+def replace_into(tmp: str | os.PathLike[str], target: Path) -> None:
+    """``os.replace(tmp, target)``; an error names ``target``, never the hidden ``tmp``."""
+    if target.is_dir():
+        raise DataFileError(f"cannot write {target}: it is a folder")
+    try:
+        os.replace(tmp, target)
+    except OSError as exc:
+        raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
+
+
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` to ``path`` atomically (temp file + fsync + rename).
 
     A folder that cannot be made or written raises DataFileError.
     """
     target = Path(path)
+    check_no_dangling_link(target.parent)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
@@ -54,7 +85,7 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
             fh.write(text)
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, target)
+        replace_into(tmp, target)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)

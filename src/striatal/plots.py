@@ -52,7 +52,10 @@ def _figure(width: float, height: float) -> Figure:
 
 def _atomic(path: Path, write: Callable[[Path], None]) -> None:
     """Call ``write(tmp)`` on a temp file beside ``path``, then rename it onto ``path``."""
+    from striatal.files import check_no_dangling_link, replace_into
+
     target = Path(path)
+    check_no_dangling_link(target.parent)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp_name = tempfile.mkstemp(
@@ -68,7 +71,7 @@ def _atomic(path: Path, write: Callable[[Path], None]) -> None:
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, target)
+        replace_into(tmp, target)
     except BaseException:
         if tmp.exists():
             tmp.unlink()

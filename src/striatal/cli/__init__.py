@@ -14,10 +14,12 @@ import pkgutil
 import re
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from types import ModuleType
 from typing import Any, NoReturn
 
 from striatal.errors import StriatalError
+from striatal.files import check_no_dangling_link
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
@@ -105,6 +107,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
     try:
+        out = getattr(args, "out", None)
+        if isinstance(out, str | os.PathLike) and str(out):
+            # every --out (a folder or a file): a link to nothing above it can never be
+            # written, so say so now rather than after the computation
+            check_no_dangling_link(Path(out).parent)
         return int(args._run(args))
     except StriatalError as exc:
         sys.stderr.write(f"striatal {args.command}: error: {exc}\n")

@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     controller, plant = options.controller_and_plant(args)
     sim = options.simulation_from(args)
     if args.out is not None:
-        check_out_dir(args.out)
+        check_out_dir(args.out, files=("trajectory.csv", "summary.json"))
     traj = simulate(plant, controller, sim)
     result = summary(traj, settings_of(args, traj))
     if args.out is not None:
