@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
+from striatal.limits import count_of_steps
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -30,6 +31,10 @@ if TYPE_CHECKING:
 
 #: The chapter: "each motion snapshot was recorded in every 0.2 second" (section 3).
 SNAPSHOT_EVERY = 0.2
+#: Most stick figures one Figure 5 draws, and most frames one animation holds
+#: (memory and file size); both counts are checked before anything is allocated.
+MAX_SNAPSHOTS = 10_000
+MAX_FRAMES = 5_000
 #: Horizontal drift of the snapshot strip of Figure 5's top panel [m/s]: snapshot k is
 #: drawn at x(t_k) + DRIFT t_k so that successive stick figures do not overlap.
 DRIFT = 0.5
@@ -111,7 +116,9 @@ def snapshot_indices(traj: Trajectory, every: float = SNAPSHOT_EVERY) -> np.ndar
         raise ParameterError(f"snapshot interval must be > 0 s, got {every}")
     dt = traj.sim.dt
     t_end = float(traj.t[-1])
-    n = int(math.floor(t_end / every + 1e-9)) + 1
+    n = count_of_steps(
+        t_end, every, cap=MAX_SNAPSHOTS, what="snapshots", fix="raise the snapshot interval"
+    )
     idx = np.rint(np.arange(n) * every / dt).astype(int)
     return idx[idx < len(traj.t)]
 
@@ -479,13 +486,17 @@ def switch_figure(theta_c: float, gammas: Sequence[float], *, theta_max: float =
 
 def frame_times(t_end: float, fps: float, speed: float) -> np.ndarray:
     """Simulation times [s] shown by an animation at ``fps`` frames per second of video
-    that runs ``speed`` times faster than the simulation: 0, speed/fps, ... <= t_end."""
+    that runs ``speed`` times faster than the simulation: 0, speed/fps, ... <= t_end.
+
+    At most :data:`MAX_FRAMES`, checked before the array is built."""
     if not (math.isfinite(fps) and fps > 0):
         raise ParameterError(f"fps must be > 0, got {fps}")
     if not (math.isfinite(speed) and speed > 0):
         raise ParameterError(f"speed must be > 0, got {speed}")
     step = speed / fps
-    n = int(math.floor(t_end / step + 1e-9)) + 1
+    n = count_of_steps(
+        t_end, step, cap=MAX_FRAMES, what="frames", fix="raise the speed or lower the fps"
+    )
     return np.arange(n) * step
 
 
