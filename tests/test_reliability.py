@@ -204,6 +204,41 @@ def non_utf8_stdout(encoding: str) -> Callable[[Path], tuple[bool, str]]:
     return run
 
 
+def _peak_rss_mb(*argv: str) -> tuple[int, float]:
+    """(exit code, peak resident memory [MB]) of ``python -m striatal ARGV`` alone."""
+    probe = (
+        "import resource, subprocess, sys; "
+        "r = subprocess.run([sys.executable, '-m', 'striatal', *sys.argv[1:]], "
+        "stdout=subprocess.DEVNULL); "
+        "print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)"
+    )
+    r = subprocess.run(
+        [sys.executable, "-c", probe, *argv], capture_output=True, text=True, timeout=600
+    )
+    rc, kib = r.stdout.split()
+    return int(rc), int(kib) / 1024
+
+
+STREAM_STEPS = 200_000
+
+
+def streamed_trajectory(tmp: Path) -> tuple[bool, str]:
+    """Writing trajectory.csv adds little memory: rows are formatted a chunk at a time.
+
+    Before, the whole trajectory became Python lists and one string first (about
+    600 bytes a step: 6 GB at the 10,000,000-step limit).
+    """
+    run = ("simulate", "--duration", str(STREAM_STEPS // 10), "--dt", "0.1")
+    rc0, without = _peak_rss_mb(*run)
+    rc1, with_out = _peak_rss_mb(*run, "--out", str(tmp / "OUT"))
+    extra = with_out - without
+    ok = rc0 == rc1 == 0 and extra < 40
+    return ok, (
+        f"exit {rc1}; peak memory {with_out:.0f} MB with --out, {without:.0f} MB without: "
+        f"writing {STREAM_STEPS:,} rows adds {extra:.0f} MB"
+    )
+
+
 def library_error(
     make: Callable[[Path], object], error: type[StriatalError]
 ) -> Callable[[Path], tuple[bool, str]]:
@@ -989,6 +1024,10 @@ SCENARIOS: tuple[Scenario, ...] = (
     S("bench-seconds", "bad input", "`striatal bench --seconds 1e308`",
       "exit 2, one line (no OverflowError)",
       usage_error(("bench", "--seconds", "1e308"), says="--seconds")),
+    # ---- memory (issue 16, item 15)
+    S("sim-stream", "bad input", f"`striatal simulate --duration {STREAM_STEPS // 10} --dt 0.1 "
+      f"--out DIR` ({STREAM_STEPS:,} steps), peak memory with and without --out",
+      "trajectory.csv streamed: writing adds < 40 MB", streamed_trajectory),
     # ---- the library's typed errors
     S("lib-seed", "bad input", "`learn.initial_state(CHAPTER_INITIAL_W, 0.6, seed=-1)`",
       "ParameterError",
