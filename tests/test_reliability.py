@@ -233,10 +233,8 @@ def streamed_trajectory(tmp: Path) -> tuple[bool, str]:
     rc1, with_out = _peak_rss_mb(*run, "--out", str(tmp / "OUT"))
     extra = with_out - without
     ok = rc0 == rc1 == 0 and extra < 40
-    return ok, (
-        f"exit {rc1}; peak memory {with_out:.0f} MB with --out, {without:.0f} MB without: "
-        f"writing {STREAM_STEPS:,} rows adds {extra:.0f} MB"
-    )
+    # the megabytes vary from machine to machine; the table states the bound
+    return ok, f"exit {rc1}; writing {STREAM_STEPS:,} rows adds < 40 MB: {'yes' if ok else 'no'}"
 
 
 def library_error(
