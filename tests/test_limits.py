@@ -161,3 +161,25 @@ def test_streamed_csv_is_the_same_bytes(tmp_path: Path) -> None:
     text = (tmp_path / "a.csv").read_text()
     assert text == csv_text(("a", "b", "c"), data.tolist())
     assert [float(v) for v in text.splitlines()[1].split(",")] == data[0].tolist()
+
+
+# ---- start-up
+
+
+def test_import_striatal_is_light_and_still_registers_the_env() -> None:
+    """``import striatal`` loads neither NumPy nor Numba (so Ctrl-C at start-up lands in
+    ``main``'s guard), yet Gymnasium imported after it knows the env id, and the
+    package's names still resolve."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, striatal, striatal.cli; "
+        "heavy = sorted(m for m in ('numpy', 'numba', 'gymnasium', 'matplotlib') "
+        "if m in sys.modules); "
+        "import gymnasium; "
+        "print(heavy, 'striatal/CartPoleSwingUp-v0' in gymnasium.envs.registry, "
+        "striatal.Plant().length, striatal.kernel.__name__)"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert r.stdout.split() == ["[]", "True", "1.0", "striatal.kernel"]
