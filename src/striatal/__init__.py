@@ -13,12 +13,15 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import sys
-from typing import TYPE_CHECKING, Any
 
+# not ``typing.TYPE_CHECKING``: importing typing (and re) would widen the start-up
+# window in which Ctrl-C cannot be caught yet
+TYPE_CHECKING = False
 if TYPE_CHECKING:
     from collections.abc import Sequence
     from importlib.machinery import ModuleSpec
     from types import ModuleType
+    from typing import Any
 
 __version__ = "0.1.0"
 
