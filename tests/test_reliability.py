@@ -163,8 +163,8 @@ def usage_error(
         args = tuple(a.replace("OUT", str(out)) if a.startswith("OUT") else a for a in argv)
         r = cli_process(*args) if process else cli_in_process(*args)
         lines = r.err.strip().splitlines()
-        untouched = snapshot(out) == before and (prepare is not None or not out.exists())
-        untouched = untouched or not untouched_too
+        same = snapshot(out) == before and (prepare is not None or not out.exists())
+        untouched = same or not untouched_too
         ok = (
             r.rc == 2 and r.out == "" and len(lines) == 1 and "Traceback" not in r.err and untouched
         )
@@ -174,7 +174,9 @@ def usage_error(
         line = re.sub(r"\(truncated or corrupted\?\): .*", "(truncated or corrupted?): ...", line)
         if "Traceback" in r.err:
             return ok, f"exit {r.rc}, a Python traceback ending `{line}`"
-        written = "nothing written" if untouched else "FILES CHANGED"
+        written = (
+            "nothing written" if same else "files not checked" if untouched else "FILES CHANGED"
+        )
         return ok, f"exit {r.rc}, {len(lines)} line: `{line}`; {written}"
 
     return run
