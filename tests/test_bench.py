@@ -172,10 +172,14 @@ def test_anchors_without_the_extra_is_one_clear_line(
     assert "envpool" in captured.err and captured.out == ""
 
 
-def test_cli_bad_batch_size_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["bench", "--quick", "--batch-size", "0"]) == 2
+@pytest.mark.parametrize("size", ["0", "100000000"])
+def test_cli_bad_batch_size_exits_2(size: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """Refused by the parser (cli.guards), before anything is allocated."""
+    with pytest.raises(SystemExit) as exc:
+        main(["bench", "--quick", "--batch-size", size])
+    assert exc.value.code == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "batch size" in err
+    assert err.count("\n") == 1 and "--batch-size" in err
 
 
 def test_bench_quick_json_reports_positive_finite_figures(

@@ -102,6 +102,19 @@ def cli_process(*argv: str) -> Ran:
     return Ran(r.returncode, r.stdout, r.stderr)
 
 
+def cli_process_env(env: dict[str, str], *argv: str) -> Ran:
+    """:func:`cli_process` with ``env`` added to the environment; output read as bytes."""
+    r = subprocess.run(
+        [sys.executable, "-m", "striatal", *argv],
+        capture_output=True,
+        timeout=300,
+        env={**os.environ, **env},
+        preexec_fn=_default_sigint,
+    )
+    decode = env.get("PYTHONIOENCODING", "utf-8")
+    return Ran(r.returncode, r.stdout.decode(decode), r.stderr.decode(decode))
+
+
 def snapshot(folder: Path) -> dict[str, bytes]:
     if not folder.exists():
         return {}
@@ -133,10 +146,14 @@ def usage_error(
     *,
     process: bool = False,
     prepare: Callable[[Path], None] | None = None,
+    says: str = "",
+    untouched_too: bool = True,
 ) -> Callable[[Path], tuple[bool, str]]:
     """Expect exit 2, nothing on stdout, one line on stderr, no traceback, no file touched.
 
-    ``OUT`` in argv stands for a fresh folder under the test's tmp dir.
+    ``OUT`` in argv stands for a fresh folder under the test's tmp dir; ``says``, when
+    given, must appear in the line (the error names the real problem).
+    ``untouched_too=False``: only the message is checked, not the files.
     """
 
     def run(tmp: Path) -> tuple[bool, str]:
@@ -147,19 +164,80 @@ def usage_error(
         args = tuple(a.replace("OUT", str(out)) if a.startswith("OUT") else a for a in argv)
         r = cli_process(*args) if process else cli_in_process(*args)
         lines = r.err.strip().splitlines()
-        untouched = snapshot(out) == before and (prepare is not None or not out.exists())
+        same = snapshot(out) == before and (prepare is not None or not out.exists())
+        untouched = same or not untouched_too
         ok = (
             r.rc == 2 and r.out == "" and len(lines) == 1 and "Traceback" not in r.err and untouched
         )
         line = one_line(r.err).replace(str(out), "OUT")
+        ok = ok and says in line
         # where and why the JSON parser stopped depends on the file's layout, not on striatal
         line = re.sub(r"\(truncated or corrupted\?\): .*", "(truncated or corrupted?): ...", line)
         if "Traceback" in r.err:
             return ok, f"exit {r.rc}, a Python traceback ending `{line}`"
-        written = "nothing written" if untouched else "FILES CHANGED"
+        written = (
+            "nothing written" if same else "files not checked" if untouched else "FILES CHANGED"
+        )
         return ok, f"exit {r.rc}, {len(lines)} line: `{line}`; {written}"
 
     return run
+
+
+def runs(argv: tuple[str, ...], says: str) -> Callable[[Path], tuple[bool, str]]:
+    """Expect exit 0 and ``says`` in what is printed."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        r = cli_in_process(*argv)
+        line = next((s for s in r.out.splitlines() if says in s), one_line(r.err or r.out))
+        return r.rc == 0 and says in r.out, f"exit {r.rc}: `{line}`"
+
+    return run
+
+
+def non_utf8_stdout(encoding: str) -> Callable[[Path], tuple[bool, str]]:
+    """``striatal interpret`` prints theta as a Greek letter; a stdout that cannot hold it."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        r = cli_process_env({"PYTHONIOENCODING": encoding}, "interpret", "--chapter-final")
+        line = next((s for s in r.out.splitlines() if s.startswith("mu_1")), "")
+        ok = r.rc == 0 and r.err == "" and "\\u03b8" in line
+        err = "empty" if not r.err else repr(one_line(r.err))
+        return ok, f"exit {r.rc}, stderr {err}; `{line}`"
+
+    return run
+
+
+def _peak_rss_mb(*argv: str) -> tuple[int, float]:
+    """(exit code, peak resident memory [MB]) of ``python -m striatal ARGV`` alone."""
+    probe = (
+        "import resource, subprocess, sys; "
+        "r = subprocess.run([sys.executable, '-m', 'striatal', *sys.argv[1:]], "
+        "stdout=subprocess.DEVNULL); "
+        "print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)"
+    )
+    r = subprocess.run(
+        [sys.executable, "-c", probe, *argv], capture_output=True, text=True, timeout=600
+    )
+    rc, kib = r.stdout.split()
+    return int(rc), int(kib) / 1024
+
+
+STREAM_STEPS = 200_000
+
+
+def streamed_trajectory(tmp: Path) -> tuple[bool, str]:
+    """Writing trajectory.csv adds little memory: rows are formatted a chunk at a time.
+
+    Before, the whole trajectory became Python lists and one string first (about
+    600 bytes a step: 6 GB at the 10,000,000-step limit).
+    """
+    run = ("simulate", "--duration", str(STREAM_STEPS // 10), "--dt", "0.1")
+    rc0, without = _peak_rss_mb(*run)
+    rc1, with_out = _peak_rss_mb(*run, "--out", str(tmp / "OUT"))
+    extra = with_out - without
+    ok = rc0 == rc1 == 0 and extra < 40
+    # the megabytes vary from machine to machine; the table states the bound
+    return ok, f"exit {rc1}; writing {STREAM_STEPS:,} rows adds < 40 MB: {'yes' if ok else 'no'}"
 
 
 def library_error(
@@ -198,6 +276,36 @@ def _result_file(out: Path) -> None:
 def _random_result(out: Path) -> None:
     out.mkdir(parents=True)
     _random_bytes(out / "result.json")
+
+
+def _fifo(out: Path) -> None:
+    out.mkdir(parents=True)
+    os.mkfifo(out / "result.json")
+
+
+def _folder_result(out: Path) -> None:
+    (out / "result.json").mkdir(parents=True)
+
+
+def _huge_result(out: Path) -> None:
+    """A sparse file one byte over the limit: refused by its size, never read."""
+    from striatal.files import MAX_INPUT_BYTES
+
+    out.mkdir(parents=True)
+    with (out / "result.json").open("wb") as fh:
+        fh.truncate(MAX_INPUT_BYTES + 1)
+
+
+def _dangling(out: Path) -> None:
+    out.mkdir(parents=True)
+    (out / "link").symlink_to(out / "nowhere" / "x")
+
+
+def _folder_at(name: str) -> Callable[[Path], None]:
+    def prepare(out: Path) -> None:
+        (out / name).mkdir(parents=True)
+
+    return prepare
 
 
 def _random_history(out: Path) -> None:
@@ -616,6 +724,45 @@ def sweep_reference(tmp: Path) -> dict[str, Any]:
     return _REFERENCE["sweep"]
 
 
+def _interpreter_start() -> float:
+    """Seconds until striatal's own code runs: ``python -c "import striatal.cli"``, the
+    slowest of three (about 0.05 s on an idle machine, more on a loaded one). Before
+    that the interpreter itself is starting, and Ctrl-C is its to report."""
+    times = []
+    for _ in range(3):
+        t = time.perf_counter()
+        subprocess.run([sys.executable, "-c", "import striatal.cli"], check=True)
+        times.append(time.perf_counter() - t)
+    return max(times)
+
+
+def interrupt_at_start(delays: tuple[float, ...]) -> Callable[[Path], tuple[bool, str]]:
+    """SIGINT ``delay`` seconds after striatal's code starts running in ``python -m
+    striatal train ...``: while NumPy, Numba and the kernels load (about 1.5 s), or later."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        seen = []
+        for delay in delays:
+            start = _interpreter_start()
+            proc = subprocess.Popen(
+                [sys.executable, "-m", "striatal", "train", *TRAIN_LONG],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.PIPE,
+                text=True,
+                preexec_fn=_default_sigint,
+            )
+            time.sleep(start + delay)
+            proc.send_signal(signal.SIGINT)
+            _, err = proc.communicate(timeout=120)
+            seen.append((delay, proc.returncode, "Traceback" in err))
+        ok = all(rc == 130 and not tb for _, rc, tb in seen)
+        return ok, "; ".join(
+            f"after {d:g} s: exit {rc}{', a traceback' if tb else ''}" for d, rc, tb in seen
+        )
+
+    return run
+
+
 def interrupted_sweep(sig: signal.Signals) -> Callable[[Path], tuple[bool, str]]:
     def run(tmp: Path) -> tuple[bool, str]:
         want = sweep_reference(tmp)
@@ -957,6 +1104,86 @@ SCENARIOS: tuple[Scenario, ...] = (
     S("figure-random", "bad file", "`striatal figure --result FILE`, FILE 600 random bytes",
       "exit 2, one line", usage_error(("figure", "--result", "OUT/result.json", "--out",
                                        "OUT/f.png"), prepare=_random_result)),
+    # ---- negative values (issue 16, item 19): read as values, never as options
+    S("neg-exponent", "bad input", "`striatal simulate --gains 1 -2e-1 0 0 0 0 --theta-c 0.5 "
+      "--duration 5`", "runs (-2e-1 is W2, not an option)",
+      runs(("simulate", "--gains", "1", "-2e-1", "0", "0", "0", "0", "--theta-c", "0.5",
+            "--duration", "5"), "success: ")),
+    S("neg-inf", "bad input", "`striatal simulate --x0 -inf`",
+      "exit 2, one line naming x0 (not \"expected one argument\")",
+      usage_error(("simulate", "--x0", "-inf", "--out", "OUT"), says="x0 must be")),
+    S("neg-nan", "bad input", "`striatal simulate --theta0 -nan`",
+      "exit 2, one line naming theta0",
+      usage_error(("simulate", "--theta0", "-nan", "--out", "OUT"), says="theta0 must be")),
+    S("neg-list", "bad input", "`striatal sweep --alpha-grid -1,2`",
+      "exit 2, one line naming alpha (-1,2 is the grid, not an option)",
+      usage_error(("sweep", "--alpha-grid", "-1,2", "--seeds", "1", "--out", "OUT"),
+                  says="alpha must be")),
+    # ---- a stdout that is not UTF-8 (issue 16, item 13)
+    S("latin-1", "bad input", "`PYTHONIOENCODING=latin-1 striatal interpret --chapter-final`",
+      "exit 0; what latin-1 cannot hold printed as an escape", non_utf8_stdout("latin-1")),
+    S("ascii", "bad input", "`PYTHONIOENCODING=ascii striatal interpret --chapter-final`",
+      "exit 0; what ASCII cannot hold printed as an escape", non_utf8_stdout("ascii")),
+    # ---- inputs that are not regular files, or too big (issue 16, item 14)
+    S("read-dev-zero", "bad file", "`striatal simulate --result /dev/zero`",
+      "exit 2, one line, nothing read",
+      usage_error(("simulate", "--result", "/dev/zero"), process=True, says="not a regular")),
+    S("curves-dev-zero", "bad file", "`striatal curves /dev/zero`",
+      "exit 2, one line, nothing read",
+      usage_error(("curves", "/dev/zero", "--out", "OUT/c.png"), says="not a regular")),
+    S("read-fifo", "bad file", "`striatal simulate --result FIFO` (no writer: a read would "
+      "wait for ever)", "exit 2, one line, no hang",
+      usage_error(("simulate", "--result", "OUT/result.json"), process=True, prepare=_fifo,
+                  says="not a regular")),
+    S("read-folder", "bad file", "`striatal figure --result DIR` where DIR is a folder",
+      "exit 2, one line", usage_error(("figure", "--result", "OUT/result.json", "--out",
+                                       "OUT/f.png"), prepare=_folder_result, says="folder")),
+    S("read-huge", "bad file", "`striatal interpret FILE`, FILE 256 MiB + 1 byte",
+      "exit 2, one line, nothing read",
+      usage_error(("interpret", "OUT/result.json"), prepare=_huge_result,
+                  says="larger than 256 MiB")),
+    # ---- outputs that cannot be written, said before computing (issue 16, item 18)
+    S("out-dangling-sim", "bad file", "`striatal simulate --out LINK`, LINK a symbolic link "
+      "to a path that does not exist", "exit 2, one line naming the link, before the run",
+      usage_error(("simulate", "--out", "OUT/link"), prepare=_dangling, says="symbolic link")),
+    S("out-dangling-train", "bad file", "`striatal train --out LINK/run`, LINK as above",
+      "exit 2, one line naming the link, before the run",
+      usage_error(("train", "--max-trials", "2", "--out", "OUT/link/run"), prepare=_dangling,
+                  says="symbolic link")),
+    S("out-dangling-figure", "bad file", "`striatal figure --out LINK/f.png`, LINK as above",
+      "exit 2, one line naming the link, before the run",
+      usage_error(("figure", "--out", "OUT/link/f.png"), prepare=_dangling,
+                  says="symbolic link")),
+    S("result-is-folder", "bad file", "`striatal train --out DIR`, DIR/result.json a folder",
+      "exit 2, one line naming result.json (not a hidden temporary file)",
+      usage_error(("train", "--max-trials", "2", "--out", "OUT"),
+                  prepare=_folder_at("result.json"), untouched_too=False,
+                  says="cannot write OUT/result.json: it is a folder")),
+    S("summary-is-folder", "bad file", "`striatal simulate --out DIR`, DIR/summary.json a "
+      "folder", "exit 2, one line naming summary.json, before the run; nothing written",
+      usage_error(("simulate", "--duration", "5", "--out", "OUT"),
+                  prepare=_folder_at("summary.json"),
+                  says="cannot write OUT/summary.json: it is a folder")),
+    # ---- sizes checked before they are allocated (issue 16, item 11)
+    S("figure-every-tiny", "bad input", "`striatal figure --every 1e-300`",
+      "exit 2, one line (no ValueError from NumPy)",
+      usage_error(("figure", "--every", "1e-300", "--out", "OUT/f.png"), says="more than")),
+    S("figure-every-small", "bad input", "`striatal figure --every 1e-7` (4.5 GiB of indices)",
+      "exit 2, one line, before the run",
+      usage_error(("figure", "--every", "1e-7", "--out", "OUT/f.png"), says="more than")),
+    S("animate-speed", "bad input", "`striatal animate --speed 1e-9` (6.5 TiB of frame times)",
+      "exit 2, one line, before the run",
+      usage_error(("animate", "--speed", "1e-9", "--out", "OUT/a.gif"), says="more than")),
+    S("bench-batch", "bad input", "`striatal bench --batch-size 100000000`",
+      "exit 2, one line (no MemoryError)",
+      usage_error(("bench", "--batch-size", "100000000"), says="--batch-size")),
+    S("bench-seconds", "bad input", "`striatal bench --seconds 1e308`",
+      "exit 2, one line (no OverflowError)",
+      usage_error(("bench", "--seconds", "1e308"), says="--seconds")),
+    # ---- memory (issue 16, item 15)
+    S("sim-stream", "bad input", f"`striatal simulate --duration {STREAM_STEPS // 10} --dt 0.1 "
+      f"--out DIR` ({STREAM_STEPS:,} steps), peak memory with and without --out",
+      "trajectory.csv streamed: writing adds < 40 MB", streamed_trajectory),
     # ---- the library's typed errors
     S("lib-seed", "bad input", "`learn.initial_state(CHAPTER_INITIAL_W, 0.6, seed=-1)`",
       "ParameterError",
@@ -1074,6 +1301,11 @@ INTERRUPTIONS: tuple[Scenario, ...] = (
     S("determinism", "interruption",
       "`striatal train --seed 3 --max-trials 200` in two processes, and with `--seed 6`",
       "same seed, same files; another seed, another run", same_seed_same_run),
+    S("int-start", "interruption",
+      f"`striatal train {' '.join(TRAIN_LONG)}`, SIGINT (Ctrl-C) 0, 0.1, 0.3, 0.6, 1 and 1.5 s "
+      "after striatal's code starts (while the libraries load; the interpreter's own start, "
+      "timed as `python -c 'import striatal.cli'`, excluded)", "exit 130, no traceback",
+      interrupt_at_start((0.0, 0.1, 0.3, 0.6, 1.0, 1.5))),
     S("broken-pipe", "interruption",
       "`striatal simulate --chapter-final` writing into a pipe whose reader has gone "
       "(as `| head` does)", "no traceback", broken_pipe),

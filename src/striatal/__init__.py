@@ -1,7 +1,11 @@
 """striatal: the chapter's basal-ganglia switching REINFORCE learner on the cart-pole.
 
 The physics, the controllers and the learning step exist once, in
-:mod:`striatal.kernel`; everything else is a front end to it. The Python API:
+:mod:`striatal.kernel`; everything else is a front end to it.
+
+The names below are loaded on first use (PEP 562), so that ``import striatal``
+costs milliseconds and the command line can start, and be interrupted with
+Ctrl-C, before NumPy and Numba load (docs/reliability.md). The Python API:
 
 - :func:`train`: a whole learning run, as ``striatal train`` runs it (same defaults);
 - :func:`simulate`: one run of a controller, as ``striatal simulate`` (same defaults);
@@ -12,28 +16,115 @@ The physics, the controllers and the learning step exist once, in
 
 from __future__ import annotations
 
-from striatal import learners, plots, rundir
-from striatal.learners import LEARNERS, History, LearnerConfig, default_config
-from striatal.params import (
-    CHAPTER_FINAL_THETA_C,
-    CHAPTER_FINAL_W,
-    CHAPTER_INITIAL_THETA_C,
-    CHAPTER_INITIAL_W,
-    Controller,
-    Plant,
-    Simulation,
-    SuccessTest,
-)
-from striatal.rollout import Protocol, Trajectory, TrialOutcome, run_trial
-from striatal.rundir import read_history, read_result
-from striatal.training import Run, simulate, train
+import importlib
+import importlib.util
+import sys
+
+# not ``typing.TYPE_CHECKING``: importing typing (and re) would widen the start-up
+# window in which Ctrl-C cannot be caught yet
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+    from importlib.machinery import ModuleSpec
+    from types import ModuleType
+    from typing import Any
+
+    from striatal import learners, plots, rundir
+    from striatal.learners import LEARNERS, History, LearnerConfig, default_config
+    from striatal.params import (
+        CHAPTER_FINAL_THETA_C,
+        CHAPTER_FINAL_W,
+        CHAPTER_INITIAL_THETA_C,
+        CHAPTER_INITIAL_W,
+        Controller,
+        Plant,
+        Simulation,
+        SuccessTest,
+    )
+    from striatal.rollout import Protocol, Trajectory, TrialOutcome, run_trial
+    from striatal.rundir import read_history, read_result
+    from striatal.training import Run, simulate, train
 
 __version__ = "0.1.0"
 
-# Gymnasium id striatal/CartPoleSwingUp-v0 (and its vector entry point); idempotent.
-from striatal.envs import register_envs as _register_envs
+_FROM = {
+    "CHAPTER_FINAL_THETA_C": "striatal.params",
+    "CHAPTER_FINAL_W": "striatal.params",
+    "CHAPTER_INITIAL_THETA_C": "striatal.params",
+    "CHAPTER_INITIAL_W": "striatal.params",
+    "Controller": "striatal.params",
+    "Plant": "striatal.params",
+    "Simulation": "striatal.params",
+    "SuccessTest": "striatal.params",
+    "Protocol": "striatal.rollout",
+    "Trajectory": "striatal.rollout",
+    "TrialOutcome": "striatal.rollout",
+    "run_trial": "striatal.rollout",
+    "LEARNERS": "striatal.learners",
+    "History": "striatal.learners",
+    "LearnerConfig": "striatal.learners",
+    "default_config": "striatal.learners",
+    "read_history": "striatal.rundir",
+    "read_result": "striatal.rundir",
+    "Run": "striatal.training",
+    "simulate": "striatal.training",
+    "train": "striatal.training",
+}
 
-_register_envs()
+
+def __getattr__(name: str) -> Any:
+    if name in _FROM:
+        value = getattr(importlib.import_module(_FROM[name]), name)
+        globals()[name] = value
+        return value
+    if not name.startswith("_"):  # a submodule, as ``import striatal`` once loaded them all
+        try:
+            return importlib.import_module(f"{__name__}.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_FROM})
+
+
+def _register_env() -> None:
+    from striatal.envs import register_envs
+
+    register_envs()
+
+
+class _RegisterAfterGymnasium:
+    """Registers the Gymnasium env id as soon as Gymnasium is imported, then steps aside."""
+
+    def find_spec(
+        self, fullname: str, path: Sequence[str] | None, target: ModuleType | None = None
+    ) -> ModuleSpec | None:
+        if fullname != "gymnasium":
+            return None
+        if self in sys.meta_path:
+            sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(fullname)
+        if spec is None or spec.loader is None:
+            return spec
+        exec_module = spec.loader.exec_module
+
+        def exec_then_register(module: ModuleType) -> None:
+            exec_module(module)
+            _register_env()
+
+        spec.loader.exec_module = exec_then_register  # type: ignore[method-assign]
+        return spec
+
+
+# ``import striatal`` registers the Gymnasium id striatal/CartPoleSwingUp-v0 (and its
+# vector entry point): now if Gymnasium is loaded, else the moment it is.
+if "gymnasium" in sys.modules:
+    _register_env()
+elif not any(isinstance(f, _RegisterAfterGymnasium) for f in sys.meta_path):
+    sys.meta_path.insert(0, _RegisterAfterGymnasium())
 
 __all__ = [
     "CHAPTER_FINAL_THETA_C",

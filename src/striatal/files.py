@@ -11,22 +11,31 @@ import io
 import json
 import math
 import os
+import stat
 import tempfile
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TextIO
+
+if TYPE_CHECKING:
+    import numpy as np
 
 from striatal.errors import DataFileError
 
 
-def check_out_dir(path: str | os.PathLike[str]) -> Path:
+def check_out_dir(path: str | os.PathLike[str], files: Sequence[str] = ()) -> Path:
     """``path`` as a Path if it is, or can be made, a writable folder; creates nothing.
 
-    Raises DataFileError otherwise, so a command can refuse before it computes.
+    ``files``: the names the command will write there; none may be a folder. Raises
+    DataFileError otherwise, so a command can refuse before it computes.
     """
     p = Path(path)
+    check_no_dangling_link(p)
     if p.exists() and not p.is_dir():
         raise DataFileError(f"output folder {p} exists and is not a folder")
+    for name in files:
+        if (p / name).is_dir():
+            raise DataFileError(f"cannot write {p / name}: it is a folder")
     probe = p
     while not probe.exists() and probe != probe.parent:
         probe = probe.parent
@@ -51,6 +60,31 @@ def _umask() -> int:
     return mask
 
 
+def check_no_dangling_link(path: str | os.PathLike[str]) -> None:
+    """Raise DataFileError if ``path`` or a folder above it is a link to nothing.
+
+    Such a path cannot be created (mkdir says "File exists"), so a command checks it
+    before it computes, not after.
+    """
+    p = Path(path)
+    for probe in (p, *p.parents):
+        if probe.is_symlink() and not probe.exists():
+            raise DataFileError(
+                f"output {p}: {probe} is a symbolic link to {os.readlink(probe)}, "
+                "which does not exist"
+            )
+
+
+def replace_into(tmp: str | os.PathLike[str], target: Path) -> None:
+    """``os.replace(tmp, target)``; an error names ``target``, never the hidden ``tmp``."""
+    if target.is_dir():
+        raise DataFileError(f"cannot write {target}: it is a folder")
+    try:
+        os.replace(tmp, target)
+    except OSError as exc:
+        raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
+
+
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` to ``path`` atomically (temp file + fsync + rename).
 
@@ -58,7 +92,17 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     the umask), not mkstemp's 0600. A folder that cannot be made or written raises
     DataFileError.
     """
+    atomic_write_stream(path, lambda fh: fh.write(text))
+
+
+def atomic_write_stream(path: str | os.PathLike[str], write: Callable[[TextIO], object]) -> None:
+    """``write(fh)`` into a temporary file beside ``path``, then fsync and rename.
+
+    The text goes to the file as ``write`` produces it, so a large file never has
+    to be held in memory. A folder that cannot be made or written raises DataFileError.
+    """
     target = Path(path)
+    check_no_dangling_link(target.parent)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
@@ -67,10 +111,10 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     try:
         os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
+            write(fh)
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, target)
+        replace_into(tmp, target)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
@@ -111,15 +155,54 @@ def _finite_float(token: str) -> float:
     return v
 
 
-def read_json(path: str | os.PathLike[str], *, what: str = "file") -> Any:
-    """Read a JSON file or raise DataFileError naming the file and the problem."""
+#: Largest file striatal reads as input [bytes]: 256 MiB. Its own files are far smaller
+#: (history.csv of 100,000 trials: about 25 MB); anything bigger is not one of them.
+MAX_INPUT_BYTES = 256 * 2**20
+
+
+def read_text(path: str | os.PathLike[str], *, what: str = "file") -> str:
+    """The UTF-8 text of a regular file of at most :data:`MAX_INPUT_BYTES`.
+
+    Every JSON and CSV input goes through here. A folder, a device (``/dev/zero``),
+    a FIFO or a socket, or a file that is too big, raises DataFileError before a
+    byte is read: none can hang or exhaust memory.
+    """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        st = os.stat(p)  # stat, unlike open, does not wait for a FIFO's writer
+        if stat.S_ISDIR(st.st_mode):
+            raise DataFileError(f"{what} {p} is a folder, not a file")
+        _check_regular(p, st, what)
+        # O_NONBLOCK: if a FIFO took the file's place since the stat, open does not wait
+        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK)
+        with os.fdopen(fd, "rb") as fh:
+            _check_regular(p, os.fstat(fh.fileno()), what)
+            data = fh.read(MAX_INPUT_BYTES + 1)
+        _check_size(p, len(data), what)
+        return data.decode("utf-8")
     except FileNotFoundError:
         raise DataFileError(f"{what} {p} does not exist") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise DataFileError(f"{what} {p} cannot be read: {exc}") from None
+
+
+def _check_regular(p: Path, st: os.stat_result, what: str) -> None:
+    if not stat.S_ISREG(st.st_mode):
+        raise DataFileError(f"{what} {p} is not a regular file (a device, FIFO or socket?)")
+    _check_size(p, st.st_size, what)
+
+
+def _check_size(p: Path, size: int, what: str) -> None:
+    if size > MAX_INPUT_BYTES:
+        raise DataFileError(
+            f"{what} {p} is larger than {MAX_INPUT_BYTES // 2**20} MiB, the most striatal reads"
+        )
+
+
+def read_json(path: str | os.PathLike[str], *, what: str = "file") -> Any:
+    """Read a JSON file (through :func:`read_text`) or raise DataFileError naming it."""
+    p = Path(path)
+    text = read_text(p, what=what)
     try:
         return json.loads(text, parse_constant=_reject_constant, parse_float=_finite_float)
     except json.JSONDecodeError as exc:
@@ -150,18 +233,36 @@ def csv_text(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
 def write_csv(
     path: str | os.PathLike[str], header: Sequence[str], rows: Iterable[Sequence[Any]]
 ) -> None:
-    """Atomically write a CSV file."""
-    atomic_write_text(path, csv_text(header, rows))
+    """Atomically write a CSV file, row by row (the same bytes as :func:`csv_text`).
+
+    ``rows`` may be a generator (see :func:`array_rows`): memory stays bounded
+    whatever the number of rows.
+    """
+
+    def write(fh: TextIO) -> None:
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow(header)
+        for row in rows:
+            writer.writerow([_csv_cell(v) for v in row])
+
+    atomic_write_stream(path, write)
+
+
+def array_rows(data: np.ndarray, chunk: int = 4096) -> Iterator[list[float]]:
+    """The rows of a 2-D array as lists of Python floats, ``chunk`` rows converted at a time.
+
+    ``data.tolist()`` would hold every cell as a Python float at once (about 6 GB for
+    10,000,000 steps of 8 columns); this holds ``chunk`` rows.
+    """
+    for start in range(0, len(data), chunk):
+        yield from data[start : start + chunk].tolist()
 
 
 def read_csv(path: str | os.PathLike[str], *, what: str = "file") -> list[dict[str, str]]:
-    """Read a CSV file with a header into dicts, or raise DataFileError."""
+    """Read a CSV file (through :func:`read_text`) with a header into dicts."""
     p = Path(path)
+    text = read_text(p, what=what)
     try:
-        with p.open(encoding="utf-8", newline="") as fh:
-            rows = list(csv.DictReader(fh))
-    except FileNotFoundError:
-        raise DataFileError(f"{what} {p} does not exist") from None
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        return list(csv.DictReader(io.StringIO(text, newline="")))
+    except csv.Error as exc:
         raise DataFileError(f"{what} {p} cannot be read as CSV: {exc}") from None
-    return rows

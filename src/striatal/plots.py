@@ -22,6 +22,7 @@ import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
 from striatal.learners import History
+from striatal.limits import count_of_steps
 from striatal.rundir import read_history as read_history
 
 if TYPE_CHECKING:
@@ -38,6 +39,10 @@ ROW_SECONDS = 10.0
 POSE_GAP = 0.6
 #: Height of one row of snapshots, in pole lengths (a hanging and an upright pole fit).
 ROW_HEIGHT = 2.6
+#: Most stick figures one Figure 5 draws, and most frames one animation holds
+#: (memory and file size); both counts are checked before anything is allocated.
+MAX_SNAPSHOTS = 10_000
+MAX_FRAMES = 5_000
 #: Runs whose cart leaves |x| <= VIEW_LIMIT [m] (a runaway, e.g. the printed balancing sign)
 #: are drawn clipped to that window, so the part before the runaway stays readable.
 VIEW_LIMIT = 15.0
@@ -57,7 +62,10 @@ def _figure(width: float, height: float) -> Figure:
 
 def _atomic(path: Path, write: Callable[[Path], None]) -> None:
     """Call ``write(tmp)`` on a temp file beside ``path``, then rename it onto ``path``."""
+    from striatal.files import check_no_dangling_link, replace_into
+
     target = Path(path)
+    check_no_dangling_link(target.parent)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp_name = tempfile.mkstemp(
@@ -73,7 +81,7 @@ def _atomic(path: Path, write: Callable[[Path], None]) -> None:
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, target)
+        replace_into(tmp, target)
     except BaseException:
         if tmp.exists():
             tmp.unlink()
@@ -113,7 +121,9 @@ def snapshot_indices(traj: Trajectory, every: float = SNAPSHOT_EVERY) -> np.ndar
         raise ParameterError(f"snapshot interval must be > 0 s, got {every}")
     dt = traj.sim.dt
     t_end = float(traj.t[-1])
-    n = int(math.floor(t_end / every + 1e-9)) + 1
+    n = count_of_steps(
+        t_end, every, cap=MAX_SNAPSHOTS, what="snapshots", fix="raise the snapshot interval"
+    )
     idx = np.rint(np.arange(n) * every / dt).astype(int)
     return idx[idx < len(traj.t)]
 
@@ -527,13 +537,17 @@ def switch_figure(theta_c: float, gammas: Sequence[float], *, theta_max: float =
 
 def frame_times(t_end: float, fps: float, speed: float) -> np.ndarray:
     """Simulation times [s] shown by an animation at ``fps`` frames per second of video
-    that runs ``speed`` times faster than the simulation: 0, speed/fps, ... <= t_end."""
+    that runs ``speed`` times faster than the simulation: 0, speed/fps, ... <= t_end.
+
+    At most :data:`MAX_FRAMES`, checked before the array is built."""
     if not (math.isfinite(fps) and fps > 0):
         raise ParameterError(f"fps must be > 0, got {fps}")
     if not (math.isfinite(speed) and speed > 0):
         raise ParameterError(f"speed must be > 0, got {speed}")
     step = speed / fps
-    n = int(math.floor(t_end / step + 1e-9)) + 1
+    n = count_of_steps(
+        t_end, step, cap=MAX_FRAMES, what="frames", fix="raise the speed or lower the fps"
+    )
     return np.arange(n) * step
 
 

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
+from striatal.files import read_text
 from striatal.stats import wilson_interval
 
 #: The costs a profile can be drawn against, in order of preference.
@@ -62,12 +63,9 @@ def read_sweep_runs(folder: Path) -> list[SweepRun]:
     (a kill during a write) is dropped; any other bad line raises DataFileError.
     """
     path = Path(folder) / "runs.csv"
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DataFileError(f"{folder} has no runs.csv (is it a striatal sweep folder?)") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataFileError(f"runs file {path} cannot be read: {exc}") from None
+    if not path.exists() and not path.is_symlink():
+        raise DataFileError(f"{folder} has no runs.csv (is it a striatal sweep folder?)")
+    text = read_text(path, what="runs file")
     lines = text.splitlines(keepends=True)
     if not lines or not lines[0].endswith("\n"):
         raise DataFileError(f"runs file {path} is empty")

@@ -11,12 +11,15 @@ import argparse
 import importlib
 import os
 import pkgutil
+import re
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from types import ModuleType
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from striatal.errors import StriatalError
+from striatal.files import check_no_dangling_link
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
@@ -24,8 +27,23 @@ EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141
 
 
+_NUMBER = r"(?:(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?|inf(?:inity)?|nan)"
+#: A value, not an option: a negative number as ``float`` reads it (``-2e-1``, ``-.5``,
+#: ``-inf``, ``-nan``) or a comma-separated list starting with one (``-1,2``).
+NEGATIVE_VALUE = re.compile(rf"^-{_NUMBER}(?:\s*,\s*[-+]?{_NUMBER})*$", re.IGNORECASE)
+
+
 class OneLineParser(argparse.ArgumentParser):
-    """argparse that reports a usage error as one line on stderr and exits 2."""
+    """argparse that reports a usage error as one line on stderr and exits 2.
+
+    Every command's parser is one of these, so a negative value reads as a value
+    everywhere: argparse's own test knows only ``-1`` and ``-1.5`` and takes
+    ``-2e-1``, ``-inf`` or ``-1,2`` for an unknown option.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_VALUE
 
     def error(self, message: str) -> NoReturn:
         sys.stderr.write(f"{self.prog}: error: {message}\n")
@@ -63,11 +81,37 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def tolerate_any_encoding() -> None:
+    """Make stdout and stderr print what they cannot encode as an escape, not raise.
+
+    Under ``PYTHONIOENCODING=latin-1`` or an ASCII locale a theta or a minus sign would
+    otherwise stop a command with UnicodeEncodeError; every command prints through these.
+    """
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None and (stream.encoding or "").lower() not in ("utf-8", "utf8"):
+            reconfigure(errors="backslashreplace")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``striatal`` and ``python -m striatal``; returns the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Entry point of ``striatal`` and ``python -m striatal``; returns the exit code.
+
+    Ctrl-C at any point, while the libraries load too (they load here, when the
+    parser imports the commands, not when ``striatal.cli`` is imported), exits 130
+    without a traceback.
+    """
+    tolerate_any_encoding()
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+    except KeyboardInterrupt:
+        return EXIT_INTERRUPTED
+    try:
+        out = getattr(args, "out", None)
+        if isinstance(out, str | os.PathLike) and str(out):
+            # every --out (a folder or a file): a link to nothing above it can never be
+            # written, so say so now rather than after the computation
+            check_no_dangling_link(Path(out).parent)
         return int(args._run(args))
     except StriatalError as exc:
         sys.stderr.write(f"striatal {args.command}: error: {exc}\n")

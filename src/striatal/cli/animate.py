@@ -9,6 +9,7 @@ from pathlib import Path
 from striatal.cli import options
 from striatal.cli.options import add_gain_source_arguments, controller_and_plant
 from striatal.errors import ParameterError
+from striatal.limits import count_of_steps
 
 COMMAND = "animate"
 ORDER = 42
@@ -20,7 +21,7 @@ DESCRIPTION = (
     "striatal figure."
 )
 
-#: Most frames one animation may hold (memory and file size).
+#: Most frames one animation may hold (memory and file size), counted before the run.
 MAX_FRAMES = 5000
 
 
@@ -58,11 +59,13 @@ def run(args: argparse.Namespace) -> int:
             raise ParameterError(f"--{name} must be in [16, 4096] px, got {v}")
     controller, plant = controller_and_plant(args)
     sim = options.simulation_from(args)
-    n_frames = len(plots.frame_times(sim.duration, args.fps, args.speed))
-    if n_frames > MAX_FRAMES:
-        raise ParameterError(
-            f"{n_frames} frames is more than {MAX_FRAMES}: raise --speed or lower --fps"
-        )
+    count_of_steps(
+        sim.duration,
+        args.speed / args.fps,
+        cap=MAX_FRAMES,
+        what="frames",
+        fix="raise --speed or lower --fps",
+    )
     traj = simulate(plant, controller, sim)
     frames = plots.animation_frames(
         traj, fps=args.fps, speed=args.speed, width=args.width, height=args.height

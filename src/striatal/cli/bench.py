@@ -12,6 +12,7 @@ from types import ModuleType
 from typing import Any
 
 from striatal.bench import load_harness
+from striatal.cli.guards import bounded_float, bounded_int
 from striatal.files import dumps_json
 from striatal.params import check_seed
 
@@ -27,6 +28,12 @@ DESCRIPTION = (
     "each ratio are timed alternately in the same process, warm-up excluded."
 )
 
+#: Largest --batch-size: the batched side draws B x duration/dt noise floats (200 MB
+#: at 4096 and the default 60-s trial at dt = 0.01).
+MAX_BATCH = 4096
+#: Largest --seconds per timed repeat (one hour).
+MAX_SECONDS = 3600.0
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the full report as JSON")
@@ -37,26 +44,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "no cold compile)",
     )
     parser.add_argument(
-        "--batch-size", type=int, default=None, help="B of the batched comparison (default 256)"
+        "--batch-size",
+        type=bounded_int(1, MAX_BATCH),
+        default=None,
+        help=f"B of the batched comparison, at most {MAX_BATCH} (its noise is B x steps "
+        "floats) (default 256)",
     )
     parser.add_argument(
         "--seconds",
-        type=float,
+        type=bounded_float(0.0, MAX_SECONDS),
         default=None,
-        help="wall budget of one timed repeat of one side [s] (default 0.5)",
+        help=f"wall budget of one timed repeat of one side [s], at most {MAX_SECONDS:g} "
+        "(default 0.5)",
     )
-    parser.add_argument("--repeats", type=int, default=None, help="timed repeats (default 5)")
+    parser.add_argument(
+        "--repeats", type=bounded_int(1, 100), default=None, help="timed repeats (default 5)"
+    )
     parser.add_argument("--no-train", action="store_true", help="skip timing striatal train")
     parser.add_argument(
         "--sweep-seeds",
-        type=int,
+        type=bounded_int(0, 10_000),
         default=0,
         help="time `striatal sweep --seeds N` (learner + control arm) on 1 and on all "
         "workers (0: skip; the docs use 100)",
     )
     parser.add_argument(
         "--memory-runs",
-        type=int,
+        type=bounded_int(0, 100_000),
         default=0,
         help="peak memory of a sweep of this many runs on one worker, trials capped at 20 "
         "(0: skip; the docs use 1000)",

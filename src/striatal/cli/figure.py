@@ -8,6 +8,7 @@ from pathlib import Path
 
 from striatal.cli import options
 from striatal.errors import ParameterError
+from striatal.limits import count_of_steps
 
 COMMAND = "figure"
 ORDER = 40
@@ -43,6 +44,9 @@ def run(args: argparse.Namespace) -> int:
     sim = options.simulation_from(args)
     if not (math.isfinite(args.every) and args.every > 0):
         raise ParameterError(f"--every must be > 0 s, got {args.every}")
+    count_of_steps(
+        sim.duration, args.every, cap=plots.MAX_SNAPSHOTS, what="snapshots", fix="raise --every"
+    )
     if not 10 <= args.dpi <= 1000:
         raise ParameterError(f"--dpi must be in [10, 1000], got {args.dpi}")
     traj = simulate(plant, controller, sim)

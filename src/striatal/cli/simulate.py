@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from striatal.cli import options
-from striatal.files import check_out_dir, dumps_json, write_csv, write_json
+from striatal.files import array_rows, check_out_dir, dumps_json, write_csv, write_json
 from striatal.kernel import TRAJ_COLUMNS
 from striatal.rollout import Trajectory, simulate
 
@@ -71,11 +71,11 @@ def run(args: argparse.Namespace) -> int:
     controller, plant = options.controller_and_plant(args)
     sim = options.simulation_from(args)
     if args.out is not None:
-        check_out_dir(args.out)
+        check_out_dir(args.out, files=("trajectory.csv", "summary.json"))
     traj = simulate(plant, controller, sim)
     result = summary(traj, settings_of(args, traj))
     if args.out is not None:
-        write_csv(args.out / "trajectory.csv", TRAJ_COLUMNS, traj.data.tolist())
+        write_csv(args.out / "trajectory.csv", TRAJ_COLUMNS, array_rows(traj.data))
         write_json(args.out / "summary.json", result)
     if args.json:
         sys.stdout.write(dumps_json(result))
