@@ -8,8 +8,8 @@ history row and build the next state. Every simulated trial is counted in
 ``LearnerState.simulations`` (and its simulated time in ``simulated_seconds``):
 the learning trial and each success check that needs a trial of its own. A rule
 with ``judges_candidate`` (pgpe) is judged on the controller its trial ran; when
-that trial already was the noise-free run on the nominal plant, it is the check. :func:`learn` repeats it until success or
-``max_trials``.
+that trial already was the noise-free run on the nominal plant, it is the check.
+:func:`learn` repeats it until success or ``max_trials``.
 """
 
 from __future__ import annotations
