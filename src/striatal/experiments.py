@@ -435,6 +435,11 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
     if not lines or not lines[0].endswith("\n"):
         return [], csv_text(RUN_COLUMNS, [])
     if lines[0].strip() != header:
+        if lines[0].startswith("arm,"):
+            raise DataFileError(
+                f"runs file {path} has the columns of another striatal version (before "
+                "simulations were counted); use another --out"
+            )
         raise DataFileError(f"runs file {path} does not have the header of a striatal sweep")
     rows: list[dict[str, Any]] = []
     kept = [lines[0]]
