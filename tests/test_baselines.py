@@ -76,3 +76,27 @@ def test_searches_are_deterministic_and_within_budget(plant: Plant) -> None:
     assert b == baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 4, 15, "mean")
     assert 1 <= b["trials"] <= 15 and b["W"][0] > 0
     assert low[6] <= b["theta_c"] <= high[6]
+
+
+def test_cmaes_restarts_with_twice_the_population_when_cma_stops(
+    plant: Plant, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """IPOP: whenever cma's termination criteria fire, a new run with a doubled population
+    starts from (W(0), theta_c(0)); every candidate is one counted trial."""
+    import cma
+
+    sim = Simulation(duration=5.0)  # too short to pass: the budget is spent
+    plain = baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 2, 20, "mean")
+    assert plain["restarts"] == 0 and plain["popsize"] == 4 + int(3 * np.log(7))
+    assert plain["simulations"] == plain["trials"] == 20
+    real_stop = cma.CMAEvolutionStrategy.stop
+
+    def stop_after_one_generation(self: cma.CMAEvolutionStrategy, *a: object, **k: object):  # type: ignore[no-untyped-def]
+        return {"test": 1} if self.countiter >= 1 else real_stop(self, *a, **k)
+
+    monkeypatch.setattr(cma.CMAEvolutionStrategy, "stop", stop_after_one_generation)
+    out = baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 2, 60, "mean")
+    # runs of 9, 18 and (33 of) 36 candidates: two restarts
+    assert out["restarts"] == 2 and out["popsize"] == 36
+    assert out["simulations"] == out["trials"] == 60 and not out["success"]
+    assert 0 < out["simulated_seconds"] <= 60 * 5.0

@@ -51,6 +51,8 @@ def _no_wall(obj: Any) -> Any:
         return {k: _no_wall(v) for k, v in obj.items() if not k.startswith("wall_seconds")}
     if isinstance(obj, list):
         return [_no_wall(v) for v in obj]
+    if isinstance(obj, float) and math.isnan(obj):
+        return None  # NaN != NaN: compare "not estimated" as None
     return obj
 
 
@@ -97,11 +99,27 @@ def test_control_arm_never_changes_W_but_theta_c_follows_eq21() -> None:
             assert row["alpha"] == 0.0
 
 
+def _row(**kw: Any) -> dict[str, Any]:
+    base = {
+        "simulations": 2 * kw["trials"],
+        "simulated_seconds": 60.0 * kw["trials"],
+        "eval_simulations": 1,
+        "pass_rate_W0": math.nan,
+        "pass_rate": math.nan,
+        "mean_policy_success": True,
+        "wall_seconds": 0.5,
+        "role": "learner",
+        "learner": "chapter",
+        "method": "learn",
+    }
+    return {**base, **kw}
+
+
 def test_arm_statistics_on_handmade_rows() -> None:
     rows = [
-        {"success": True, "trials": t, "mean_policy_success": t < 30, "wall_seconds": 1.0}
+        _row(success=True, trials=t, mean_policy_success=t < 30, wall_seconds=1.0)
         for t in (10, 20, 30, 40)
-    ] + [{"success": False, "trials": 100, "mean_policy_success": False, "wall_seconds": 2.0}]
+    ] + [_row(success=False, trials=100, mean_policy_success=False, wall_seconds=2.0)]
     s = experiments.arm_statistics(rows, max_trials=100)
     assert s["runs"] == 5 and s["successes"] == 4
     assert s["success_rate"] == pytest.approx(0.8)
@@ -112,24 +130,29 @@ def test_arm_statistics_on_handmade_rows() -> None:
     assert s["trials_median_all"] == pytest.approx(30.0)
     assert s["mean_policy_success_rate"] == pytest.approx(0.4)
     assert s["wall_seconds_total"] == pytest.approx(6.0)
+    # the stats of issue 14: Wilson interval, medians over solved runs with bootstrap intervals
+    lo, hi = s["success_rate_ci"]
+    assert lo == pytest.approx(0.3755, abs=1e-3) and hi == pytest.approx(0.9638, abs=1e-3)
+    assert s["simulations_median"] == 50.0 and s["simulations_iqm"] == pytest.approx(50.0)
+    assert s["simulations_median_ci"][0] <= 50.0 <= s["simulations_median_ci"][1]
+    assert s["simulations_total"] == 2 * (10 + 20 + 30 + 40 + 100)
     empty = experiments.arm_statistics(
-        [{"success": False, "trials": 9, "mean_policy_success": False, "wall_seconds": 0.0}], 9
+        [_row(success=False, trials=9, mean_policy_success=False, wall_seconds=0.0)], 9
     )
     assert math.isnan(empty["trials_median"]) and empty["unsolved_share"] == 1.0
+    assert empty["simulations_median"] is None
 
 
 def test_summary_does_not_depend_on_completion_order() -> None:
     rows = [
-        {
-            "arm": arm,
-            "method": "learn",
-            "init": "chapter",
-            "seed": seed,
-            "success": seed % 2 == 0,
-            "trials": seed,
-            "mean_policy_success": True,
-            "wall_seconds": 0.5,
-        }
+        _row(
+            arm=arm,
+            role=arm,
+            init="chapter",
+            seed=seed,
+            success=seed % 2 == 0 or (arm == "learner" and seed == 1),
+            trials=seed,
+        )
         for arm in ("learner", "control")
         for seed in range(1, 9)
     ]
@@ -138,8 +161,29 @@ def test_summary_does_not_depend_on_completion_order() -> None:
     random.Random(0).shuffle(shuffled)
     assert experiments.summarise(shuffled, 10, {"x": 1}) == a
     assert [x["arm"] for x in a["arms"]] == ["control", "learner"]
-    assert a["learner_vs_control"][0]["success_rate"] == 0.5
+    pair = a["learner_vs_control"][0]
+    assert pair["success_rate"] == 5 / 8 and pair["control_success_rate"] == 0.5
+    assert pair["mcnemar"]["only_a"] == 1 and pair["mcnemar"]["only_b"] == 0
+    assert pair["mcnemar"]["p_value"] == 1.0 and pair["same_seeds"]
+    assert 0.0 < pair["fisher"]["p_value"] <= 1.0
     assert "theta_c still follows eq 21" in a["notes"][0]
+
+
+def test_duplicate_runs_are_dropped_on_read_and_refused_by_the_summary(tmp_path: Path) -> None:
+    """Issue 16 item 4: a duplicated (arm, init, seed) line was counted twice."""
+    rows = [_row(arm="learner", init="chapter", seed=s, success=True, trials=3) for s in (1, 2)]
+    with pytest.raises(ParameterError, match="twice"):
+        experiments.summarise([*rows, rows[0]], 10, {})
+    path = tmp_path / "runs.csv"
+    spec = _specs((1,), max_trials=2)[0]
+    line = experiments.row_text(experiments.run_one(spec))
+    header = ",".join(experiments.RUN_COLUMNS) + "\n"
+    path.write_text(header + line + line)
+    read, clean = experiments.read_runs(path)
+    assert len(read) == 1 and clean == header + line
+    summary = experiments.sweep([spec], {"t": 1}, out=tmp_path, max_trials=2)
+    assert summary.ran == 0 and summary.summary["arms"][0]["runs"] == 1
+    assert (tmp_path / "runs.csv").read_text() == header + line
 
 
 def test_resume_skips_finished_runs_and_gives_the_same_summary(tmp_path: Path) -> None:
@@ -272,3 +316,203 @@ def test_ray_backend_gives_the_local_rows(tmp_path: Path) -> None:
         assert _no_wall(ray_rows) == _no_wall(local)
     finally:
         subprocess.run([ray_bin, "stop", "--force"], env=env, capture_output=True, timeout=60)
+
+
+class KernelCalls:
+    """Counts the calls of the kernel's trial entry (every simulated trial goes through it)."""
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
+        from striatal import kernel
+
+        self.n = 0
+        real = kernel.run_trial
+
+        def counted(*args: Any) -> Any:
+            self.n += 1
+            return real(*args)
+
+        monkeypatch.setattr(kernel, "run_trial", counted)
+
+
+@pytest.mark.parametrize(
+    ("method", "learner"), [("learn", "chapter"), ("learn", "pgpe"), ("random", ""), ("cmaes", "")]
+)
+def test_simulations_equal_the_kernel_calls(
+    monkeypatch: pytest.MonkeyPatch, method: str, learner: str
+) -> None:
+    """Issue 14: every simulated trial is counted, the mean-policy checks included."""
+    from striatal.learners import default_config
+
+    config = default_config(learner or "chapter", max_trials=12, success_on="mean")
+    arm = experiments.Arm("a", method, config, "learner" if method == "learn" else "baseline")
+    (spec,), _ = experiments.specs_of(
+        [arm],
+        template=Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
+        plant=Plant(),
+        sim=SHORT,
+        seeds=(4,),
+        inits=("random",),
+        eval_draws=3,
+    )
+    calls = KernelCalls(monkeypatch)
+    found = experiments.search(spec, experiments.initial_gains("random", 4))
+    assert found["simulations"] == calls.n
+    if learner == "chapter":  # a noisy trial plus a mean-policy check per trial
+        assert found["simulations"] == 2 * found["trials"]
+    elif learner == "pgpe":  # its trial is the check of the candidate: nothing more
+        assert found["simulations"] == found["trials"]
+    else:
+        assert found["simulations"] == found["trials"]
+    assert 0 < found["simulated_seconds"] <= SHORT.duration * found["simulations"] + 1e-9
+    calls.n = 0
+    row = experiments.run_one(spec)
+    assert row["simulations"] + row["eval_simulations"] == calls.n
+    assert row["simulations"] == found["simulations"]
+    assert row["eval_simulations"] == 1 + 2 * (3 + 1)  # re-simulation, two pass probabilities
+    assert 0.0 <= row["pass_rate_W0"] <= 1.0 and 0.0 <= row["pass_rate"] <= 1.0
+
+
+def test_pgpe_control_draws_the_learners_perturbations(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The exploration-only control draws the same perturbations as pgpe under one seed:
+    the same p' until the first update, the same z every trial, and never moves p."""
+    from striatal.learners import control_config, default_config, learning_step
+    from striatal.learners.common import initial_state
+    from striatal.learners.pgpe import PgpeRule
+    from striatal.rollout import Protocol
+
+    seen: dict[str, list[dict[str, Any]]] = {"learner": [], "control": []}
+    real = PgpeRule.plan
+    who = ["learner"]
+
+    def plan(self: Any, *args: Any) -> Any:
+        p = real(self, *args)
+        seen[who[0]].append({k: np.array(v) for k, v in p.scratch.items()} | {"W": p.W})
+        return p
+
+    monkeypatch.setattr(PgpeRule, "plan", plan)
+    learner = default_config("pgpe", max_trials=6)
+    control = control_config(learner)
+    assert (control.alpha, control.sigma_rate) == (0.0, 0.0)
+    W0 = random_initial_gains(np.random.default_rng([8, 1]))
+    template = Controller(W0, CHAPTER_INITIAL_THETA_C)
+    for name, cfg in (("learner", learner), ("control", control)):
+        who[0] = name
+        state = initial_state(W0, CHAPTER_INITIAL_THETA_C, 8)
+        for _ in range(6):
+            state, _ = learning_step(state, Plant(), template, SHORT, Protocol(), cfg)
+            if state.success:
+                break
+    a, b = seen["learner"], seen["control"]
+    n = min(len(a), len(b))
+    assert n >= 2
+    np.testing.assert_array_equal(a[0]["W"], b[0]["W"])  # trial 1: the same candidate p'
+    np.testing.assert_array_equal(a[0]["eps"], b[0]["eps"])
+    for x, y in zip(a[:n], b[:n], strict=True):
+        np.testing.assert_array_equal(x["z"], y["z"])  # the same draws every trial
+    p0 = np.array([*W0[:5], CHAPTER_INITIAL_THETA_C])
+    for y in b:
+        np.testing.assert_array_equal(y["p"], p0)  # the control never moves p
+    assert not np.array_equal(a[1]["p"], p0)  # the learner has updated
+
+
+def test_a_second_sweep_on_a_locked_out_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 16 item 2: one line, exit 2, nothing written."""
+    from striatal.rundir import RunDir
+
+    out = tmp_path / "s"
+    with RunDir(out).lock():
+        code = main(["sweep", "--seeds", "1", "--max-trials", "1", "--out", str(out)])
+        code_ablation = main(["ablation", "--seeds", "1", "--variants", "pgpe", "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and code_ablation == 2
+    assert len(err) == 2 and all("in use by another striatal process" in e for e in err)
+    assert sorted(p.name for p in out.iterdir()) == []
+
+
+WATCHED = """
+import os, sys, time
+from concurrent.futures import ProcessPoolExecutor
+from striatal import experiments
+pool = ProcessPoolExecutor(max_workers=2, initializer=experiments._worker_init)
+futures = [pool.submit(time.sleep, 120) for _ in range(2)]
+time.sleep(1.0)
+print(" ".join(str(p) for p in pool._processes), flush=True)
+time.sleep(120)
+"""
+
+
+def _alive(pid: int) -> bool:
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    return "\nState:\tZ" not in status
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_workers_exit_soon_after_their_parent_is_killed() -> None:
+    """Issue 16 item 6: sweep workers outlived a SIGKILLed parent by minutes."""
+    import signal
+    import time
+
+    parent = subprocess.Popen(
+        [sys.executable, "-c", WATCHED], stdout=subprocess.PIPE, text=True, env=os.environ
+    )
+    try:
+        assert parent.stdout is not None
+        pids = [int(p) for p in parent.stdout.readline().split()]
+        assert len(pids) == 2 and all(_alive(p) for p in pids)
+        parent.send_signal(signal.SIGKILL)
+        parent.wait(timeout=10)
+        deadline = time.monotonic() + 5.0
+        while time.monotonic() < deadline and any(_alive(p) for p in pids):
+            time.sleep(0.1)
+        assert not any(_alive(p) for p in pids)
+    finally:
+        if parent.poll() is None:
+            parent.kill()
+
+
+def test_ray_address_that_never_answers_is_given_up_on() -> None:
+    """Issue 16 item 7: one line and exit 2 after --connect-timeout, not ten minutes."""
+    pytest.importorskip("ray", reason="the Ray path needs the [cluster] extra (ray)")
+    import time
+
+    cmd = [sys.executable, "-m", "striatal", "sweep", "--seeds", "1", "--backend", "ray"]
+    cmd += ["--address", "127.0.0.1:1", "--connect-timeout", "2", "--no-progress"]
+    t0 = time.monotonic()
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2, r.stderr
+    assert time.monotonic() - t0 < 30
+    assert len(r.stderr.strip().splitlines()) == 1 and "127.0.0.1:1" in r.stderr
+    assert main(["sweep", "--backend", "ray", "--address", "x:1", "--connect-timeout", "0"]) == 2
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("success_rate", "x"), ("arm", 5), ("wall_seconds_total", {}), ("success_rate_ci", [1])],
+)
+def test_compare_refuses_arm_fields_of_the_wrong_type(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], field: str, value: Any
+) -> None:
+    """Issue 16 item 9: one line and exit 2, not a TypeError."""
+    arm = {
+        "arm": "learner",
+        "init": "chapter",
+        "method": "learn",
+        "runs": 2,
+        "success_rate": 0.5,
+        "unsolved_share": 0.5,
+        "trials_median": 3.0,
+        "wall_seconds_total": 1.0,
+    }
+    path = tmp_path / "summary.json"
+    path.write_text(json.dumps({"arms": [arm]}))
+    assert main(["compare", str(path)]) == 0
+    capsys.readouterr()
+    path.write_text(json.dumps({"arms": [{**arm, field: value}]}))
+    assert main(["compare", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and field in err[0]

@@ -13,14 +13,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from striatal import baselines
-from striatal.ablation import VARIANTS, markdown_table, run_seed, summary, variant
+from striatal import baselines, experiments
+from striatal.ablation import VARIANTS, build, markdown_table, runs_of, summary, variant
 from striatal.cli.learner_options import add_learner_arguments, learner_config_from
 from striatal.errors import ParameterError
 from striatal.learn import random_initial_gains
 from striatal.params import Controller, Plant, Simulation
 
 LEARNER_VARIANTS = [v for v in VARIANTS if v.kind == "learner"]
+
+
+def run_seed(name: str, seed: int, max_trials: int) -> dict[str, object]:
+    """One run of variant ``name`` through the sweep's runner, as ablation.json holds it."""
+    specs, _ = build([variant(name)], [seed], max_trials)
+    (spec,) = specs
+    return runs_of([experiments.run_one(spec)])[0]
 
 
 @pytest.mark.parametrize("v", LEARNER_VARIANTS, ids=[v.name for v in LEARNER_VARIANTS])
@@ -33,7 +40,7 @@ def test_printed_options_select_the_same_config(v: object) -> None:
 
 def test_run_seed_equals_train_from_the_command_line() -> None:
     v = variant("pgpe")
-    row = run_seed(v.config(40), seed=2)
+    row = run_seed("pgpe", 2, 40)
     cmd = [sys.executable, "-m", "striatal", "train", "--init", "random", "--seed", "2"]
     cmd += [*shlex.split(v.options), "--max-trials", "40", "--json"]
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
@@ -48,20 +55,20 @@ def test_run_seed_equals_train_from_the_command_line() -> None:
     assert row["success"] and row["resimulated"]
 
 
-@pytest.mark.parametrize("kind", ["random-search", "cmaes"])
-def test_search_rows_are_seeded_count_trials_and_resimulate(kind: str) -> None:
+@pytest.mark.parametrize("name", ["random-search", "cma-es"])
+def test_search_rows_are_seeded_count_trials_and_resimulate(name: str) -> None:
     """The ablation's search rows run the sweep's baselines, judged on the mean policy."""
-    config = variant("pgpe").config(12)
-    a = run_seed(config, 3, kind)
-    assert a == run_seed(config, 3, kind)
-    assert 1 <= a["trials"] <= 12
+    a = run_seed(name, 3, 12)
+    assert a == run_seed(name, 3, 12)
+    assert 1 <= a["trials"] <= 12  # type: ignore[operator]
+    assert a["simulations"] == a["trials"]  # one trial per candidate, nothing else
     assert a["resimulated"] == a["success"]
     assert a["W0"] == list(random_initial_gains(np.random.default_rng([3, 1])))
 
 
 def test_random_search_row_is_the_sweep_baseline() -> None:
     W0 = random_initial_gains(np.random.default_rng([5, 1]))
-    row = run_seed(variant("random-search").config(20), 5, "random-search")
+    row = run_seed("random-search", 5, 20)
     direct = baselines.random_search(Plant(), Controller(W0, 0.6), Simulation(), 5, 20, "mean")
     assert (row["success"], row["trials"], row["theta_c"]) == (
         direct["success"],
@@ -81,7 +88,7 @@ def test_summary_and_table() -> None:
     none = summary(runs[2:])
     assert none["successes"] == 0 and math.isnan(none["median_trials"])
     table = markdown_table([(variant("pgpe"), s), (variant("chapter"), none)])
-    assert "| 2/3 | 20 |" in table and "| 0/1 | - | - |" in table
+    assert "| 2/3 | - | 20 |" in table and "| 0/1 | - | - | - |" in table
     with pytest.raises(ParameterError):
         variant("nope")
 
@@ -96,5 +103,32 @@ def test_ablation_cli_writes_table_and_runs(tmp_path: Path) -> None:
     assert [row["seed"] for row in runs["pgpe"]["runs"]] == [3, 4]
     assert r.stdout == (out / "ablation.md").read_text()
     assert r.stdout.count("\n") == 4
+    assert "| 2/2 |" in r.stdout or "/2 | [" in r.stdout  # successes with their interval
+    summary_json = json.loads((out / "summary.json").read_text())
+    assert {a["arm"] for a in summary_json["arms"]} == {"pgpe", "random-search"}
+    assert all("success_rate_ci" in a for a in summary_json["arms"])
+    # a rerun resumes: every run is already in runs.csv
+    again = subprocess.run([*cmd, "--out", str(out)], capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0 and again.stdout == r.stdout
     bad = subprocess.run([*cmd[:4], "--variants", "nope"], capture_output=True, text=True)
     assert bad.returncode == 2 and "nope" in bad.stderr
+
+
+@pytest.mark.parametrize("names", ["", " , ", "pgpe,pgpe"])
+def test_ablation_refuses_an_empty_or_repeated_variant_list(names: str) -> None:
+    """Issue 16 item 21: --variants "" ran nothing and exited 0."""
+    cmd = [sys.executable, "-m", "striatal", "ablation", "--seeds", "1", "--variants", names]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert r.stdout == ""
+
+
+def test_control_variants_are_their_learners_declared_control() -> None:
+    from striatal.learners import control_config, default_config
+
+    for name, learner in (("chapter-control", "chapter"), ("pgpe-control", "pgpe")):
+        v = variant(name)
+        cfg = default_config(learner, max_trials=50, success_on="mean")
+        assert v.config(50) == control_config(cfg)
+        assert v.role == "control"
+    assert variant("pgpe-control").config(50).sigma_rate == 0.0

@@ -12,16 +12,34 @@ import pytest
 
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
-from striatal.robustness import (
-    CONDITIONS,
-    Condition,
-    controller_groups,
-    evaluate,
-    mean_policy_trial,
-)
-from striatal.rollout import Protocol, SensorNoise, simulate
+from striatal.robustness import CONDITIONS, Condition, controller_groups, evaluate
+from striatal.rollout import Protocol, SensorNoise, TrialOutcome, run_trial, simulate
 
 FINAL = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
+
+
+def mean_policy_trial(
+    plant: Plant,
+    model: Plant,
+    controller: Controller,
+    sim: Simulation,
+    protocol: Protocol,
+    sensor: SensorNoise,
+    rng: np.random.Generator | None,
+) -> TrialOutcome:
+    """The trial robustness.evaluate runs: the rollout's mean-policy trial, no wrapper."""
+    return run_trial(
+        plant,
+        controller,
+        sim,
+        protocol=protocol,
+        trace=np.zeros(6),
+        gamma=0.0,
+        rng=rng,
+        model=model,
+        sensor=sensor,
+        mean_policy=True,
+    )
 
 
 def test_nominal_run_equals_simulate() -> None:
@@ -90,3 +108,26 @@ def test_cli_table_and_clear_error(tmp_path: Path) -> None:
         timeout=60,
     )
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_evaluate_is_the_rollout_mean_policy_trial() -> None:
+    """evaluate's verdict on a mismatched plant equals the rollout's own mean-policy trial."""
+    heavy = Condition("heavy", pole_mass=1.2, length=1.2)
+    plant = Plant().scaled(pole_mass=1.2, length=1.2)
+    o = mean_policy_trial(plant, Plant(), FINAL, Simulation(), Protocol(), SensorNoise(), None)
+    assert evaluate([FINAL], heavy)["success"] == float(o.success)
+
+
+@pytest.mark.parametrize("runs", ['"x"', "[5]", '[{"success": true, "W": "x", "theta_c": 1}]'])
+def test_cli_refuses_an_ablation_json_with_malformed_runs(tmp_path: Path, runs: str) -> None:
+    """Issue 16 item 10: one line on stderr and exit 2, not an AttributeError."""
+    bad = tmp_path / "ablation.json"
+    bad.write_text('{"pgpe": {"runs": ' + runs + "}}")
+    r = subprocess.run(
+        [sys.executable, "-m", "striatal", "robustness", str(bad)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert r.returncode == 2, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr

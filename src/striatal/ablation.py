@@ -4,26 +4,34 @@ Every run starts from W(0) uniform in [-1, 1]^6 (W1 floored) and theta_c(0) = 0.
 drawn exactly as ``striatal train --init random --seed S`` draws them, with the
 policy noise seeded by S, so any row of the table can be rerun on its own with
 ``striatal train --init random --seed S --learner ... --success-on mean``.
-Success is the chapter's success test on the mean policy; "trials" counts the
-learner's 60-s trials (the mean-policy check of each trial is not counted, as in
-``train --success-on mean``).
+Success is the chapter's success test on the mean policy. The variants are arms of
+one sweep (:func:`striatal.experiments.sweep`: resume, progress, the Ray backend,
+the output folder's lock), with seeds S..S+N-1 and init "random". "trials" counts
+the learner's 60-s trials; "simulations" every simulated trial, the mean-policy
+checks of ``--success-on mean`` included (pgpe judges the candidate its trial ran,
+so its check is that trial). The ``-control`` variants are their learner's declared
+no-learning control (:func:`striatal.learners.control_config`).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from striatal import baselines, experiments
+from striatal import experiments
 from striatal.errors import ParameterError
-from striatal.learners import LearnerConfig, default_config, random_initial_gains
-from striatal.params import CHAPTER_INITIAL_THETA_C, Controller, Plant, Simulation
-from striatal.rollout import Protocol, simulate
+from striatal.learners import LearnerConfig, control_config, default_config
+from striatal.params import (
+    CHAPTER_INITIAL_THETA_C,
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+)
 
 
 @dataclass(frozen=True)
@@ -35,11 +43,28 @@ class Variant:
     changes: tuple[tuple[str, Any], ...]
     what: str
     kind: str = "learner"
+    control: bool = False
 
     def config(self, max_trials: int) -> LearnerConfig:
-        return default_config(
+        """The learner's preset with the changes (and, for a control, learning off)."""
+        cfg = default_config(
             self.learner, max_trials=max_trials, success_on="mean", **dict(self.changes)
         )
+        return control_config(cfg) if self.control else cfg
+
+    @property
+    def method(self) -> str:
+        """The sweep's method: "learn", or the baseline ("random", "cmaes")."""
+        return {"learner": "learn", "random-search": "random"}.get(self.kind, self.kind)
+
+    @property
+    def role(self) -> str:
+        if self.kind != "learner":
+            return "baseline"
+        return "control" if self.control else "learner"
+
+    def arm(self, max_trials: int) -> experiments.Arm:
+        return experiments.Arm(self.name, self.method, self.config(max_trials), self.role)
 
     @property
     def options(self) -> str:
@@ -47,7 +72,10 @@ class Variant:
         if self.kind != "learner":
             return f"(striatal.baselines.{self.kind.replace('-', '_')}, success on mean)"
         parts = [f"--learner {self.learner}"]
-        for k, v in self.changes:
+        changes = dict(self.changes)
+        if self.control:
+            changes.update(_control(self))
+        for k, v in changes.items():
             flag = "--" + k.replace("_", "-")
             if isinstance(v, bool):
                 parts.append(flag if v else "--no-" + k.replace("_", "-"))
@@ -58,7 +86,7 @@ class Variant:
 
 VARIANTS: tuple[Variant, ...] = (
     Variant("chapter", "chapter", (), "the chapter's rule (alpha 5, sparse reward, b = 0)"),
-    Variant("chapter-control", "chapter", (("alpha", 0.0),), "its alpha = 0 control"),
+    Variant("chapter-control", "chapter", (), "its no-learning control (alpha = 0)", control=True),
     Variant("rpe", "rpe", (), "chapter rule, delta = r - b with tracked b, normalised"),
     Variant("rpe-raw", "rpe", (("normalise", False),), "rpe, delta not normalised"),
     Variant("rpe-shaped", "rpe", (("reward", "shaped"),), "rpe with the shaped reward"),
@@ -90,7 +118,14 @@ VARIANTS: tuple[Variant, ...] = (
     ),
     Variant("pgpe-adaptive-sigma", "pgpe", (("sigma_rate", 0.1),), "pgpe, adaptive exploration"),
     Variant("pgpe-rpe-rate-0.3", "pgpe", (("rpe_rate", 0.3),), "pgpe, baseline rate 0.3"),
-    Variant("pgpe-control", "pgpe", (("alpha", 0.0),), "its alpha = 0 control"),
+    Variant(
+        "pgpe-control",
+        "pgpe",
+        (),
+        "its no-learning control (alpha = 0, sigma_rate = 0): the same perturbations "
+        "around W(0), no update",
+        control=True,
+    ),
     Variant(
         "pgpe-robust",
         "pgpe",
@@ -108,7 +143,8 @@ VARIANTS: tuple[Variant, ...] = (
         "cma-es",
         "pgpe",
         (),
-        "CMA-ES over (W, theta_c) from (W(0), 0.6), sigma0 1, on the shaped reward",
+        "IPOP-CMA-ES over (W, theta_c) from (W(0), 0.6), sigma0 1, population 9 doubled "
+        "at each restart, on the shaped reward",
         kind="cmaes",
     ),
 )
@@ -122,52 +158,59 @@ def variant(name: str) -> Variant:
     raise ParameterError(f"no variant {name!r}; choose from {', '.join(VARIANT_NAMES)}")
 
 
-def run_seed(config: LearnerConfig, seed: int, kind: str = "learner") -> dict[str, Any]:
-    """One learning run from the random W(0) of ``seed``; the learned gains re-simulated.
+def _control(v: Variant) -> dict[str, Any]:
+    from striatal.learners import rule_of
 
-    ``kind`` "random-search" or "cmaes" runs that baseline of the sweep instead
-    (:func:`striatal.baselines.random_search`, :func:`striatal.baselines.cmaes`,
-    success judged on the mean policy) with ``config.max_trials`` trials.
-    """
-    W0 = random_initial_gains(np.random.default_rng([seed, 1]))
-    template = Controller(W0, CHAPTER_INITIAL_THETA_C)
-    plant, sim = Plant(), Simulation()
-    if kind == "random-search":
-        found = baselines.random_search(plant, template, sim, seed, config.max_trials, "mean")
-    elif kind == "cmaes":
-        found = baselines.cmaes(
-            plant, template, sim, W0, CHAPTER_INITIAL_THETA_C, seed, config.max_trials, "mean"
-        )
-    else:
-        found = experiments.learning_run(plant, template, config, seed, sim)
-    resimulated = False
-    if found["success"]:
-        learned = template.with_gains(tuple(found["W"]), found["theta_c"])
-        resimulated = simulate(plant, learned, sim, protocol=Protocol()).outcome.success
-    return {
-        "seed": seed,
-        "success": bool(found["success"]),
-        "trials": int(found["trials"]),
-        "W0": list(W0),
-        "W": [float(v) for v in found["W"]],
-        "theta_c": float(found["theta_c"]),
-        "resimulated": resimulated,
+    return dict(rule_of(v.learner).control)
+
+
+def build(
+    variants: Sequence[Variant], seeds: Sequence[int], max_trials: int, eval_draws: int = 0
+) -> tuple[list[experiments.RunSpec], dict[str, Any]]:
+    """(specs, settings) of the ablation sweep: every variant an arm, init "random"."""
+    if not variants:
+        raise ParameterError("no variant to run: name at least one")
+    arms = [v.arm(max_trials) for v in variants]
+    specs, arm_settings = experiments.specs_of(
+        arms,
+        template=Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
+        plant=Plant(),
+        sim=Simulation(),
+        seeds=seeds,
+        inits=("random",),
+        eval_draws=eval_draws,
+    )
+    settings = {
+        "command": "striatal ablation",
+        "seeds": list(seeds),
+        "init": "random",
+        "theta_c0": CHAPTER_INITIAL_THETA_C,
+        "max_trials": max_trials,
+        "success_on": "mean",
+        "eval_draws": eval_draws,
+        "arms": arm_settings,
+        "variants": {v.name: {"options": v.options, "what": v.what} for v in variants},
+        "budget": experiments.NOTE_BUDGET,
     }
+    return specs, settings
 
 
-def _run_one(job: tuple[LearnerConfig, int, str]) -> dict[str, Any]:
-    return run_seed(*job)
-
-
-def run_variant(
-    config: LearnerConfig, seeds: Sequence[int], workers: int = 1, kind: str = "learner"
-) -> list[dict[str, Any]]:
-    """run_seed for every seed, in ``workers`` processes (results in seed order)."""
-    jobs = [(config, s, kind) for s in seeds]
-    if workers <= 1:
-        return [_run_one(j) for j in jobs]
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        return list(pool.map(_run_one, jobs, chunksize=4))
+def runs_of(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The rows of one variant as ablation.json's "runs" (seed order)."""
+    return [
+        {
+            "seed": int(r["seed"]),
+            "success": bool(r["success"]),
+            "trials": int(r["trials"]),
+            "simulations": int(r["simulations"]),
+            "simulated_seconds": float(r["simulated_seconds"]),
+            "W0": [float(r[f"W0_{i}"]) for i in range(1, 7)],
+            "W": [float(r[f"W{i}"]) for i in range(1, 7)],
+            "theta_c": float(r["theta_c"]),
+            "resimulated": bool(r["success"] and r["mean_policy_success"]),
+        }
+        for r in sorted(rows, key=lambda r: int(r["seed"]))
+    ]
 
 
 def summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
@@ -182,20 +225,47 @@ def summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
-def markdown_table(rows: Sequence[tuple[Variant, dict[str, Any]]]) -> str:
-    """The ablation table, one row per variant."""
+def table_rows(
+    variants: Sequence[Variant], result: experiments.SweepResult
+) -> tuple[list[tuple[Variant, dict[str, Any]]], dict[str, Any]]:
+    """(table rows, ablation.json) of a finished ablation sweep, in the variants' order.
 
-    def num(v: float) -> str:
-        return "-" if not math.isfinite(v) else f"{v:g}"
+    Each row's statistics: :func:`summary` of its runs plus the sweep summary's arm
+    block (success_rate_ci, simulations_median and its interval...).
+    """
+    arms = {a["arm"]: a for a in result.summary["arms"]}
+    rows, data = [], {}
+    for v in variants:
+        runs = runs_of([r for r in result.rows if r["arm"] == v.name])
+        cfg = result.summary["settings"]["arms"][v.name]["config"]
+        data[v.name] = {"options": v.options, "config": cfg, "runs": runs}
+        rows.append((v, {**arms.get(v.name, {}), **summary(runs)}))
+    return rows, data
+
+
+def markdown_table(rows: Sequence[tuple[Variant, dict[str, Any]]]) -> str:
+    """The ablation table, one row per variant (95 % intervals: Wilson for the success
+    rate, bootstrap for the median simulations to success)."""
+
+    def num(v: Any) -> str:
+        return "-" if not isinstance(v, int | float) or not math.isfinite(v) else f"{v:g}"
+
+    def ci(v: Any, fmt: str = "g") -> str:
+        if not isinstance(v, list | tuple) or len(v) != 2:
+            return ""
+        return f" [{format(v[0], fmt)}, {format(v[1], fmt)}]"
 
     lines = [
-        "| variant | options | what | success | median trials | 90th pct | re-simulated |",
-        "|---|---|---|---|---|---|---|",
+        "| variant | options | what | success | 95% CI | median trials | 90th pct | "
+        "median simulations [95% CI] | re-simulated |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for v, s in rows:
         lines.append(
             f"| {v.name} | `{v.options}` | {v.what} | {s['successes']}/{s['runs']} | "
+            f"{ci(s.get('success_rate_ci'), '.2f').strip() or '-'} | "
             f"{num(s['median_trials'])} | {num(s['p90_trials'])} | "
+            f"{num(s.get('simulations_median'))}{ci(s.get('simulations_median_ci'))} | "
             f"{s['resimulated']}/{s['successes']} |"
         )
     return "\n".join(lines) + "\n"

@@ -28,7 +28,20 @@ cmaes
     size 1, bounded to W1 >= W1_FLOOR and theta_c in [0.2, 1.4], minimising minus the
     dense score :func:`striatal.learners.common.shaped_reward` of each candidate's trial (the
     sparse +10/-5 reward of eqs 24-25 is almost flat for a black-box search). Success
-    when a candidate's trial passes the success test.
+    when a candidate's trial passes the success test. Population: cma's default
+    4 + floor(3 ln 7) = 9 candidates per generation. Restarts: IPOP-CMA-ES (Auger and
+    Hansen 2005), the rule of ``cma.fmin(..., restarts=, incpopsize=2)``: whenever cma's
+    own termination criteria fire (``es.stop()``), a new run starts from (W(0),
+    theta_c(0)) with step size 1 and twice the population, until ``max_trials``
+    candidates were tried. It is written as an ask/tell loop rather than through
+    ``cma.fmin`` so that the first passing candidate ends the search and every
+    candidate is one counted trial (BIPOP is not used: cma draws its population
+    sizes from NumPy's global generator, which the seed does not govern).
+
+Budget: every baseline reports ``simulations`` (every trial it ran, one per
+candidate; a fixed controller's mean-policy verdict is one) and
+``simulated_seconds`` (their simulated time, each trial ending at T_f or when it
+fails early).
 
 For the fixed controllers (lqr, hand) with the "noisy" reading, the seed's generator
 draws a new noisy trial each time until one passes; with "mean" the one noise-free
@@ -151,8 +164,8 @@ def _trial(
     success_on: SuccessOn,
     rng: np.random.Generator,
     shaped: bool = False,
-) -> tuple[bool, float]:
-    """(success, shaped score or nan) of one 60-s trial of p = (W1..W6, theta_c)."""
+) -> tuple[bool, float, float]:
+    """(success, shaped score or nan, simulated seconds) of one 60-s trial of p."""
     controller = template.with_gains(template.gains, float(p[6]))
     W = np.array(p[:N_GAINS], dtype=float)
     noise = rng if success_on == "noisy" else None
@@ -167,7 +180,8 @@ def _trial(
             trace=np.zeros(N_GAINS),
             gamma=0.0,
         )
-        return outcome.success, shaped_reward(data, outcome, plant, sim, Protocol())
+        score = shaped_reward(data, outcome, plant, sim, Protocol())
+        return outcome.success, score, outcome.ended_at
     outcome = run_trial(
         plant,
         controller,
@@ -178,15 +192,19 @@ def _trial(
         rng=noise,
         gains=W,
     )
-    return outcome.success, math.nan
+    return outcome.success, math.nan, outcome.ended_at
 
 
-def _result(ok: bool, trials: int, p: np.ndarray) -> dict[str, Any]:
+def _result(ok: bool, trials: int, p: np.ndarray, seconds: float, **extra: Any) -> dict[str, Any]:
+    """A baseline's outcome; ``trials`` is also its number of simulations (one per trial)."""
     return {
         "success": ok,
         "trials": trials,
         "W": tuple(float(v) for v in p[:N_GAINS]),
         "theta_c": float(p[N_GAINS]),
+        "simulations": trials,
+        "simulated_seconds": seconds,
+        **extra,
     }
 
 
@@ -204,10 +222,14 @@ def fixed_controller(
     p = np.array([*W, theta_c])
     rng = np.random.default_rng(seed)
     budget = max_trials if success_on == "noisy" else 1
+    seconds = 0.0
     for trial in range(1, budget + 1):
-        if _trial(plant, template, sim, p, success_on, rng)[0]:
-            return _result(True, trial, p)
-    return _result(False, max_trials, p)
+        ok, _, t = _trial(plant, template, sim, p, success_on, rng)
+        seconds += t
+        if ok:
+            return _result(True, trial, p, seconds)
+    # "mean": the one noise-free trial decided (unsolved at max_trials, 1 simulation)
+    return {**_result(False, max_trials, p, seconds), "simulations": budget}
 
 
 def random_search(
@@ -223,12 +245,15 @@ def random_search(
     rng = np.random.default_rng(seed)
     low, high = RANDOM_BOX
     p = draw.uniform(low, high)
+    seconds = 0.0
     for trial in range(1, max_trials + 1):
         if trial > 1:
             p = draw.uniform(low, high)
-        if _trial(plant, template, sim, p, success_on, rng)[0]:
-            return _result(True, trial, p)
-    return _result(False, max_trials, p)
+        ok, _, t = _trial(plant, template, sim, p, success_on, rng)
+        seconds += t
+        if ok:
+            return _result(True, trial, p, seconds)
+    return _result(False, max_trials, p, seconds)
 
 
 def cmaes(
@@ -242,35 +267,49 @@ def cmaes(
     success_on: SuccessOn,
     sigma0: float = 1.0,
 ) -> dict[str, Any]:
-    """CMA-ES over (W1..W6, theta_c) from (W0, theta_c0) on minus the shaped reward."""
+    """IPOP-CMA-ES over (W1..W6, theta_c) from (W0, theta_c0) on minus the shaped reward.
+
+    ``restarts`` in the result: how many times the search restarted with a doubled
+    population; ``popsize``: the population of the last run.
+    """
     import cma
 
     low, high = RANDOM_BOX
     lower = np.array([W1_FLOOR, *[-np.inf] * 5, low[6]])
     upper = np.array([*[np.inf] * 6, high[6]])
     x0 = np.clip(np.array([*W0, theta_c0]), lower + 1e-9, upper - 1e-9)
-    opts = {
+    opts: dict[str, Any] = {
         "seed": int(seed) % (2**31 - 1) + 1,
         "bounds": [[W1_FLOOR, *[None] * 5, low[6]], [*[None] * 6, high[6]]],
         "verbose": -9,
     }
-    es = cma.CMAEvolutionStrategy(x0.tolist(), sigma0, opts)
     rng = np.random.default_rng(seed)
-    trials = 0
+    trials, seconds, restarts = 0, 0.0, 0
     p = x0
+    popsize = 0
     while trials < max_trials:
-        candidates = es.ask()
-        losses = []
-        for x in candidates:
-            trials += 1
-            p = np.clip(np.array(x), lower, upper)
-            ok, score = _trial(plant, template, sim, p, success_on, rng, shaped=True)
-            if ok:
-                return _result(True, trials, p)
-            losses.append(-score)
-            if trials >= max_trials:
+        if restarts:
+            # IPOP: cma.fmin's incpopsize = 2; the seed moves on so the run differs
+            opts = {**opts, "popsize": 2 * popsize, "seed": opts["seed"] + 1}
+        es = cma.CMAEvolutionStrategy(x0.tolist(), sigma0, opts)
+        popsize, started = int(es.popsize), trials
+        while trials < max_trials and not es.stop():
+            candidates = es.ask()
+            losses = []
+            for x in candidates:
+                trials += 1
+                p = np.clip(np.array(x), lower, upper)
+                ok, score, t = _trial(plant, template, sim, p, success_on, rng, shaped=True)
+                seconds += t
+                if ok:
+                    return _result(True, trials, p, seconds, restarts=restarts, popsize=popsize)
+                losses.append(-score)
+                if trials >= max_trials:
+                    break
+            if len(losses) < len(candidates):
                 break
-        if len(losses) < len(candidates):
+            es.tell(candidates, losses)
+        if trials == started:  # stopped before its first candidate: nothing more to try
             break
-        es.tell(candidates, losses)
-    return _result(False, max_trials, p)
+        restarts += 1
+    return _result(False, max_trials, p, seconds, restarts=restarts - 1, popsize=popsize)

@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
-from striatal.params import Controller, Plant, Simulation, check_seed
-from striatal.rollout import Protocol, SensorNoise, TrialOutcome, run_trial
+from striatal.params import N_GAINS, Controller, Plant, Simulation, check_seed
+from striatal.rollout import Protocol, SensorNoise, run_trial
 from striatal.rundir import result_of
 
 
@@ -53,35 +53,6 @@ CONDITIONS: tuple[Condition, ...] = (
 )
 
 
-def mean_policy_trial(
-    plant: Plant,
-    model: Plant,
-    controller: Controller,
-    sim: Simulation,
-    protocol: Protocol,
-    sensor: SensorNoise,
-    rng: np.random.Generator | None,
-) -> TrialOutcome:
-    """One trial of the mean policy on the true ``plant``, the controller believing ``model``.
-
-    Sensor noise (if active) is drawn from ``rng``; the policy itself draws nothing.
-    """
-    if sensor.active and rng is None:
-        raise ParameterError("sensor noise needs a random generator")
-    return run_trial(
-        plant,
-        controller,
-        sim,
-        protocol=protocol,
-        trace=np.zeros(6),
-        gamma=0.0,
-        rng=rng,
-        model=model,
-        sensor=sensor,
-        mean_policy=True,
-    )
-
-
 def evaluate(
     controllers: Sequence[Controller],
     condition: Condition,
@@ -93,7 +64,9 @@ def evaluate(
     """Fractions of runs passing the success test and balanced at T_f, over controllers.
 
     Each controller runs once without sensor noise, or ``repeats`` times with
-    independent sensor noise (streams spawned from ``seed``).
+    independent sensor noise (streams spawned from ``seed``). Every run is one
+    :func:`striatal.rollout.run_trial` with ``mean_policy=True`` on the true plant,
+    the controller believing ``nominal`` (the generator draws only the sensor noise).
     """
     if not controllers:
         raise ParameterError("no controllers to evaluate")
@@ -107,7 +80,18 @@ def evaluate(
     for controller, ss in zip(controllers, streams, strict=True):
         rng = np.random.default_rng(ss)
         for _ in range(n):
-            o = mean_policy_trial(plant, nominal, controller, sim, protocol, condition.sensor, rng)
+            o = run_trial(
+                plant,
+                controller,
+                sim,
+                protocol=protocol,
+                trace=np.zeros(N_GAINS),
+                gamma=0.0,
+                rng=rng,
+                model=nominal,
+                sensor=condition.sensor,
+                mean_policy=True,
+            )
             success += o.success
             balanced += o.reward == protocol.reward_success
     total = n * len(controllers)
@@ -158,11 +142,19 @@ def controller_groups(
     if isinstance(data, dict) and all(isinstance(v, dict) and "runs" in v for v in data.values()):
         groups = []
         for name in [v for v in variants if v in data] if variants else list(data):
-            ctrls = [
-                Controller(gains=r["W"], theta_c=r["theta_c"])
-                for r in data[name]["runs"]
-                if r.get("success")
-            ]
+            runs = data[name]["runs"]
+            if not isinstance(runs, list) or not all(isinstance(r, dict) for r in runs):
+                raise ParameterError(f'variant {name!r}: "runs" must be a list of objects')
+            ctrls = []
+            for i, r in enumerate(runs):
+                if not r.get("success"):
+                    continue
+                try:
+                    ctrls.append(Controller(gains=tuple(r["W"]), theta_c=r["theta_c"]))
+                except (KeyError, TypeError, ValueError, ParameterError) as exc:
+                    raise ParameterError(
+                        f"variant {name!r} run {i}: no valid W and theta_c ({exc})"
+                    ) from None
             if ctrls:
                 groups.append((name, ctrls))
         return groups

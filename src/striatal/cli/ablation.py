@@ -1,11 +1,17 @@
-"""``striatal ablation``: the learner variants side by side from random initial gains."""
+"""``striatal ablation``: the learner variants side by side from random initial gains.
+
+A thin layer over the sweep: each variant is an arm of one
+:func:`striatal.experiments.sweep` (resume, progress bar, the Ray backend, the
+output folder's lock); the table and ablation.json are written from its rows.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
 
-from striatal.ablation import VARIANT_NAMES, markdown_table, run_variant, summary, variant
+from striatal import experiments
+from striatal.ablation import VARIANT_NAMES, build, markdown_table, table_rows, variant
 from striatal.cli import options
 from striatal.errors import ParameterError
 from striatal.files import atomic_write_text, check_out_dir, write_json
@@ -15,8 +21,10 @@ ORDER = 45
 HELP = "compare the learner variants over many seeds from random W(0)"
 DESCRIPTION = (
     "Run each named learner variant from W(0) uniform in [-1, 1]^6 (as train --init random) "
-    "for seeds S..S+N-1 and tabulate success (mean policy) and trials to success "
-    "(docs/ablation.md)."
+    "for seeds S..S+N-1 and tabulate success (mean policy, Wilson 95 % interval), trials "
+    "and simulations to success (docs/ablation.md). The variants are arms of one sweep: "
+    "with --out, runs.csv, summary.json, ablation.json and ablation.md are written there "
+    "and a rerun with the same options resumes."
 )
 
 
@@ -31,13 +39,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=",".join(VARIANT_NAMES),
         help="comma-separated names from: " + ", ".join(VARIANT_NAMES),
     )
+    parser.add_argument(
+        "--eval-draws",
+        type=int,
+        default=0,
+        help="noisy trials of each pass-probability estimate (W(0) and final gains), "
+        "counted apart as eval_simulations; 0: none",
+    )
     parser.add_argument("--workers", type=int, default=2, help="worker processes")
+    parser.add_argument("--backend", choices=("local", "ray"), default="local")
+    parser.add_argument("--address", default=None, help="Ray cluster HOST:PORT (--backend ray)")
+    parser.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=experiments.CONNECT_TIMEOUT,
+        help="give up on a Ray address that accepts no connection after this many seconds",
+    )
     parser.add_argument(
         "--out",
         type=options.out_path,
         default=None,
-        help="write ablation.json and ablation.md here",
+        help="write runs.csv, summary.json, ablation.json and ablation.md here",
     )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -49,19 +73,36 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--first-seed must be >= 0, got {args.first_seed}")
     if args.workers < 1:
         raise ParameterError(f"--workers must be >= 1, got {args.workers}")
-    chosen = [variant(n.strip()) for n in args.variants.split(",") if n.strip()]
-    configs = [v.config(args.max_trials) for v in chosen]
-    rows = []
-    runs = {}
-    for v, config in zip(chosen, configs, strict=True):
-        seeds = range(args.first_seed, args.first_seed + args.seeds)
-        result = run_variant(config, seeds, args.workers, v.kind)
-        runs[v.name] = {"options": v.options, "config": config.to_dict(), "runs": result}
-        rows.append((v, summary(result)))
-        print(f"{v.name}: {rows[-1][1]}", file=sys.stderr, flush=True)
+    if args.backend == "ray" and not args.address:
+        raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
+    if not args.connect_timeout > 0:
+        raise ParameterError(f"--connect-timeout must be > 0 seconds, got {args.connect_timeout}")
+    names = [n.strip() for n in args.variants.split(",") if n.strip()]
+    if not names:
+        raise ParameterError(f"--variants names no variant; choose from {', '.join(VARIANT_NAMES)}")
+    if len(set(names)) != len(names):
+        raise ParameterError("--variants names a variant twice")
+    chosen = [variant(n) for n in names]
+    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+    specs, settings = build(chosen, seeds, args.max_trials, args.eval_draws)
+    result = experiments.sweep(
+        specs,
+        settings,
+        out=args.out,
+        max_trials=args.max_trials,
+        backend=args.backend,
+        workers=args.workers,
+        address=args.address,
+        connect_timeout=args.connect_timeout,
+        progress=not args.no_progress and sys.stderr.isatty(),
+    )
+    rows, data = table_rows(chosen, result)
+    for v, s in rows:
+        brief = {k: s[k] for k in ("runs", "successes", "median_trials", "p90_trials")}
+        print(f"{v.name}: {brief}", file=sys.stderr, flush=True)
     table = markdown_table(rows)
     if args.out is not None:
-        write_json(args.out / "ablation.json", runs)
+        write_json(args.out / "ablation.json", data)
         atomic_write_text(args.out / "ablation.md", table)
     sys.stdout.write(table)
     return 0

@@ -17,12 +17,40 @@ ORDER = 41
 HELP = "print the comparison table (markdown) of sweep summaries and write it as JSON"
 DESCRIPTION = (
     "Read summary.json of one or more sweeps (a folder or the file itself), print one "
-    "markdown table of every arm (learner, alpha = 0 control, baselines) per init, and "
-    "optionally write the rows as JSON. Run the arms with "
-    "'striatal sweep --baselines lqr,hand,random,cmaes'."
+    "markdown table of every arm (learner, its no-learning control, baselines) per init: "
+    "success rate with its Wilson 95 % interval, simulations to success (median and IQM "
+    "with bootstrap 95 % intervals), then each learner against its control (Fisher's "
+    "exact test, McNemar's on the shared seeds); optionally write the rows as JSON. Run "
+    "the arms with 'striatal sweep --baselines lqr,hand,random,cmaes'."
 )
 
-_KEYS = ("arm", "init", "method", "runs", "success_rate", "unsolved_share", "trials_median")
+#: Fields every arm must have, with the JSON types each may take (None: JSON null).
+_FIELDS: dict[str, tuple[type, ...]] = {
+    "arm": (str,),
+    "init": (str,),
+    "method": (str,),
+    "runs": (int,),
+    "success_rate": (int, float, type(None)),
+    "unsolved_share": (int, float, type(None)),
+    "trials_median": (int, float, type(None)),
+}
+#: Optional fields, checked when present.
+_OPTIONAL: dict[str, tuple[type, ...]] = {
+    "role": (str,),
+    "learner": (str,),
+    "success_rate_ci": (list, type(None)),
+    "simulations_median": (int, float, type(None)),
+    "simulations_median_ci": (list, type(None)),
+    "simulations_iqm": (int, float, type(None)),
+    "simulations_iqm_ci": (list, type(None)),
+    "simulations_total": (int, type(None)),
+    "mean_policy_success_rate": (int, float, type(None)),
+    "trials_q1": (int, float, type(None)),
+    "trials_q3": (int, float, type(None)),
+    "pass_rate_W0_mean": (int, float, type(None)),
+    "pass_rate_mean": (int, float, type(None)),
+    "wall_seconds_total": (int, float, type(None)),
+}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -32,24 +60,62 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _check_fields(obj: dict[str, Any], where: str) -> None:
+    for name in _FIELDS:
+        if name not in obj:
+            raise DataFileError(f"{where} has an arm without {name!r}")
+    for name, types in (*_FIELDS.items(), *_OPTIONAL.items()):
+        if name not in obj:
+            continue
+        v = obj[name]
+        if isinstance(v, bool) or not isinstance(v, types):
+            raise DataFileError(
+                f"{where}: arm field {name!r} is {type(v).__name__} {v!r:.40}, "
+                f"expected {' or '.join('null' if t is type(None) else t.__name__ for t in types)}"
+            )
+        if isinstance(v, list) and (
+            len(v) != 2 or any(isinstance(x, bool) or not isinstance(x, int | float) for x in v)
+        ):
+            raise DataFileError(f"{where}: arm field {name!r} must be [low, high], got {v!r:.40}")
+
+
 def load_summary(path: Path) -> dict[str, Any]:
-    """A sweep's summary.json (from its folder or the file), checked for its arms."""
+    """A sweep's summary.json (from its folder or the file), checked for its arms and
+    the types of their fields (issue 16 item 9)."""
     p = path / "summary.json" if path.is_dir() else path
     data = read_json(p, what="sweep summary")
     if not isinstance(data, dict) or not isinstance(data.get("arms"), list):
         raise DataFileError(f"{p} is not the summary.json of a striatal sweep")
     for a in data["arms"]:
-        if not isinstance(a, dict) or any(k not in a for k in _KEYS):
-            raise DataFileError(f"{p} has an arm without {', '.join(_KEYS)}")
+        if not isinstance(a, dict):
+            raise DataFileError(f"{p} has an arm that is not an object")
+        _check_fields(a, str(p))
+    pairs = data.get("learner_vs_control", [])
+    if not isinstance(pairs, list) or not all(
+        isinstance(c, dict)
+        and isinstance(c.get("arm"), str)
+        and isinstance(c.get("control"), str)
+        and isinstance(c.get("init"), str)
+        and isinstance(c.get("fisher"), dict)
+        and isinstance(c["fisher"].get("p_value"), int | float)
+        and isinstance(c.get("mcnemar"), dict | type(None))
+        for c in pairs
+    ):
+        pairs = []  # a summary from before the tests were recorded: no comparison to print
+    data["learner_vs_control"] = pairs
+    settings = data.get("settings", {})
+    data["settings"] = settings if isinstance(settings, dict) else {}
     return data
 
 
 def learner_of(summary: dict[str, Any], arm: str) -> str | None:
     """The learner (chapter, rpe, pgpe) of a learning arm of a sweep, or None."""
-    cfg = summary.get("settings", {}).get("arms", {}).get(arm, {})
+    arms = summary.get("settings", {}).get("arms", {})
+    cfg = arms.get(arm, {}) if isinstance(arms, dict) else {}
     if not isinstance(cfg, dict) or cfg.get("method") != "learn":
         return None
-    learner = cfg.get("config", {}).get("learner")
+    config = cfg.get("config", {})
+    learner = config.get("learner") if isinstance(config, dict) else None
     return learner if isinstance(learner, str) else None
 
 
@@ -72,13 +138,17 @@ def run(args: argparse.Namespace) -> int:
     summaries = [load_summary(p) for p in args.summaries]
     arms = label_arms(summaries, [str(p) for p in args.summaries])
     arms.sort(key=lambda a: (a["init"], a["arm"]))
-    table = experiments.markdown_table({"arms": arms})
+    pairs = [c for s in summaries for c in s["learner_vs_control"]]
+    table = experiments.markdown_table({"arms": arms, "learner_vs_control": pairs})
     if args.out is not None:
         write_json(
             args.out,
             {
                 "arms": arms,
-                "notes": [experiments.NOTE_CONTROL],
+                "learner_vs_control": pairs,
+                "notes": list(
+                    dict.fromkeys(n for s in summaries for n in s.get("notes", []) or [])
+                ),
                 "settings": [s.get("settings", {}) for s in summaries],
             },
         )

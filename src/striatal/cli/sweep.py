@@ -15,12 +15,16 @@ from striatal.rollout import Protocol
 
 COMMAND = "sweep"
 ORDER = 40
-HELP = "many learning runs over seeds (and a grid), with the alpha = 0 control and baselines"
+HELP = "many learning runs over seeds (and a grid), with the learner's control and baselines"
 DESCRIPTION = (
     "Run the learner for N seeds spawned from --seed (SeedSequence), for each --init and "
-    "each alpha x gamma of the grid, plus the alpha = 0 control arm and any --baselines. "
-    "Writes runs.csv (one row per run, appended as runs finish; a rerun with the same --out "
-    "skips finished runs) and summary.json. Row seed S reruns alone as "
+    "each alpha x gamma of the grid, plus the learner's declared no-learning control arm "
+    "(chapter, rpe: alpha = 0; pgpe: alpha = 0 and sigma_rate = 0, exploration without "
+    "learning) and any --baselines. Every run counts its simulated trials (simulations, "
+    "success checks included). Writes runs.csv (one row per run, appended as runs finish; "
+    "a rerun with the same --out skips finished runs) and summary.json (success rates with "
+    "Wilson intervals, simulations to success with bootstrap intervals, Fisher and McNemar "
+    "tests of the learner against its control). Row seed S reruns alone as "
     "'striatal train --seed S --init INIT' with the same learner options."
 )
 
@@ -51,7 +55,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     g.add_argument("--alpha-grid", default=None, help="comma-separated alphas (default: --alpha)")
     g.add_argument("--gamma-grid", default=None, help="comma-separated gammas (default: --gamma)")
-    g.add_argument("--no-control", action="store_true", help="skip the alpha = 0 control arm")
+    g.add_argument(
+        "--no-control", action="store_true", help="skip the learner's no-learning control arm"
+    )
+    g.add_argument(
+        "--eval-draws",
+        type=int,
+        default=experiments.EVAL_DRAWS,
+        help="noisy trials of each pass-probability estimate (W(0) and final gains of every "
+        "run), counted as eval_simulations, not in the budget; 0: none",
+    )
     g.add_argument(
         "--baselines",
         default="",
@@ -67,6 +80,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     eg = parser.add_argument_group("engine and output")
     eg.add_argument("--backend", choices=("local", "ray"), default="local")
     eg.add_argument("--address", default=None, help="Ray cluster address HOST:PORT (--backend ray)")
+    eg.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=experiments.CONNECT_TIMEOUT,
+        help="give up on a Ray address that accepts no connection after this many seconds",
+    )
     eg.add_argument("--workers", type=int, default=1, help="local worker processes")
     eg.add_argument(
         "--out", type=options.out_path, default=None, help="write runs.csv, summary.json here"
@@ -85,6 +104,10 @@ def prepare(
         raise ParameterError(f"--workers must be >= 1, got {args.workers}")
     if args.backend == "ray" and not args.address:
         raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
+    if not args.connect_timeout > 0:
+        raise ParameterError(f"--connect-timeout must be > 0 seconds, got {args.connect_timeout}")
+    if args.eval_draws < 0:
+        raise ParameterError(f"--eval-draws must be >= 0, got {args.eval_draws}")
     config = learner_options.learner_config_from(args)
     plant = options.plant_from(args)
     sim = Simulation(duration=args.duration, dt=args.dt)
@@ -105,6 +128,7 @@ def prepare(
         gammas=gammas,
         control=not args.no_control,
         methods=methods,
+        eval_draws=args.eval_draws,
     )
     settings: dict[str, Any] = {
         "command": "striatal sweep",
@@ -118,6 +142,9 @@ def prepare(
         "success_on": config.success_on,
         "arms": arm_settings,
         "control": not args.no_control,
+        "control_reading": experiments.control_note(config.learner),
+        "budget": experiments.NOTE_BUDGET,
+        "eval_draws": args.eval_draws,
         "controller": {
             "balance_sign": template.balance_sign,
             "switch": template.switch,
@@ -134,10 +161,12 @@ def prepare(
         "baselines": {
             "lqr": baselines.lqr_fit(plant).to_dict(),
             "random_box": [baselines.RANDOM_BOX[0].tolist(), baselines.RANDOM_BOX[1].tolist()],
-            "cmaes": "sigma0 1 from (W(0), theta_c(0)), minimising minus the shaped reward",
+            "cmaes": "IPOP-CMA-ES: sigma0 1 from (W(0), theta_c(0)), cma's default "
+            "population (9), restarted with twice the population when cma stops, "
+            "minimising minus the shaped reward",
         },
         "reproduce": "striatal train --seed S --init INIT with the same learner options "
-        "(control arm: --alpha 0)",
+        "(control arm: the options of settings.arms.control.config)",
     }
     return specs, settings, config.max_trials
 
@@ -153,13 +182,15 @@ def run(args: argparse.Namespace) -> int:
         backend=args.backend,
         workers=args.workers,
         address=args.address,
+        connect_timeout=args.connect_timeout,
         progress=not (args.no_progress or args.json) and sys.stderr.isatty(),
     )
     if args.json:
         sys.stdout.write(dumps_json(result.summary))
         return 0
     sys.stdout.write(experiments.markdown_table(result.summary))
-    print(f"\n{experiments.NOTE_CONTROL}")
+    for note in result.summary["notes"]:
+        print(f"\n{note}")
     print(f"ran {result.ran} runs, {result.skipped} already in --out")
     if out is not None:
         print(f"wrote {out / 'runs.csv'}, {out / 'summary.json'}")

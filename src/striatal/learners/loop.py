@@ -4,8 +4,12 @@
 it (recorded when the reward is the shaped one), score it (eqs 24-25 or the
 shaped reward), apply the success test (on the noisy trial or on a mean-policy
 rerun, eqs 22-23; on the jitter corners too), let the rule update, record the
-history row and build the next state. :func:`learn` repeats it until success or
-``max_trials``.
+history row and build the next state. Every simulated trial is counted in
+``LearnerState.simulations`` (and its simulated time in ``simulated_seconds``):
+the learning trial and each success check that needs a trial of its own. A rule
+with ``judges_candidate`` (pgpe) is judged on the controller its trial ran; when
+that trial already was the noise-free run on the nominal plant, it is the check.
+:func:`learn` repeats it until success or ``max_trials``.
 """
 
 from __future__ import annotations
@@ -19,15 +23,15 @@ import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.learners.chapter import CHAPTER
-from striatal.learners.common import initial_state, jitter_corners, mean_policy_success
+from striatal.learners.common import initial_state, jitter_corners
 from striatal.learners.common import shaped_reward as shaped_reward
 from striatal.learners.config import LearnerConfig
 from striatal.learners.pgpe import PGPE
 from striatal.learners.rpe import RPE
 from striatal.learners.rule import Rule, Update
 from striatal.learners.state import LearnerState, TrainResult, TrialRecord
-from striatal.params import Controller, Plant, Simulation
-from striatal.rollout import Protocol, recorded_trial, run_trial
+from striatal.params import N_GAINS, Controller, Plant, Simulation
+from striatal.rollout import Protocol, TrialOutcome, recorded_trial, run_trial
 
 __all__ = ["LEARNERS", "RULES", "check_config", "learn", "learning_step", "rule_of"]
 
@@ -69,6 +73,30 @@ def _finite(update: Update, state: LearnerState) -> Update:
     return Update(W=W, theta_c=theta_c, memory=memory)
 
 
+def _mean_policy_outcome(
+    plant: Plant,
+    controller: Controller,
+    sim: Simulation,
+    protocol: Protocol,
+    W: np.ndarray,
+    action_every: int,
+    model: Plant | None,
+) -> TrialOutcome:
+    """The noise-free trial of the success test (``mean_policy_success`` with its outcome)."""
+    return run_trial(
+        plant=plant,
+        controller=controller,
+        sim=sim,
+        protocol=protocol,
+        trace=np.zeros(N_GAINS),
+        gamma=0.0,
+        rng=None,
+        gains=W,
+        action_every=action_every,
+        model=model,
+    )
+
+
 def learning_step(
     state: LearnerState,
     plant: Plant,
@@ -108,19 +136,35 @@ def learning_step(
     else:
         outcome = run_trial(**kwargs)  # type: ignore[arg-type]
         reward = outcome.reward
-    W = np.array(state.W, dtype=float)
-    controller = replace(template, theta_c=state.theta_c)
+    simulations, seconds = 1, outcome.ended_at
+    if rule.judges_candidate:
+        # the controller the trial ran (e.g. pgpe's perturbed p') is the one judged
+        W = np.asarray(plan.W, dtype=float)
+        controller = replace(template, theta_c=plan.theta_c)
+    else:
+        W = np.array(state.W, dtype=float)
+        controller = replace(template, theta_c=state.theta_c)
     if config.success_on == "noisy":
         success = outcome.success
     else:
-        success = mean_policy_success(plant, controller, sim, protocol, W, config.action_every)
-        if success and config.plant_jitter > 0.0:
-            success = all(
-                mean_policy_success(
-                    corner, controller, sim, protocol, W, config.action_every, model=plant
-                )
-                for corner in jitter_corners(plant, config.plant_jitter)
+        checks: list[tuple[Plant, Plant | None]] = []
+        if rule.judges_candidate and plan.rng is None and plan.plant is None:
+            # the trial itself was the noise-free run of the judged controller
+            success = outcome.success
+        else:
+            checks.append((plant, None))
+            success = True
+        if config.plant_jitter > 0.0:
+            checks.extend((corner, plant) for corner in jitter_corners(plant, config.plant_jitter))
+        for true_plant_i, model_i in checks:
+            if not success:
+                break
+            check = _mean_policy_outcome(
+                true_plant_i, controller, sim, protocol, W, config.action_every, model_i
             )
+            simulations += 1
+            seconds += check.ended_at
+            success = check.success
     update = _finite(rule.update(state, config, plan, outcome, reward, success), state)
     record = TrialRecord(
         trial=state.trials_done + 1,
@@ -142,6 +186,8 @@ def learning_step(
         success=success,
         n_positive=state.n_positive + int(outcome.reward > 0),
         memory=update.memory,
+        simulations=state.simulations + simulations,
+        simulated_seconds=state.simulated_seconds + seconds,
     )
     return new_state, record
 

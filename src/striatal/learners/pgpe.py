@@ -11,8 +11,13 @@ factors uniform in [1 - J, 1 + J], the controller still believing the nominal
 plant, and success must also hold on the four corner plants. With ``sigma_rate``
 > 0 the exploration adapts, s <- s exp(sigma_rate * factor * (z^2 - 1)), z = eps / s.
 W6 (the per-step sigma) is not used: the trial acts with the mean policy. The
-success test is judged on the unperturbed p (success_on "mean"). Its no-learning
-control keeps the same exploration and changes nothing (alpha = 0, sigma_rate = 0).
+success test (success_on "mean") is judged on the candidate p' the trial ran:
+that trial is already the noise-free run of p' on the nominal plant, so the test
+costs no extra simulation (with ``plant_jitter``, p' is rerun on the nominal plant
+and the four corners, each counted); when p' passes it is the learned controller.
+Its no-learning control (alpha = 0, sigma_rate = 0) draws the same perturbations
+around W(0) with the same spreads and is judged the same way: exploration
+without learning.
 """
 
 from __future__ import annotations
@@ -123,6 +128,7 @@ class PgpeRule(Rule):
     history_columns = ("explore",)
     memory_names = ("explore", "reward_mean", "rpe_square")
     learns_theta_c = True
+    judges_candidate = True
 
     def check(self, config: LearnerConfig) -> None:
         super().check(config)
@@ -176,7 +182,8 @@ class PgpeRule(Rule):
         c = pick(PgpeConfig, config)
         p, eps, s, z = (plan.scratch[k] for k in ("p", "eps", "s", "z"))
         factor, b, square = prediction_error(state, reward, c.rpe_rate, c.normalise)
-        new_p, new_s = p, s
+        # on success: the candidate p' the trial ran and passed, exactly as it ran
+        new_p, new_s = np.array([*plan.W[:5], plan.theta_c], dtype=float), s
         if not success:
             new_p = three_factor_update(p, eps, factor, c.alpha, c.max_step)
             new_p[:5] -= c.alpha * c.decay * p[:5]

@@ -81,6 +81,10 @@ class Rule:
     memory_names: ClassVar[tuple[str, ...]] = ()
     #: Whether theta_c_rule "learned" (theta_c perturbed and updated with the gains) applies.
     learns_theta_c: ClassVar[bool] = False
+    #: Whether the success test (success_on "mean") judges the controller the trial ran
+    #: (the plan's W and theta_c: pgpe's candidate p') rather than the state's mean W.
+    #: Then, on success, :meth:`update` must return the plan's W and theta_c.
+    judges_candidate: ClassVar[bool] = False
 
     @property
     def options(self) -> tuple[str, ...]:
@@ -124,7 +128,8 @@ class Rule:
         reward: float,
         success: bool,
     ) -> Update:
-        """The next W, theta_c and memory; with ``success`` W and theta_c must stay."""
+        """The next W, theta_c and memory; with ``success`` W and theta_c must stay
+        (or, with :attr:`judges_candidate`, become the plan's: the controller judged)."""
         raise NotImplementedError
 
     def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:

@@ -49,6 +49,9 @@ class LearnerState:
 
     ``memory``: the rule's own quantities, name -> numbers (e.g. the chapter's
     eligibility trace D, pgpe's exploration std); see each rule's ``memory_names``.
+    ``simulations``: every simulated trial so far, the learning trials and every
+    success check that needed a trial of its own (a mean-policy rerun, the jitter
+    corners); ``simulated_seconds``: their total simulated time [s].
     """
 
     trials_done: int
@@ -58,6 +61,8 @@ class LearnerState:
     success: bool = False
     n_positive: int = 0
     memory: Memory = ()
+    simulations: int = 0
+    simulated_seconds: float = 0.0
 
     def get(self, name: str) -> tuple[float, ...]:
         """The memory entry ``name`` (empty if the rule has not set it yet)."""
@@ -72,6 +77,8 @@ class LearnerState:
             "success": self.success,
             "n_positive": self.n_positive,
             "memory": {k: list(v) for k, v in self.memory},
+            "simulations": self.simulations,
+            "simulated_seconds": self.simulated_seconds,
         }
 
     @classmethod
@@ -90,12 +97,20 @@ class LearnerState:
                 success=bool(d["success"]),
                 n_positive=int(d.get("n_positive", 0)),
                 memory=memory,
+                simulations=int(d.get("simulations", 0)),
+                simulated_seconds=float(d.get("simulated_seconds", 0.0)),
             )
         except ParameterError:
             raise
         except (KeyError, TypeError, ValueError, OverflowError) as exc:
             raise ParameterError(f"learner state is incomplete or malformed: {exc!r}") from None
-        if len(W) != N_GAINS or state.trials_done < 0 or state.n_positive < 0:
+        if (
+            len(W) != N_GAINS
+            or state.trials_done < 0
+            or state.n_positive < 0
+            or state.simulations < 0
+            or not state.simulated_seconds >= 0.0
+        ):
             raise ParameterError("learner state has the wrong number of gains or trials")
         numbers = (*W, state.theta_c, *(x for _, v in memory for x in v))
         if not all(math.isfinite(v) for v in numbers):
@@ -254,5 +269,7 @@ class TrainResult:
             "wall_seconds": self.wall_seconds,
             "interrupted": self.interrupted,
             "learner": self.learner,
+            "simulations": self.state.simulations,
+            "simulated_seconds": self.state.simulated_seconds,
             "settings": self.settings,
         }
