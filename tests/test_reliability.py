@@ -1155,9 +1155,10 @@ SCENARIOS: tuple[Scenario, ...] = (
       usage_error(("figure", "--out", "OUT/link/f.png"), prepare=_dangling,
                   says="symbolic link")),
     S("result-is-folder", "bad file", "`striatal train --out DIR`, DIR/result.json a folder",
-      "exit 2, one line naming result.json (not a hidden temporary file)",
+      "exit 2, one line naming result.json (not a hidden temporary file), before the run; "
+      "nothing written",
       usage_error(("train", "--max-trials", "2", "--out", "OUT"),
-                  prepare=_folder_at("result.json"), untouched_too=False,
+                  prepare=_folder_at("result.json"),
                   says="cannot write OUT/result.json: it is a folder")),
     S("summary-is-folder", "bad file", "`striatal simulate --out DIR`, DIR/summary.json a "
       "folder", "exit 2, one line naming summary.json, before the run; nothing written",

@@ -56,7 +56,7 @@ import numpy as np
 from striatal import baselines, stats
 from striatal.errors import DataFileError, ParameterError
 from striatal.evaluate import pass_probability
-from striatal.files import atomic_write_text, csv_text
+from striatal.files import atomic_write_text, csv_text, read_text
 from striatal.learners import LearnerConfig, learn, random_initial_gains, rule_of
 from striatal.params import CHAPTER_INITIAL_W, N_GAINS, Controller, Plant, Simulation
 from striatal.rollout import Protocol, simulate
@@ -426,11 +426,7 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
     """
     if not path.exists():
         return [], csv_text(RUN_COLUMNS, [])
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataFileError(f"runs file {path} cannot be read: {exc}") from None
-    lines = text.splitlines(keepends=True)
+    lines = read_text(path, what="runs file").splitlines(keepends=True)
     header = ",".join(RUN_COLUMNS)
     if not lines or not lines[0].endswith("\n"):
         return [], csv_text(RUN_COLUMNS, [])

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import atomic_write_text, csv_text, read_csv, read_json, write_json
+from striatal.files import atomic_write_text, csv_text, read_csv, read_json, read_text, write_json
 from striatal.learners import (
     RULES,
     History,
@@ -52,6 +52,7 @@ __all__ = [
     "CHECKPOINT_VERSION",
     "HISTORY",
     "RESULT",
+    "RUN_FILES",
     "SETTINGS_SCHEMA",
     "ResultFile",
     "RunDir",
@@ -68,6 +69,8 @@ __all__ = [
 CHECKPOINT = "checkpoint.json"
 HISTORY = "history.csv"
 RESULT = "result.json"
+#: The files of a run folder (none may be a folder: checked before a run computes).
+RUN_FILES = (CHECKPOINT, HISTORY, RESULT)
 #: Version of checkpoint.json (2: the learner's memory by name, settings with a schema).
 CHECKPOINT_VERSION = 2
 #: Version of the settings object in checkpoint.json and result.json.
@@ -254,14 +257,9 @@ class RunDir:
         belongs to another run, or was edited.
         """
         path = self.history_path
-        try:
-            lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
-        except FileNotFoundError:
-            raise DataFileError(
-                f"history {path} is missing but the checkpoint has {n_rows} trials"
-            ) from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise DataFileError(f"history {path} cannot be read: {exc}") from None
+        if not path.exists():
+            raise DataFileError(f"history {path} is missing but the checkpoint has {n_rows} trials")
+        lines = read_text(path, what="history").splitlines(keepends=True)
         if len(lines) < 1 + n_rows or lines[0].strip() != ",".join(columns):
             raise DataFileError(
                 f"history {path} has fewer rows than the checkpoint's {n_rows} trials "

@@ -40,7 +40,7 @@ from striatal.params import (
 )
 from striatal.rollout import Trajectory
 from striatal.rollout import simulate as _simulate
-from striatal.rundir import RunDir, Setup, rule_columns, run_id, run_settings, setup_of
+from striatal.rundir import RUN_FILES, RunDir, Setup, rule_columns, run_id, run_settings, setup_of
 
 __all__ = [
     "DEFAULT_CHECKPOINT_EVERY",
@@ -267,7 +267,7 @@ def train(
     if resume:
         if out is None:
             raise ParameterError("--resume needs --out DIR holding a checkpoint")
-        rundir = RunDir(check_out_dir(out))
+        rundir = RunDir(check_out_dir(out, files=RUN_FILES))
         if not rundir.checkpoint_path.exists():
             raise DataFileError(f"checkpoint {rundir.checkpoint_path} does not exist")
         with rundir.lock():
@@ -302,7 +302,7 @@ def train(
         return _run(
             run, settings, setup, state, None, None, checkpoint_every, on_trial, should_stop
         )
-    rundir = RunDir(check_out_dir(out))
+    rundir = RunDir(check_out_dir(out, files=RUN_FILES))
     with rundir.lock():
         rundir.clear()
         rundir.start_history(rule_columns(setup.config))
