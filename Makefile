@@ -8,7 +8,7 @@ RUN_STAMP  := $(VENV)/.stamp-run
 TEST_STAMP := $(VENV)/.stamp-test
 OUT ?= results
 
-.PHONY: run test lint bench docs clean
+.PHONY: run test lint bench docs tutorial clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -66,6 +66,10 @@ test: lint
 # The API reference from the docstrings (mkdocs + mkdocstrings), strict: into site/
 docs: $(TEST_STAMP)
 	$(BIN)/mkdocs build --strict --site-dir site
+
+# Re-execute docs/tutorial.ipynb and store it with its outputs (about 1.5 minutes)
+tutorial: $(TEST_STAMP)
+	$(BIN)/jupyter execute --inplace --timeout=600 docs/tutorial.ipynb
 
 clean:
 	rm -rf $(VENV) $(OUT) .venv-floor site

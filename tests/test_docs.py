@@ -66,6 +66,22 @@ def test_api_reference_builds_in_strict_mode(tmp_path: Path) -> None:
     # A parameter's text is its description, not its type.
     assert "switching threshold [rad] (eq 21)." in page
     assert "<code>switching threshold" not in page
-    for name in ("model", "learning", "envs", "analysis", "files"):
+    for name in ("training", "model", "learning", "envs", "analysis", "files"):
         assert (site / "api" / name / "index.html").is_file()
+    # The Python API leads the reference, and every layer's public module is on a page.
+    index = (site / "api" / "index.html").read_text(encoding="utf-8")
+    assert index.index('<td><a href="training/">') < index.index('<td><a href="model/">')
+    learning = (site / "api" / "learning" / "index.html").read_text(encoding="utf-8")
+    for module in ("config", "state", "rule", "loop", "chapter", "rpe", "pgpe"):
+        assert f'id="striatal.learners.{module}"' in learning, module
+    for module in ("stats", "evaluate", "profiles"):
+        assert f'id="striatal.{module}"' in learning, module
+    training = (site / "api" / "training" / "index.html").read_text(encoding="utf-8")
+    assert 'id="striatal.training.train"' in training and 'id="striatal.rundir"' in training
+    # Re-exports are documented once, where they are defined.
+    assert 'id="striatal.learners.LearnerConfig"' not in learning
+    # The tutorial is a page with its stored outputs; the architecture page is built.
+    tutorial = (site / "tutorial" / "index.html").read_text(encoding="utf-8")
+    assert "success test (eqs 24-25): passed" in tutorial and "<img" in tutorial
+    assert (site / "architecture" / "index.html").is_file()
     assert not list(site.rglob("cli*")), "the CLI is not part of the API reference"

@@ -173,7 +173,13 @@ def test_figure_from_result_json(tmp_path: Path, capsys: pytest.CaptureFixture[s
     res = _result_json(tmp_path / "result.json", list(CHAPTER_FINAL_W), 0.9035)
     out = tmp_path / "f.png"
     assert main(["figure", "--result", str(res), "--duration", "30", "--out", str(out)]) == 0
-    assert "151 snapshots, 1 switch(es)" in capsys.readouterr().out
+    printed = capsys.readouterr().out.splitlines()
+    assert "151 snapshots, 1 switch(es)" in printed[0]
+    # The caption follows, with this run's gains and its outcome at 30 s.
+    assert printed[1].startswith("Figure 5. One run with the mean policy: W = [1.1736, ")
+    verdict = printed[0].rsplit(" ", 1)[1]  # "passed" or "failed"
+    assert f"success test at 30 s: {verdict}." in printed[1]
+    assert "switches between the controllers at 19.55 s." in printed[1]
     assert main(["figure", "--result", str(res), "--chapter-initial", "--out", str(out)]) == 2
     (tmp_path / "bad.json").write_text('{"W": [1, 2]')
     assert main(["figure", "--result", str(tmp_path / "bad.json"), "--out", str(out)]) == 2

@@ -16,7 +16,7 @@ from striatal.params import Controller, Plant
 def balancing_mean(state: np.ndarray, W: np.ndarray, plant: Plant, sign: float = 1.0) -> np.ndarray:
     """mu_1, eq 22: sign ((1 + W1 l) g theta + 2 l sqrt(W1 g) theta_dot) - W2 x - W3 x_dot.
 
-    sign = +1 is the corrected law (NOTES section 1), -1 the printed one.
+    sign = +1 is the corrected law (docs/paper-notes.md section 1), -1 the printed one.
     """
     s = np.asarray(state, dtype=float)
     l, g = plant.length, plant.gravity
@@ -43,7 +43,7 @@ def switch_weights(
     theta: np.ndarray, theta_c: float, soft: bool, inhibition: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """(balancing weight, swing-up weight) of the hard switch (section 2.3) or the
-    cerebellar soft switch (section 4, NOTES section 4):
+    cerebellar soft switch (section 4, docs/paper-notes.md section 4):
     clip(gamma (theta_c - |theta|), 0, 1) and clip(gamma (|theta| - theta_c), 0, 1)."""
     a = np.abs(wrap_angle(theta))
     if not soft:

@@ -31,11 +31,11 @@ CHAPTER_PRINTED_MU2 = {"energy_pump": 0.36, "x": -0.02, "x_dot": -0.29}
 SIGN_NOTE = (
     "The chapter prints mu_1 = -21.5 theta - 6.84 theta_dot + 0.31 x + 0.8 x_dot for its "
     "final W. With its own linearization (eq 18) that sign makes the upright unstable; "
-    "this project's default (--balance-sign corrected, NOTES section 1) puts + on both "
-    "theta terms: +21.30 theta + 6.78 theta_dot for the chapter's final W. Under the "
-    "corrected sign the theta and theta_dot terms therefore read as direct (excitatory) "
-    "pathway activity, where the printed form reads them as indirect (inhibitory). The "
-    "cart terms (-W2 x - W3 x_dot) keep the printed sign."
+    "this project's default (--balance-sign corrected, docs/paper-notes.md section 1) "
+    "puts + on both theta terms: +21.30 theta + 6.78 theta_dot for the chapter's final W."
+    " Under the corrected sign the theta and theta_dot terms therefore read as direct "
+    "(excitatory) pathway activity, where the printed form reads them as indirect "
+    "(inhibitory). The cart terms (-W2 x - W3 x_dot) keep the printed sign."
 )
 
 
@@ -69,7 +69,7 @@ def balancing_terms(W: Sequence[float], plant: Plant, sign: float = 1.0) -> tupl
     """mu_1 of eq 22 as c_theta theta + c_thetadot theta_dot + c_x x + c_xdot x_dot.
 
     c_theta = s (1 + W1 l) g, c_thetadot = s 2 l sqrt(W1 g), c_x = -W2, c_xdot = -W3;
-    s = +1 for the corrected law, -1 for the law as printed (NOTES section 1).
+    s = +1 for the corrected law, -1 for the law as printed (docs/paper-notes.md section 1).
     """
     w = check_gains(W)
     if sign not in (1.0, -1.0):

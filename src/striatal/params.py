@@ -152,7 +152,8 @@ class Controller:
         regulation while balancing), W4 = swing-up energy gain, W5 = k_c (cart
         regulation during swing-up, eq 17), W6 sets the policy's sigma (eq 22-23).
     theta_c : switching threshold [rad]: balancing while |theta| < theta_c (eq 21).
-    balance_sign : ``"corrected"`` (default, NOTES section 1) or ``"chapter"`` (eq 20 as printed).
+    balance_sign : ``"corrected"`` (default, docs/paper-notes.md section 1) or
+        ``"chapter"`` (eq 20 as printed).
     switch : ``"hard"`` (section 2.3) or ``"soft"`` (the cerebellar switch of section 4).
     inhibition : gamma of the soft switch, the strength of lateral inhibition [1/rad].
     """

@@ -1,4 +1,6 @@
-"""The Gaussian policy of eqs 5, 22-23 and its eligibilities (eq 2, NOTES sections 2-3).
+"""The Gaussian policy of eqs 5, 22-23 and its eligibilities (eq 2).
+
+The readings: docs/paper-notes.md, sections 2-3.
 
 sigma = 0.1 + sigmoid(W6) in both modes. The eligibilities are the score
 d ln pi / d W_i with the chapter's rescaling: the mean weights drop 1/sigma^2,
@@ -43,7 +45,7 @@ def mean_gradient(
     """d mu / d W1..W5 (5,) at one state, analytically (eqs 22-23).
 
     ``chapter_form`` replaces the W1 entry by the chapter's printed
-    -l (g theta - sqrt(g / W1) theta_dot) (NOTES section 2).
+    -l (g theta - sqrt(g / W1) theta_dot) (docs/paper-notes.md section 2).
     """
     from striatal.control import switch_weights
     from striatal.dynamics import energy_error, wrap_angle

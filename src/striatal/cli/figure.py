@@ -20,7 +20,8 @@ DESCRIPTION = (
     "controller and blue under balancing; (middle) the path of the pole tip "
     "(x + l sin theta, l cos theta); (bottom) x(t) and theta(t) with the switch times as "
     "dashed lines. Gains: --chapter-final (default), --chapter-initial, --gains with "
-    "--theta-c, or --result result.json of striatal train."
+    "--theta-c, or --result result.json of striatal train. Prints the figure's caption "
+    "(the run's gains, readings and outcome, and how to read each panel)."
 )
 
 
@@ -58,4 +59,5 @@ def run(args: argparse.Namespace) -> int:
         f"{len(traj.switch_times)} switch(es), success test "
         f"{'passed' if o.success else 'failed'}"
     )
+    print(plots.figure5_caption(traj, every=args.every))
     return 0

@@ -12,10 +12,11 @@ COMMAND = "switch-figure"
 ORDER = 43
 HELP = "plot the soft switch's balancing and swing-up weights against |theta|"
 DESCRIPTION = (
-    "The cerebellar soft switch of section 4, read with the labels swapped (NOTES section 4): "
-    "balancing weight clip(gamma (theta_c - |theta|), 0, 1) on mu_1 and swing-up weight "
-    "clip(gamma (|theta| - theta_c), 0, 1) on mu_2, for each gamma given, beside the hard "
-    "switch; and their sum, which shows the dead zone of half-width 1/gamma at theta_c."
+    "The cerebellar soft switch of section 4, read with the labels swapped "
+    "(docs/paper-notes.md section 4): balancing weight clip(gamma (theta_c - |theta|), 0,"
+    " 1) on mu_1 and swing-up weight clip(gamma (|theta| - theta_c), 0, 1) on mu_2, for "
+    "each gamma given, beside the hard switch; and their sum, which shows the dead zone "
+    "of half-width 1/gamma at theta_c."
 )
 
 
