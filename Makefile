@@ -19,7 +19,7 @@ $(RUN_STAMP): pyproject.toml | $(BIN)/python
 	touch $@
 
 $(TEST_STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/pip install -q -e ".[dev,rl,cluster]"
+	$(BIN)/pip install -q -e ".[dev,rl,cluster,neural]"
 	touch $@ $(RUN_STAMP)
 
 # The chapter's experiment (about 3 minutes on 2 cores):
