@@ -230,7 +230,18 @@ def test_swing_up_reaches_upright() -> None:
 def test_cli_json_and_files(tmp_path, capsys) -> None:
     out = tmp_path / "run"
     rc = main(
-        ["neural", "--duration", "1", "--neurons", "300", "--seed", "2", "--json", "--out", str(out)]
+        [
+            "neural",
+            "--duration",
+            "1",
+            "--neurons",
+            "300",
+            "--seed",
+            "2",
+            "--json",
+            "--out",
+            str(out),
+        ]
     )
     assert rc == 0
     data = json.loads(capsys.readouterr().out)

@@ -81,6 +81,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from striatal.cli import options
     from striatal.files import check_out_dir, dumps_json, write_csv, write_json
+    from striatal.kernel import wrap_angle
     from striatal.neural.network import NetworkConfig, require_nengo
     from striatal.neural.run import NEURAL_TRAJ_COLUMNS, run_network
 
@@ -149,7 +150,8 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(dumps_json(summary))
         return 0
-    x, xd, th, thd = summary["final_state"]  # type: ignore[misc]
+    x, xd, th, thd = (float(v) for v in result.data[-1, 1:5])
+    th = wrap_angle(th)
     print(f"neurons: {result.neurons}  ({config.selection} switch, seed {seed})")
     print(f"upright_last_10s: {'yes' if result.upright_last_10s else 'no'}  (|theta| < 0.1)")
     print(

@@ -89,7 +89,7 @@ class NetworkConfig:
     switch_gain: float = 20.0
     synapse: float = 0.005
     gate_inhibition: float = 10.0
-    radius_x: float = 8.0
+    radius_x: float = 12.0
     radius_v: float = 5.0
     radius_omega: float = 7.0
     radius_bal_theta: float = 1.2
@@ -126,9 +126,7 @@ class NetworkConfig:
 
     def sizes(self) -> dict[str, int]:
         """Neurons per population (cortex, channels, switch)."""
-        return {
-            k: max(MIN_PER_POPULATION, int(round(s * self.neurons))) for k, s in SHARES.items()
-        }
+        return {k: max(MIN_PER_POPULATION, int(round(s * self.neurons))) for k, s in SHARES.items()}
 
 
 @dataclass
@@ -202,9 +200,7 @@ def build(
         # E~ of eqs 15-16 as the sum of a potential part (from cos theta) and a kinetic one
         e_max = 2.0 * m * g * length
         energy = ens("energy", 1, e_max)
-        nengo.Connection(
-            cos, energy, function=lambda c: m * g * length * (c[0] - 1.0), synapse=syn
-        )
+        nengo.Connection(cos, energy, function=lambda c: m * g * length * (c[0] - 1.0), synapse=syn)
         nengo.Connection(
             omega, energy, function=lambda w: 0.5 * m * length**2 * w[0] ** 2, synapse=syn
         )
