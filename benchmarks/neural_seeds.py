@@ -47,6 +47,7 @@ def main() -> int:
                 Simulation(duration=args.duration),
                 NetworkConfig(neurons=n, selection=args.selection),
                 seed,
+                record_rates=False,
             )
             row = {"neurons_requested": n, "selection": args.selection, **r.summary()}
             with args.out.open("a") as fh:

@@ -67,7 +67,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--out",
         type=Path,
         default=None,
-        help="write trajectory.csv, rates.csv, summary.json and activity.png here",
+        help="write trajectory.csv, rates.csv, summary.json and activity.png here (recording "
+        "the populations' rates costs simulation time)",
     )
     parser.add_argument(
         "--circuit-figure",
@@ -103,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
 
         check_image_path(args.circuit_figure, (".png", ".svg", ".pdf"))
     require_nengo()
-    result = run_network(controller, plant, sim, config, seed)
+    result = run_network(controller, plant, sim, config, seed, record_rates=args.out is not None)
     summary = result.summary()
     summary["settings"] = {
         "controller": controller.to_dict(),

@@ -144,13 +144,15 @@ def run_network(
     seed: int,
     *,
     net_dt: float = 0.001,
+    record_rates: bool = True,
 ) -> NeuralRun:
     """Simulate the spiking controller on the plant from ``sim.initial_state``.
 
     The network (and the plant Node) steps every ``net_dt``; the trajectory and the
     population rates are sampled every ``sim.dt``. ``seed`` sets the network's random
     encoders, gains and biases (``nengo.Network(seed=...)``); the plant is
-    deterministic. Success is the chapter's test at T_f (``sim.success``, end of
+    deterministic. ``record_rates`` False leaves ``rates`` empty (a faster run).
+    Success is the chapter's test at T_f (``sim.success``, end of
     section 2.4) on the final state; ``upright_last_10s`` the issue's looser test.
     """
     nengo = require_nengo()
@@ -167,7 +169,7 @@ def run_network(
         nengo.Connection(node, h.sensor_input, synapse=None)
         counter = SpikeBins(len(names), every, n_net)
         rate_node = nengo.Node(counter, size_in=len(names), size_out=0, label="rates")
-        for i, name in enumerate(names):
+        for i, name in enumerate(names if record_rates else ()):
             e = h.populations[name]
             nengo.Connection(
                 e.neurons,
