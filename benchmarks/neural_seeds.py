@@ -6,6 +6,7 @@ stopped keeps what it has. Example (what docs/neural.md reports):
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/neural_seeds.py --neurons 2500 \
         --seeds 0-9 --out docs/data/neural_seeds.jsonl
+    python benchmarks/neural_seeds.py --summary docs/data/neural_seeds.jsonl
 """
 
 from __future__ import annotations
@@ -28,16 +29,48 @@ def seed_list(text: str) -> list[int]:
     return [int(s) for s in text.split(",")]
 
 
+def summarize(paths: list[Path]) -> None:
+    """Print, per (selection, neurons), the seeds that held the pole and a 95 % interval."""
+    from scipy.stats import binomtest
+
+    rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
+    groups: dict[tuple[str, int], list[dict]] = {}
+    for r in rows:
+        groups.setdefault((r["selection"], r["neurons_requested"]), []).append(r)
+    for (sel, n), rs in sorted(groups.items()):
+        k = sum(r["upright_last_10s"] for r in rs)
+        ci = binomtest(k, len(rs)).proportion_ci(confidence_level=0.95, method="exact")
+        ok = sum(r["success"] for r in rs)
+        print(
+            f"{sel} {n} requested ({rs[0]['neurons']} neurons): upright_last_10s {k}/{len(rs)} "
+            f"(95 % CI {ci.low:.2f}-{ci.high:.2f}); chapter's success test {ok}/{len(rs)}"
+        )
+        for r in sorted(rs, key=lambda r: r["seed"]):
+            x, _xd, th, _thd = r["final_state"]
+            sw = r["switch_times"]
+            print(
+                f"  seed {r['seed']}: upright {r['upright_last_10s']!s:5}  first switch "
+                f"{sw[0] if sw else float('nan'):6.2f} s  switches {len(sw):2d}  final x "
+                f"{x:+.3f} m  theta {th:+.4f} rad  max|x| {r['max_abs_x']:.2f} m"
+            )
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--summary", type=Path, nargs="+", help="summarize these files and stop")
     parser.add_argument("--neurons", type=int, nargs="+", default=[2500])
     parser.add_argument("--seeds", type=seed_list, default=list(range(10)))
     parser.add_argument(
         "--selection", choices=("cerebellum", "basal-ganglia"), default="cerebellum"
     )
     parser.add_argument("--duration", type=float, default=60.0)
-    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--out", type=Path)
     args = parser.parse_args()
+    if args.summary:
+        summarize(args.summary)
+        return 0
+    if args.out is None:
+        parser.error("--out is required")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     for n in args.neurons:
         for seed in args.seeds:
