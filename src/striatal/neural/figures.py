@@ -19,11 +19,11 @@ EXCITATORY = "#1b7837"
 INHIBITORY = "#b2182b"
 
 
-def _figure(width: float, height: float) -> Figure:
+def _figure(width: float, height: float, layout: str | None = None) -> Figure:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width, height))
+    fig = Figure(figsize=(width, height), layout=layout)
     FigureCanvasAgg(fig)
     return fig
 
@@ -34,7 +34,7 @@ def activity_figure(run: NeuralRun, theta_c: float) -> Figure:
     Rates are 10-ms bins of the population-mean spike count [Hz]; the dashed line
     marks each crossing of |theta| = theta_c.
     """
-    fig = _figure(9.0, 7.5)
+    fig = _figure(9.0, 7.5, layout="constrained")
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [1.0, 0.8, 2.2]})
     t = run.data[:, 0]
     th = np.array([kernel.wrap_angle(v) for v in run.data[:, 3]])
@@ -59,7 +59,8 @@ def activity_figure(run: NeuralRun, theta_c: float) -> Figure:
     ax3.set_yticks(range(len(run.populations)))
     ax3.set_yticklabels(run.populations, fontsize=7)
     ax3.set_xlabel("t [s]")
-    fig.colorbar(im, ax=ax3, label="mean rate [Hz]", fraction=0.04, pad=0.01)
+    # one colorbar beside all three panels keeps their time axes aligned
+    fig.colorbar(im, ax=[ax1, ax2, ax3], label="mean rate [Hz]", fraction=0.04, pad=0.01)
     for ts in run.switch_times:
         for ax in (ax1, ax2, ax3):
             ax.axvline(ts, color="C1", ls="--", lw=0.8)
@@ -68,7 +69,6 @@ def activity_figure(run: NeuralRun, theta_c: float) -> Figure:
         f"upright last 10 s: {'yes' if run.upright_last_10s else 'no'}",
         fontsize=10,
     )
-    fig.tight_layout()
     return fig
 
 
