@@ -270,3 +270,15 @@ def test_cli_bad_input_exits_2(argv, capsys) -> None:
     assert main(["neural", *argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "error" in err
+
+
+def test_recording_rates_does_not_change_the_network() -> None:
+    """A seed names one network whether or not the populations' rates are recorded."""
+    sim = Simulation(duration=0.5)
+    a, b = (
+        run_network(CTRL, PLANT, sim, NetworkConfig(neurons=300), seed=4, record_rates=rec)
+        for rec in (True, False)
+    )
+    np.testing.assert_allclose(a.data, b.data, rtol=0, atol=1e-12)
+    assert a.rates.shape == (50, len(a.populations)) and a.rates.sum() > 0
+    assert b.rates.sum() == 0

@@ -169,14 +169,19 @@ def run_network(
         nengo.Connection(node, h.sensor_input, synapse=None)
         counter = SpikeBins(len(names), every, n_net)
         rate_node = nengo.Node(counter, size_in=len(names), size_out=0, label="rates")
-        for i, name in enumerate(names if record_rates else ()):
-            e = h.populations[name]
-            nengo.Connection(
-                e.neurons,
-                rate_node[i],
-                transform=np.full((1, e.n_neurons), 1.0 / e.n_neurons),
-                synapse=None,
-            )
+        if record_rates:
+            # nengo seeds a network's objects type by type, connections before ensembles:
+            # connections added to the model itself would change every ensemble's seed, so
+            # the recording lives in a subnetwork and a seed is the same network either way
+            with nengo.Network(label="rate recording"):
+                for i, name in enumerate(names):
+                    e = h.populations[name]
+                    nengo.Connection(
+                        e.neurons,
+                        rate_node[i],
+                        transform=np.full((1, e.n_neurons), 1.0 / e.n_neurons),
+                        synapse=None,
+                    )
     simulator = nengo.Simulator(h.model, dt=net_dt, progress_bar=False, seed=seed)
     t1 = time.perf_counter()
     c1 = time.process_time()
