@@ -1,0 +1,1 @@
+"""The chapter's switching controller as a spiking network (nengo): ``striatal neural``."""

@@ -1,0 +1,273 @@
+"""Closed-loop runs of the spiking controller on the project's one physics kernel."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from striatal import kernel
+from striatal.neural.network import NetworkConfig, build, require_nengo
+from striatal.params import Controller, Plant, Simulation, check_seed
+
+#: Columns of the recorded trajectory (one row per control step of ``Simulation.dt``).
+NEURAL_TRAJ_COLUMNS = ("t", "x", "x_dot", "theta", "theta_dot", "u", "force", "mode")
+#: Upright test of the issue: |theta| below this [rad] throughout the last ``UPRIGHT_WINDOW`` s.
+UPRIGHT_THETA = 0.1
+UPRIGHT_WINDOW = 10.0
+
+
+class KernelPlant:
+    """The plant as a nengo Node function: one RK4 step of the kernel per network step.
+
+    The commanded cart acceleration u (the filtered motor output) is held over the
+    network step ``dt`` (eqs 13-14 through :func:`striatal.kernel.rk4_step`). Returns
+    the sensed state (x, x_dot, sin theta, cos theta, theta_dot). A state that blows up
+    is frozen and flagged as a fault.
+    """
+
+    def __init__(self, state0: np.ndarray, plant: Plant, dt: float, n_steps: int) -> None:
+        self.p = plant.as_array()
+        self.dt = dt
+        self.state = [float(v) for v in state0]
+        self.states = np.full((n_steps + 1, 4), np.nan)
+        self.u = np.zeros(n_steps + 1)
+        self.states[0] = self.state
+        self.k = 0
+        self.fault = False
+
+    def sensed(self) -> np.ndarray:
+        x, xd, th, thd = self.state
+        return np.array([x, xd, math.sin(th), math.cos(th), thd])
+
+    def __call__(self, t: float, u: np.ndarray) -> np.ndarray:
+        a = float(u[0])
+        if not self.fault and self.k < self.u.shape[0] - 1:
+            x, xd, th, thd = self.state
+            nxt = kernel.rk4_step(x, xd, th, thd, a, self.dt, self.p, self.p, False)
+            if all(math.isfinite(v) and abs(v) < kernel.BLOW_UP for v in nxt):
+                self.state = list(nxt)
+            else:
+                self.fault = True
+            self.u[self.k] = a
+            self.k += 1
+            self.states[self.k] = self.state
+        return self.sensed()
+
+
+class SpikeBins:
+    """A nengo Node function: mean firing rate [Hz] of each population per bin of steps."""
+
+    def __init__(self, n_pop: int, steps_per_bin: int, n_steps: int) -> None:
+        self.steps_per_bin = steps_per_bin
+        self.sums = np.zeros((n_steps // steps_per_bin + 1, n_pop))
+        self.k = 0
+
+    def __call__(self, t: float, x: np.ndarray) -> None:
+        # x holds the population-mean spike trains (amplitude 1 / dt per spike)
+        self.sums[self.k // self.steps_per_bin] += x
+        self.k += 1
+
+    def rates(self) -> np.ndarray:
+        """(n_bins, n_pop) mean rates [Hz] of the complete bins."""
+        n = self.k // self.steps_per_bin
+        return self.sums[:n] / self.steps_per_bin
+
+
+@dataclass(frozen=True)
+class NeuralRun:
+    """One closed-loop run of the spiking network.
+
+    ``data``: (n, 8) with columns :data:`NEURAL_TRAJ_COLUMNS`, sampled every
+    ``sim.dt``; theta unwrapped. ``rates``: (n_rates, n_pop) mean firing rate [Hz] of
+    each population (``populations``), sampled every ``sim.dt``.
+    """
+
+    data: np.ndarray
+    rates: np.ndarray
+    populations: tuple[str, ...]
+    success: bool
+    upright_last_10s: bool
+    fault: bool
+    neurons: int
+    wall_time: float
+    cpu_time: float
+    build_time: float
+    sim: Simulation
+    config: NetworkConfig
+    seed: int
+
+    @property
+    def wall_per_sim_second(self) -> float:
+        """Wall-clock seconds of simulation per simulated second (build excluded)."""
+        return self.wall_time / self.sim.duration
+
+    @property
+    def switch_times(self) -> list[float]:
+        """Times [s] where |theta| crosses theta_c (the hard criterion), as in ``simulate``."""
+        mode = self.data[:, 7]
+        idx = np.nonzero(np.diff(mode) != 0)[0] + 1
+        return [float(self.data[i, 0]) for i in idx]
+
+    def summary(self) -> dict[str, object]:
+        x, xd, th, thd = self.data[-1, 1:5]
+        return {
+            "success": self.success,
+            "upright_last_10s": self.upright_last_10s,
+            "fault": self.fault,
+            "final_state": [float(x), float(xd), float(kernel.wrap_angle(th)), float(thd)],
+            "switch_times": self.switch_times,
+            "max_abs_x": float(np.max(np.abs(self.data[:, 1]))),
+            "neurons": self.neurons,
+            "wall_time_s": self.wall_time,
+            "cpu_time_s": self.cpu_time,
+            "build_time_s": self.build_time,
+            "wall_per_sim_second": self.wall_per_sim_second,
+            "seed": self.seed,
+        }
+
+
+def upright_throughout(t: np.ndarray, theta: np.ndarray, window: float = UPRIGHT_WINDOW) -> bool:
+    """True if |wrap(theta)| < :data:`UPRIGHT_THETA` at every sample of the last ``window`` s."""
+    last = t >= t[-1] - window - 1e-9
+    wrapped = np.array([kernel.wrap_angle(v) for v in theta[last]])
+    return bool(np.all(np.abs(wrapped) < UPRIGHT_THETA))
+
+
+def run_network(
+    controller: Controller,
+    plant: Plant,
+    sim: Simulation,
+    config: NetworkConfig,
+    seed: int,
+    *,
+    net_dt: float = 0.001,
+    record_rates: bool = True,
+) -> NeuralRun:
+    """Simulate the spiking controller on the plant from ``sim.initial_state``.
+
+    The network (and the plant Node) steps every ``net_dt``; the trajectory and the
+    population rates are sampled every ``sim.dt``. ``seed`` sets the network's random
+    encoders, gains and biases (``nengo.Network(seed=...)``); the plant is
+    deterministic. ``record_rates`` False leaves ``rates`` empty (a faster run).
+    Success is the chapter's test at T_f (``sim.success``, end of
+    section 2.4) on the final state; ``upright_last_10s`` the issue's looser test.
+    """
+    nengo = require_nengo()
+    seed = check_seed(seed)
+    n_net = int(round(sim.duration / net_dt))
+    every = max(1, int(round(sim.dt / net_dt)))
+    t0 = time.perf_counter()
+    h = build(controller, plant, config, seed)
+    plant_fn = KernelPlant(sim.initial_state, plant, net_dt, n_net)
+    names = tuple(h.populations)
+    with h.model:
+        node = nengo.Node(plant_fn, size_in=1, size_out=5, label="cart-pole (kernel RK4)")
+        nengo.Connection(h.motor, node, synapse=None)
+        nengo.Connection(node, h.sensor_input, synapse=None)
+        counter = SpikeBins(len(names), every, n_net)
+        rate_node = nengo.Node(counter, size_in=len(names), size_out=0, label="rates")
+        if record_rates:
+            # nengo seeds a network's objects type by type, connections before ensembles:
+            # connections added to the model itself would change every ensemble's seed, so
+            # the recording lives in a subnetwork and a seed is the same network either way
+            with nengo.Network(label="rate recording"):
+                for i, name in enumerate(names):
+                    e = h.populations[name]
+                    nengo.Connection(
+                        e.neurons,
+                        rate_node[i],
+                        transform=np.full((1, e.n_neurons), 1.0 / e.n_neurons),
+                        synapse=None,
+                    )
+    simulator = nengo.Simulator(h.model, dt=net_dt, progress_bar=False, seed=seed)
+    t1 = time.perf_counter()
+    c1 = time.process_time()
+    with simulator:
+        simulator.run_steps(n_net)
+    t2 = time.perf_counter()
+    cpu = time.process_time() - c1
+    states = plant_fn.states[::every]
+    u = plant_fn.u[::every]
+    t = np.arange(states.shape[0]) * sim.dt
+    p = plant.as_array()
+    forces = np.array([kernel.force(s[2], s[3], a, p) for s, a in zip(states, u, strict=True)])
+    mode = np.array(
+        [
+            kernel.MODE_BALANCE
+            if abs(kernel.wrap_angle(s[2])) < controller.theta_c
+            else kernel.MODE_SWINGUP
+            for s in states
+        ],
+        dtype=float,
+    )
+    data = np.column_stack([t, states, u, forces, mode])
+    final = plant_fn.states[-1].copy()
+    final[2] = kernel.wrap_angle(final[2])
+    fault = plant_fn.fault
+    return NeuralRun(
+        data=data,
+        rates=counter.rates(),
+        populations=names,
+        success=(not fault) and sim.success.passed(final),
+        upright_last_10s=(not fault)
+        and upright_throughout(np.arange(n_net + 1) * net_dt, plant_fn.states[:, 2]),
+        fault=fault,
+        neurons=h.n_neurons,
+        wall_time=t2 - t1,
+        cpu_time=cpu,
+        build_time=t1 - t0,
+        sim=sim,
+        config=config,
+        seed=seed,
+    )
+
+
+def held_state_response(
+    controller: Controller,
+    plant: Plant,
+    config: NetworkConfig,
+    seed: int,
+    states: np.ndarray,
+    *,
+    hold: float = 0.2,
+    average: float = 0.1,
+    net_dt: float = 0.001,
+) -> dict[str, np.ndarray]:
+    """Decoded mu_1, mu_2, u and the gates' values with each state held for ``hold`` s.
+
+    ``states``: (n, 4) [m, m/s, rad, rad/s]. Each output is the mean over the last
+    ``average`` s of each hold, so that the network settles after every jump.
+    Returns arrays of shape (n,) keyed ``mu_1``, ``mu_2``, ``u``, ``gate_balancing``,
+    ``gate_swing-up``.
+    """
+    nengo = require_nengo()
+    S = np.asarray(states, dtype=float)
+    n_hold = int(round(hold / net_dt))
+    n_avg = int(round(average / net_dt))
+    sensed = np.column_stack([S[:, 0], S[:, 1], np.sin(S[:, 2]), np.cos(S[:, 2]), S[:, 3]])
+    h = build(controller, plant, config, check_seed(seed))
+    with h.model:
+
+        def source(t: float) -> np.ndarray:
+            i = min(int(t / hold - 1e-9), S.shape[0] - 1)
+            return sensed[i]
+
+        src = nengo.Node(source, size_out=5)
+        nengo.Connection(src, h.sensor_input, synapse=None)
+        probes = {
+            "mu_1": nengo.Probe(h.mu_1, synapse=config.synapse),
+            "mu_2": nengo.Probe(h.mu_2, synapse=config.synapse),
+            "u": nengo.Probe(h.motor, synapse=config.synapse),
+        }
+        for name, gate in h.gates.items():
+            probes[f"gate_{name}"] = nengo.Probe(gate, synapse=config.synapse)
+    with nengo.Simulator(h.model, dt=net_dt, progress_bar=False, seed=seed) as simulator:
+        simulator.run_steps(n_hold * S.shape[0])
+    out = {}
+    for name, p in probes.items():
+        v = np.asarray(simulator.data[p])[:, 0].reshape(S.shape[0], n_hold)
+        out[name] = v[:, n_hold - n_avg :].mean(axis=1)
+    return out

@@ -1,0 +1,284 @@
+"""The spiking controller: decoded means against the rate controller, pathway signs,
+the gates against the hard switch, the plant Node against the kernel, a swing-up."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from striatal import kernel
+from striatal.cli import main
+from striatal.errors import ParameterError
+from striatal.interpret import balancing_terms, swingup_terms
+from striatal.params import Controller, Plant, Simulation
+from striatal.rollout import simulate
+
+nengo = pytest.importorskip("nengo")
+
+from striatal.neural.network import NetworkConfig, build, criterion  # noqa: E402
+from striatal.neural.run import (  # noqa: E402
+    KernelPlant,
+    held_state_response,
+    run_network,
+    upright_throughout,
+)
+
+CTRL = Controller()
+PLANT = Plant()
+
+
+def rate_mean(state: np.ndarray, controller: Controller = CTRL) -> float:
+    """kernel.policy_mean with the hard switch: the rate controller's mean action."""
+    p = PLANT.as_array()
+    return kernel.policy_mean(
+        state[0],
+        state[1],
+        state[2],
+        state[3],
+        np.array(controller.gains),
+        controller.theta_c,
+        controller.sign,
+        False,
+        50.0,
+        p,
+        False,
+        np.zeros(5),
+    )
+
+
+def test_connection_signs_are_the_interpret_pathways() -> None:
+    h = build(CTRL, PLANT, NetworkConfig(neurons=300), seed=0)
+    expected = {("mu_1", t.signal): t for t in balancing_terms(CTRL.gains, PLANT, CTRL.sign)}
+    expected.update({("mu_2", t.signal): t for t in swingup_terms(CTRL.gains)})
+    seen = set()
+    for channel, term, conn in h.pathways:
+        want = expected[(channel, term.signal)]
+        seen.add((channel, term.signal))
+        transform = float(np.asarray(conn.transform.init).ravel()[0])
+        # the sign of the projection is the pathway: excitatory = direct, inhibitory = indirect
+        assert math.copysign(1.0, transform) == math.copysign(1.0, want.coefficient)
+        assert ("direct" if transform > 0 else "indirect") == want.pathway
+        assert want.pathway in conn.label
+        assert conn.post_obj is (h.mu_1 if channel == "mu_1" else h.mu_2)
+    assert seen == set(expected)
+    # chapter's final gains, corrected sign: theta, theta_dot, x, x_dot all direct in mu_1;
+    # mu_2's cart terms indirect
+    labels = {(c, t.signal): t.pathway for c, t, _ in h.pathways}
+    assert labels[("mu_1", "theta")] == "direct"
+    assert labels[("mu_2", "x_dot")] == "indirect"
+
+
+def test_printed_sign_flips_the_theta_pathways() -> None:
+    printed = Controller(balance_sign="chapter")
+    h = build(printed, PLANT, NetworkConfig(neurons=300), seed=0)
+    labels = {(c, t.signal): t.pathway for c, t, _ in h.pathways}
+    assert labels[("mu_1", "theta")] == "indirect"
+    assert labels[("mu_1", "theta_dot")] == "indirect"
+
+
+@pytest.fixture(scope="module")
+def sampled_states() -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(3)
+    n = 8
+    balancing = np.column_stack(
+        [
+            rng.uniform(-3, 3, n),
+            rng.uniform(-2, 2, n),
+            rng.uniform(-0.6, 0.6, n),
+            rng.uniform(-1.5, 1.5, n),
+        ]
+    )
+    swing = np.column_stack(
+        [
+            rng.uniform(-3, 3, n),
+            rng.uniform(-2, 2, n),
+            rng.uniform(1.4, math.pi, n) * rng.choice([-1.0, 1.0], n),
+            rng.uniform(-5, 5, n),
+        ]
+    )
+    return balancing, swing
+
+
+@pytest.fixture(scope="module")
+def responses(sampled_states: tuple[np.ndarray, np.ndarray]) -> dict[str, dict[str, np.ndarray]]:
+    balancing, swing = sampled_states
+    states = np.vstack([balancing, swing])
+    r = held_state_response(CTRL, PLANT, NetworkConfig(neurons=1500), 2, states)
+    n = balancing.shape[0]
+    return {
+        "balancing": {k: v[:n] for k, v in r.items()},
+        "swing": {k: v[n:] for k, v in r.items()},
+    }
+
+
+def test_decoded_mu_1_matches_the_rate_controller(sampled_states, responses) -> None:
+    balancing, _ = sampled_states
+    want = np.array([rate_mean(s) for s in balancing])
+    got = responses["balancing"]["mu_1"]
+    # mu_1 spans about +-25 m/s^2 here; the network decodes it within 1.2 m/s^2 (rms)
+    rms = float(np.sqrt(np.mean((got - want) ** 2)))
+    assert rms < 1.2, (got, want)
+    assert np.corrcoef(got, want)[0, 1] > 0.98
+    # the closed swing-up channel contributes nothing while balancing
+    assert np.all(np.abs(responses["balancing"]["mu_2"]) < 0.1)
+
+
+def test_decoded_mu_2_matches_the_rate_controller(sampled_states, responses) -> None:
+    _, swing = sampled_states
+    want = np.array([rate_mean(s) for s in swing])
+    got = responses["swing"]["mu_2"]
+    rms = float(np.sqrt(np.mean((got - want) ** 2)))
+    assert rms < 0.4, (got, want)
+    assert np.corrcoef(got, want)[0, 1] > 0.9
+    assert np.all(np.abs(responses["swing"]["mu_1"]) < 0.1)
+
+
+def test_gates_follow_the_hard_switch() -> None:
+    # |theta| away from theta_c by more than the criterion's width 1/gamma
+    theta_c = CTRL.theta_c
+    thetas = np.array([0.0, 0.3, 0.7, -0.75, 1.1, -1.5, 2.5, math.pi - 0.05])
+    states = np.column_stack([np.zeros(8), np.zeros(8), thetas, np.zeros(8)])
+    for selection in ("cerebellum", "basal-ganglia"):
+        r = held_state_response(
+            CTRL, PLANT, NetworkConfig(neurons=600, selection=selection), 0, states, hold=0.3
+        )
+        balancing = np.abs(thetas) < theta_c
+        # the gate of the open channel is silent, the other one active
+        assert np.all(r["gate_balancing"][balancing] < 0.15), (selection, r)
+        assert np.all(r["gate_balancing"][~balancing] > 0.5), (selection, r)
+        assert np.all(r["gate_swing-up"][~balancing] < 0.15), (selection, r)
+        assert np.all(r["gate_swing-up"][balancing] > 0.5), (selection, r)
+
+
+def test_criterion_is_the_hard_switch_at_high_gain() -> None:
+    for a in np.linspace(0.0, math.pi, 50):
+        c = criterion(a, 0.9, 1e6)
+        if abs(a - 0.9) > 1e-3:
+            assert c == (1.0 if a < 0.9 else -1.0)
+    assert criterion(0.9, 0.9, 20.0) == 0.0
+    assert criterion(0.85, 0.9, 20.0) == pytest.approx(1.0)
+
+
+def test_plant_node_is_the_kernel() -> None:
+    p = PLANT.as_array()
+    node = KernelPlant(np.array([0.1, 0.0, 3.0, 0.2]), PLANT, 0.001, 50)
+    x = [0.1, 0.0, 3.0, 0.2]
+    for k in range(50):
+        u = 0.5 * math.sin(k)
+        out = node(k * 0.001, np.array([u]))
+        x = list(kernel.rk4_step(*x, u, 0.001, p, p, False))
+        np.testing.assert_array_equal(node.states[k + 1], x)
+        np.testing.assert_array_equal(out, [x[0], x[1], math.sin(x[2]), math.cos(x[2]), x[3]])
+
+
+def test_upright_throughout() -> None:
+    t = np.arange(0, 20.001, 0.01)
+    th = np.full_like(t, 2 * math.pi + 0.05)  # wraps to 0.05
+    assert upright_throughout(t, th)
+    th[-500] = 0.2
+    assert not upright_throughout(t, th)
+    th[-500] = 0.05
+    th[100] = 3.0  # before the last 10 s: does not count
+    assert upright_throughout(t, th)
+
+
+def test_config_rejects_bad_values() -> None:
+    with pytest.raises(ParameterError):
+        NetworkConfig(neurons=10)
+    with pytest.raises(ParameterError):
+        NetworkConfig(synapse=0.0)
+    with pytest.raises(ParameterError):
+        NetworkConfig(selection="thalamus")  # type: ignore[arg-type]
+    assert sum(NetworkConfig(neurons=2000).sizes().values()) == pytest.approx(2000, abs=5)
+
+
+def test_balancing_near_upright_follows_the_rate_controller() -> None:
+    """From theta = 0.3 the balancing channel brings the pole up as the rate law does."""
+    sim = Simulation(theta0=0.3, duration=8.0)
+    r = run_network(CTRL, PLANT, sim, NetworkConfig(neurons=1000), seed=0)
+    rate = simulate(PLANT, CTRL, sim).data
+    assert not r.fault
+    assert r.neurons == sum(NetworkConfig(neurons=1000).sizes().values())
+    # same angle trajectory within 0.06 rad (decoding error and synaptic lag)
+    assert np.max(np.abs(r.data[:, 3] - rate[:, 3])) < 0.06
+    assert np.all(np.abs(r.data[-200:, 3]) < 0.05)
+    assert np.all(r.data[:, 7] == kernel.MODE_BALANCE)
+
+
+def test_printed_sign_network_drops_the_pole() -> None:
+    """The printed balancing sign (NOTES section 1) does not hold the pole in the network."""
+    sim = Simulation(theta0=0.3, duration=4.0)
+    r = run_network(
+        Controller(balance_sign="chapter"), PLANT, sim, NetworkConfig(neurons=600), seed=0
+    )
+    assert np.max(np.abs(r.data[:, 3])) > CTRL.theta_c
+
+
+@pytest.mark.slow
+def test_swing_up_reaches_upright() -> None:
+    """The chapter's final gains swing the pole up from 3.12 rad and balance it (30 s)."""
+    r = run_network(CTRL, PLANT, Simulation(duration=30.0), NetworkConfig(neurons=1500), seed=1)
+    assert r.switch_times, "never reached theta_c"
+    assert 15.0 < r.switch_times[0] < 25.0
+    th = np.array([kernel.wrap_angle(v) for v in r.data[-500:, 3]])
+    assert np.all(np.abs(th) < 0.1)
+
+
+def test_cli_json_and_files(tmp_path, capsys) -> None:
+    out = tmp_path / "run"
+    rc = main(
+        [
+            "neural",
+            "--duration",
+            "1",
+            "--neurons",
+            "300",
+            "--seed",
+            "2",
+            "--json",
+            "--out",
+            str(out),
+        ]
+    )
+    assert rc == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["neurons"] == sum(NetworkConfig(neurons=300).sizes().values())
+    assert data["upright_last_10s"] is False
+    assert {"success", "wall_per_sim_second", "settings"} <= set(data)
+    rows = (out / "trajectory.csv").read_text().splitlines()
+    assert rows[0] == "t,x,x_dot,theta,theta_dot,u,force,mode"
+    assert len(rows) == 1 + 101
+    assert (out / "activity.png").stat().st_size > 1000
+    assert json.loads((out / "summary.json").read_text())["seed"] == 2
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["--neurons", "3"],
+        ["--gains", "1", "0", "0", "0", "0", "0"],
+        ["--duration", "0"],
+        ["--seed", "-1"],
+        ["--synapse", "-0.1"],
+        ["--chapter-final", "--result", "r.json"],
+    ],
+)
+def test_cli_bad_input_exits_2(argv, capsys) -> None:
+    assert main(["neural", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "error" in err
+
+
+def test_recording_rates_does_not_change_the_network() -> None:
+    """A seed names one network whether or not the populations' rates are recorded."""
+    sim = Simulation(duration=0.5)
+    a, b = (
+        run_network(CTRL, PLANT, sim, NetworkConfig(neurons=300), seed=4, record_rates=rec)
+        for rec in (True, False)
+    )
+    np.testing.assert_allclose(a.data, b.data, rtol=0, atol=1e-12)
+    assert a.rates.shape == (50, len(a.populations)) and a.rates.sum() > 0
+    assert b.rates.sum() == 0
