@@ -264,6 +264,8 @@ def test_compare_names_the_learner_when_sweeps_mix_learners(
     table = capsys.readouterr().out
     for name in ("learner (chapter)", "control (chapter)", "learner (pgpe)", "control (pgpe)"):
         assert f"| {name} | chapter | 2 |" in table
+    for learner in ("chapter", "pgpe"):  # the learner-against-control rows too
+        assert f"| learner ({learner}) | control ({learner}) | chapter |" in table
     assert main(["compare", str(tmp_path / "b")]) == 0  # one learner: plain names
     assert "| learner | chapter | 2 |" in capsys.readouterr().out
 

@@ -132,13 +132,31 @@ def label_arms(summaries: list[dict[str, Any]], sources: list[str]) -> list[dict
     return arms
 
 
+def label_pairs(summaries: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Every learner-against-control pair, both arms named with their learner when the
+    summaries hold more than one learner (as :func:`label_arms` names them)."""
+    learners = {learner_of(s, a["arm"]) for s in summaries for a in s["arms"]} - {None}
+    pairs = []
+    for s in summaries:
+        for c in s["learner_vs_control"]:
+            learner = learner_of(s, c["arm"])
+            if learner and len(learners) > 1:
+                c = {
+                    **c,
+                    "arm": f"{c['arm']} ({learner})",
+                    "control": f"{c['control']} ({learner})",
+                }
+            pairs.append(c)
+    return pairs
+
+
 def run(args: argparse.Namespace) -> int:
     if args.out is not None and not args.out.parent.is_dir():
         raise ParameterError(f"--out {args.out}: folder {args.out.parent} does not exist")
     summaries = [load_summary(p) for p in args.summaries]
     arms = label_arms(summaries, [str(p) for p in args.summaries])
     arms.sort(key=lambda a: (a["init"], a["arm"]))
-    pairs = [c for s in summaries for c in s["learner_vs_control"]]
+    pairs = label_pairs(summaries)
     table = experiments.markdown_table({"arms": arms, "learner_vs_control": pairs})
     if args.out is not None:
         write_json(
