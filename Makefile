@@ -8,7 +8,7 @@ RUN_STAMP  := $(VENV)/.stamp-run
 TEST_STAMP := $(VENV)/.stamp-test
 OUT ?= results
 
-.PHONY: run test lint bench clean
+.PHONY: run test lint bench docs clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -19,7 +19,8 @@ $(RUN_STAMP): pyproject.toml | $(BIN)/python
 	touch $@
 
 $(TEST_STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/pip install -q -e ".[dev,rl,cluster]"
+	$(BIN)/pip install -q torch==2.13.0  # the CPU build; [rl] only asks for a range
+	$(BIN)/pip install -q -e ".[dev,rl,cluster,render]"
 	touch $@ $(RUN_STAMP)
 
 # The chapter's experiment (about 3 minutes on 2 cores):
@@ -62,5 +63,9 @@ lint: $(TEST_STAMP)
 test: lint
 	$(BIN)/pytest -q
 
+# The API reference from the docstrings (mkdocs + mkdocstrings), strict: into site/
+docs: $(TEST_STAMP)
+	$(BIN)/mkdocs build --strict --site-dir site
+
 clean:
-	rm -rf $(VENV) $(OUT)
+	rm -rf $(VENV) $(OUT) .venv-floor site

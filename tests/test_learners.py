@@ -19,7 +19,10 @@ from striatal.cli.learner_options import (
     learner_config_from,
 )
 from striatal.errors import ParameterError
-from striatal.learn import LearnerConfig, initial_state, learning_step, train
+from striatal.learners import LearnerConfig, initial_state, learning_step
+from striatal.learners import learn as train
+from striatal.learners.common import SHAPED_WEIGHTS
+from striatal.learners.pgpe import PGPE as PGPE_RULE
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -92,8 +95,8 @@ def test_plant_jitter_needs_success_on_the_corner_plants() -> None:
     state = initial_state(fragile.gains, fragile.theta_c, 0)
     assert not learning_step(state, Plant(), fragile, sim, protocol, cfg)[0].success
     assert learning_step(state, Plant(), fragile, sim, protocol, PGPE)[0].success
-    with pytest.raises(ParameterError):
-        LearnerConfig(plant_jitter=0.2)
+    with pytest.raises(ParameterError, match="does not use plant_jitter"):
+        learners.check_config(LearnerConfig(plant_jitter=0.2))
 
 
 def test_tracked_baseline_converges_to_the_mean_reward() -> None:
@@ -114,7 +117,7 @@ def test_prediction_error_factor_normalises_by_running_rms() -> None:
 
 
 def test_pgpe_update_equals_its_formula() -> None:
-    """p <- p + alpha * delta / rms * eps, eps stored as the trace (the eligibility)."""
+    """p <- p + alpha * delta / rms * eps, eps the perturbation of the trial (the eligibility)."""
     cfg = replace(PGPE, max_step=math.inf)
     plant, sim, protocol = Plant(), Simulation(), Protocol()
     s1, rec1 = learning_step(
@@ -124,19 +127,24 @@ def test_pgpe_update_equals_its_formula() -> None:
     shrink = 1 - cfg.alpha * cfg.decay
     np.testing.assert_allclose(s1.W[:5], shrink * np.array(RANDOM_START.gains[:5]), rtol=1e-12)
     assert s1.theta_c == 0.6
-    assert s1.reward_mean == rec1.reward
+    (b1,), (square1,) = s1.get("reward_mean"), s1.get("rpe_square")
+    assert b1 == rec1.reward
+    rng = np.random.default_rng()
+    rng.bit_generator.state = s1.rng_state
+    eps = PGPE_RULE.plan(s1, cfg, rng, plant).scratch["eps"]
     s2, rec2 = learning_step(s1, plant, RANDOM_START, sim, protocol, cfg)
-    delta = rec2.reward - s1.reward_mean
-    factor = delta / math.sqrt((1 - cfg.rpe_rate) * s1.rpe_square + cfg.rpe_rate * delta**2)
-    if s1.rpe_square == 0.0:
+    delta = rec2.reward - b1
+    factor = delta / math.sqrt((1 - cfg.rpe_rate) * square1 + cfg.rpe_rate * delta**2)
+    if square1 == 0.0:
         factor = math.copysign(1.0, delta) if delta else 0.0
     p1 = np.array([*s1.W[:5], s1.theta_c])
     p2 = np.array([*s2.W[:5], s2.theta_c])
     decay = cfg.alpha * cfg.decay * np.array([*p1[:5], 0.0])
-    expected = cfg.alpha * factor * np.array(s2.trace) - decay
+    expected = cfg.alpha * factor * eps - decay
     np.testing.assert_allclose(p2 - p1, expected, atol=1e-12)
     assert s2.W[5] == s1.W[5]
-    assert s2.reward_mean == pytest.approx(s1.reward_mean + cfg.rpe_rate * delta)
+    assert s2.get("reward_mean")[0] == pytest.approx(b1 + cfg.rpe_rate * delta)
+    assert rec2.extra == (("explore", cfg.explore),)
 
 
 def test_rpe_update_is_the_chapter_rule_with_the_prediction_error() -> None:
@@ -145,8 +153,8 @@ def test_rpe_update_is_the_chapter_rule_with_the_prediction_error() -> None:
         initial_state(START.gains, 0.6, 2), Plant(), START, Simulation(), Protocol(), cfg
     )
     s2, rec2 = learning_step(s1, Plant(), START, Simulation(), Protocol(), cfg)
-    delta = rec2.reward - s1.reward_mean
-    expected = cfg.alpha * (1 - cfg.gamma) * delta * np.array(s2.trace)
+    delta = rec2.reward - s1.get("reward_mean")[0]
+    expected = cfg.alpha * (1 - cfg.gamma) * delta * np.array(s2.get("trace"))
     expected[:5] -= cfg.alpha * (1 - cfg.gamma) * cfg.decay * np.array(s1.W[:5])
     np.testing.assert_allclose(np.array(s2.W) - np.array(s1.W), expected, atol=1e-12)
 
@@ -180,7 +188,7 @@ def test_shaped_reward_ranks_upright_at_rest_above_hanging() -> None:
         )
         return learners.shaped_reward(data, out, plant, sim, protocol)
 
-    assert score(0.0) == pytest.approx(sum(learners.SHAPED_WEIGHTS))
+    assert score(0.0) == pytest.approx(sum(SHAPED_WEIGHTS))
     assert 0.0 < score(math.pi) < 2.0
 
 
@@ -193,9 +201,13 @@ def test_invalid_combinations_raise() -> None:
         {"sigma_rate": -1.0},
         {"theta_c_rule": "learned"},
         {"learner": "pgpe"},  # success on the noisy trial
+        {"learner": "pgpe", "success_on": "mean", "gamma": 0.9},  # pgpe has no trace
+        {"learner": "rpe", "baseline": 1.0},  # rpe tracks its own baseline
+        {"reward": "shaped"},  # the chapter's rule has the sparse reward only
+        {"explore": 1e308},
     ):
         with pytest.raises(ParameterError):
-            LearnerConfig(**kw)  # type: ignore[arg-type]
+            learners.check_config(LearnerConfig(**kw))  # type: ignore[arg-type]
 
 
 def parse(*argv: str) -> LearnerConfig:
@@ -269,3 +281,87 @@ def test_resume_from_state_equals_uninterrupted_run(learner: str) -> None:
     resumed = train(Plant(), RANDOM_START, cfg, seed=5, state=state)
     assert (resumed.W, resumed.theta_c, resumed.trials) == (full.W, full.theta_c, full.trials)
     assert resumed.state.to_dict() == full.state.to_dict()
+
+
+def test_pgpe_control_explores_the_same_and_changes_nothing() -> None:
+    """pgpe's no-learning control: the same perturbations, no update of p or s."""
+    cfg = replace(PGPE, sigma_rate=0.5, max_trials=8)
+    control = learners.control_config(cfg)
+    assert (control.alpha, control.sigma_rate) == (0.0, 0.0)
+    assert learners.control_config(RPE).alpha == 0.0
+    rows: list[learners.TrialRecord] = []
+    r = train(Plant(), RANDOM_START, control, seed=3, on_trial=lambda s, rec: rows.append(rec))
+    assert RANDOM_START.gains == r.W and r.theta_c == RANDOM_START.theta_c
+    assert {rec.extra for rec in rows} == {(("explore", cfg.explore),)}
+    # the same draws as the learning run: its first trial (before any update) is identical
+    first: list[learners.TrialRecord] = []
+    train(Plant(), RANDOM_START, cfg, seed=3, on_trial=lambda s, rec: first.append(rec))
+    assert first[0].reward == rows[0].reward
+
+
+def test_history_columns_say_what_each_learner_records() -> None:
+    for name, column in (("chapter", "sigma"), ("rpe", "sigma"), ("pgpe", "explore")):
+        rows: list[learners.TrialRecord] = []
+        cfg = learners.default_config(name, max_trials=2)
+        train(
+            Plant(), RANDOM_START, cfg, seed=0, on_trial=lambda s, rec, rows=rows: rows.append(rec)
+        )
+        assert rows[0].columns[9] == column
+        assert learners.RULES[name].history_columns == (column,)
+
+
+def test_a_rule_registered_by_the_recipe_runs_in_the_shared_loop(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """docs/architecture.md's recipe: a rule with a config, preset, control, column, memory."""
+    from dataclasses import dataclass
+    from types import MappingProxyType
+
+    from striatal.learners.config import pick
+
+    @dataclass(frozen=True)
+    class HillConfig:
+        alpha: float
+        explore: float
+
+    class HillClimb(learners.Rule):
+        """Keep a random perturbation of W1..W5 if it scored better than the best so far."""
+
+        name = "hill"
+        summary = "hill climbing on W1..W5"
+        config_type = HillConfig
+        preset = MappingProxyType({"success_on": "mean", "explore": 0.2, "alpha": 1.0})
+        control = MappingProxyType({"alpha": 0.0})
+        history_columns = ("best",)
+        memory_names = ("best",)
+
+        def plan(self, state, config, rng, plant):  # type: ignore[no-untyped-def]
+            c = pick(HillConfig, config)
+            W = np.array(state.W)
+            eps = np.zeros(6)
+            eps[:5] = c.explore * rng.standard_normal(5)
+            return learners.TrialPlan(
+                W=W + eps, theta_c=state.theta_c, trace=np.zeros(6), gamma=0.0, rng=None
+            )
+
+        def update(self, state, config, plan, outcome, reward, success):  # type: ignore[no-untyped-def]
+            best = state.get("best")[0] if state.get("best") else -math.inf
+            keep = not success and config.alpha > 0 and reward > best
+            W = tuple(float(w) for w in plan.W) if keep else state.W
+            return learners.Update(W, state.theta_c, (("best", (max(best, reward),)),))
+
+        def extra(self, state, plan):  # type: ignore[no-untyped-def]
+            best = state.get("best")
+            return (("best", best[0] if best else math.nan),)
+
+    monkeypatch.setitem(learners.RULES, "hill", HillClimb())
+    cfg = learners.default_config("hill", max_trials=6)
+    rows: list[learners.TrialRecord] = []
+    r = train(Plant(), RANDOM_START, cfg, seed=1, on_trial=lambda s, rec: rows.append(rec))
+    assert len(rows) == 6 and rows[0].columns[9] == "best"
+    assert [rec.extra[0][1] for rec in rows[1:]] == sorted(rec.extra[0][1] for rec in rows[1:])
+    assert RANDOM_START.gains != r.W
+    still = train(Plant(), RANDOM_START, learners.control_config(cfg), seed=1)
+    assert RANDOM_START.gains == still.W
+    with pytest.raises(ParameterError, match="does not use gamma"):
+        learners.default_config("hill", gamma=0.5)

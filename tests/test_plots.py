@@ -6,6 +6,7 @@ import json
 import sys
 import types
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -34,20 +35,39 @@ def _line(ax, gid: str):  # type: ignore[no-untyped-def]
 # --------------------------------------------------------------------------- Figure 5
 
 
-def test_figure5_has_three_panels_and_a_snapshot_every_0_2_s(chapter_run: Trajectory) -> None:
+def test_figure5_has_four_panels_and_a_snapshot_every_0_2_s(chapter_run: Trajectory) -> None:
     fig = plots.figure5(chapter_run)
-    assert len(fig.axes) == 3
+    assert len(fig.axes) == 4
     snaps = fig.figure5_parts.snapshots
     assert len(snaps.get_segments()) == round(60.0 / 0.2) + 1 == 301
-    # cart of snapshot k drawn at x(t_k) + drift t_k, pole tip at l (sin, cos) theta from it
     idx = plots.snapshot_indices(chapter_run)
-    t, x, th = chapter_run.t[idx], chapter_run.column("x")[idx], chapter_run.column("theta")[idx]
+    t, th = chapter_run.t[idx], chapter_run.column("theta")[idx]
     np.testing.assert_allclose(t, np.arange(301) * 0.2, atol=1e-9)
     seg = np.array(snaps.get_segments())
-    np.testing.assert_allclose(seg[:, 0, 0], x + plots.DRIFT * t)
-    np.testing.assert_allclose(seg[:, 0, 1], 0.0)
+    # One row per 10 s, top to bottom; 50 poses a row, POSE_GAP pole lengths apart;
+    # the last snapshot (t = 60 s) ends the sixth row rather than starting a seventh.
+    row = np.minimum(np.floor(t / 10.0 + 1e-9), 5)
+    slot = np.rint((t - 10.0 * row) / 0.2)
+    assert slot.max() == 50 and row.max() == 5
+    np.testing.assert_allclose(seg[:, 0, 0], slot * plots.POSE_GAP)
+    np.testing.assert_allclose(seg[:, 0, 1], -row * plots.ROW_HEIGHT)
+    # pole tip at l (sin, cos) theta from the pivot: the pose, as simulated
     np.testing.assert_allclose(seg[:, 1, 0] - seg[:, 0, 0], np.sin(th), atol=1e-12)
-    np.testing.assert_allclose(seg[:, 1, 1], np.cos(th), atol=1e-12)
+    np.testing.assert_allclose(seg[:, 1, 1] - seg[:, 0, 1], np.cos(th), atol=1e-12)
+    # Poses of one row do not sit on each other, and rows do not overlap.
+    assert plots.POSE_GAP > 0.5 and plots.ROW_HEIGHT > 2.0
+    # The snapshot panel is not a thin strip: at least a third as tall as wide.
+    bbox = fig.axes[0].get_window_extent(fig.canvas.get_renderer())
+    assert bbox.height > bbox.width / 3
+
+
+def test_snapshot_layout_rows() -> None:
+    t = np.arange(0.0, 25.0 + 1e-9, 0.5)
+    row, slot = plots.snapshot_layout(t, 0.5, 10.0)
+    assert list(row[[0, 19, 20, 39, 40, 50]]) == [0, 0, 1, 1, 2, 2]
+    assert list(slot[[0, 19, 20, 50]]) == [0, 19, 0, 10]
+    with pytest.raises(ParameterError):
+        plots.snapshot_layout(t, 0.5, 0.1)
 
 
 @pytest.mark.parametrize(
@@ -62,26 +82,51 @@ def test_snapshot_count(duration: float, every: float, n: int) -> None:
 
 def test_figure5_series_equal_the_trajectory(chapter_run: Trajectory) -> None:
     fig = plots.figure5(chapter_run)
-    _, ax_xy, ax_t = fig.axes
+    _, ax_xy, ax_x, ax_th = fig.axes
     x, th, t = chapter_run.column("x"), chapter_run.column("theta"), chapter_run.t
     tip = _line(ax_xy, "tip_path")
     np.testing.assert_array_equal(tip.get_xdata(), x + np.sin(th))
     np.testing.assert_array_equal(tip.get_ydata(), np.cos(th))
-    xl = _line(ax_t, "x")
+    xl = _line(ax_x, "x")
     np.testing.assert_array_equal(xl.get_xdata(), t)
     np.testing.assert_array_equal(xl.get_ydata(), x)
-    thl = _line(ax_t, "theta")
-    shown = np.asarray(thl.get_ydata())
-    # unwrapped theta shifted by whole turns, ending upright near 0
-    turns = (th - shown) / (2 * np.pi)
-    np.testing.assert_allclose(turns, np.round(turns[0]), atol=1e-12)
-    assert abs(shown[-1]) < 0.05
-    # switch times as vertical lines: the one hand-over of the chapter's run at 19.55 s
-    sw = [ln for ln in ax_t.get_lines() if ln.get_gid() == "switch"]
-    assert len(sw) == len(chapter_run.switch_times) == 1
-    assert sw[0].get_xdata()[0] == pytest.approx(19.55)
-    assert "1.1736" in fig.get_suptitle() and "0.9035" in fig.get_suptitle()
-    assert ax_t.get_xlabel() == "time t [s]" and "[m]" in ax_xy.get_xlabel()
+    # x and theta on separate axes with their own units; theta_c lines only with theta
+    assert ax_x.get_ylabel() == "x [m]" and ax_th.get_ylabel() == "θ [rad]"
+    assert not [ln for ln in ax_x.get_lines() if ln.get_gid() == "theta_c"]
+    thl = _line(ax_th, "theta")
+    np.testing.assert_array_equal(thl.get_ydata(), th)  # theta(0) = 3.12 is in (-pi, pi]
+    assert thl.get_ydata()[0] == pytest.approx(3.12)
+    bounds = sorted(ln.get_ydata()[0] for ln in ax_th.get_lines() if ln.get_gid() == "theta_c")
+    assert bounds == pytest.approx([-0.9035, 0.9035])
+    # switch times as vertical lines in the x and theta panels: the one hand-over at 19.55 s
+    for ax in (ax_x, ax_th):
+        sw = [ln for ln in ax.get_lines() if ln.get_gid() == "switch"]
+        assert len(sw) == len(chapter_run.switch_times) == 1
+        assert sw[0].get_xdata()[0] == pytest.approx(19.55)
+    # the parameters are in the caption, not in the image's title
+    caption = fig.figure5_parts.caption
+    assert "1.1736" in caption and "0.9035" in caption and "θ(0) = 3.12 rad" in caption
+    assert "19.55" in caption and "passed" in caption
+    assert "1.1736" not in fig.get_suptitle() and len(fig.get_suptitle()) < 80
+    assert ax_th.get_xlabel() == "time t [s]" and "[m]" in ax_xy.get_xlabel()
+
+
+def test_figure5_of_w0_starts_at_its_theta0() -> None:
+    """W(0) swings the pole up over the other side: theta ends near 2 pi, starts at 3.12."""
+    traj = simulate(
+        Plant(),
+        Controller(gains=striatal.CHAPTER_INITIAL_W, theta_c=striatal.CHAPTER_INITIAL_THETA_C),
+        Simulation(),
+    )
+    fig = plots.figure5(traj)
+    ax_th = fig.axes[3]
+    shown = np.asarray(_line(ax_th, "theta").get_ydata())
+    assert shown[0] == pytest.approx(3.12)
+    assert abs(shown[-1] - 2 * np.pi) < 0.05
+    assert _line(ax_th, "upright").get_ydata()[0] == pytest.approx(2 * np.pi)
+    bounds = sorted(ln.get_ydata()[0] for ln in ax_th.get_lines() if ln.get_gid() == "theta_c")
+    assert bounds == pytest.approx([2 * np.pi - 0.6, 2 * np.pi + 0.6])
+    assert "θ(0) = 3.12 rad" in fig.figure5_parts.caption
 
 
 def test_pole_tip_uses_the_pole_length() -> None:
@@ -196,14 +241,45 @@ def test_curves_cli(tmp_path: Path) -> None:
     assert main(["curves", str(tmp_path / "missing.csv"), "--out", str(out)]) == 2
 
 
+def _labels(fig: Any) -> list[str]:
+    return [str(ln.get_label()) for ax in fig.axes for ln in ax.get_lines()]
+
+
+def test_learning_curves_label_each_learner_correctly(tmp_path: Path) -> None:
+    """pgpe: its exploration std, its shaped reward, no +10 panel; reward 0 is not '< 0'."""
+    import striatal
+
+    run = striatal.train(learner="pgpe", init="random", seed=0, max_trials=4, out=tmp_path / "p")
+    for h in (run.history, plots.read_history(tmp_path / "p" / "history.csv")):
+        assert h.learner == "pgpe" and h.reward_kind == "shaped"
+        fig = plots.learning_curves(h, window=2)
+        ax_r, _ax_w, _ax_c, ax_e, _ax_rate = fig.axes
+        titles = " ".join(ax.get_title() for ax in fig.axes) + fig.texts[0].get_text()
+        assert "exploration std s of pgpe" in ax_e.get_title() and "σ" not in titles
+        assert "+10" not in titles and "reward > 0" not in " ".join(_labels(fig))
+        assert ax_r.get_ylabel() == "shaped reward"
+        assert "W6 (unused)" in _labels(fig)
+        np.testing.assert_array_equal(ax_e.get_lines()[0].get_ydata(), np.ones(4))
+    sparse = plots.read_history(
+        _history_csv(tmp_path / "h.csv", [0.0, -5.0, 10.0], np.ones((3, 6)))
+    )
+    fig = plots.learning_curves(sparse, window=2)
+    by_label = {ln.get_label(): ln for ln in fig.axes[0].get_lines()}
+    assert list(by_label["reward 0"].get_ydata()) == [0.0]
+    assert list(by_label["reward < 0"].get_ydata()) == [-5.0]
+    assert fig.axes[3].get_title().startswith("policy std σ")
+
+
 # --------------------------------------------------------------------------- soft switch
 
 
 def test_switch_figure_plots_control_switch_weights() -> None:
     theta_c, gammas = 0.9, [2.0, 20.0]
     fig = plots.switch_figure(theta_c, gammas)
-    ax_w, ax_sum = fig.axes
-    for g in gammas:
+    # one column per gamma: weights on top, their sum below
+    assert len(fig.axes) == 4
+    for k, g in enumerate(gammas):
+        ax_w, ax_sum = fig.axes[k], fig.axes[len(gammas) + k]
         b, s = _line(ax_w, f"balancing:{g:g}"), _line(ax_w, f"swingup:{g:g}")
         a = np.asarray(b.get_xdata())
         wb, ws = switch_weights(a, theta_c, True, g)
@@ -215,6 +291,14 @@ def test_switch_figure_plots_control_switch_weights() -> None:
         outside = np.abs(a - theta_c) > 1.0 / g + 1e-9
         assert np.all(total[inside] < 1.0) and np.all(total[outside] == 1.0)
         assert total[np.argmin(np.abs(a - theta_c))] < 2.0 * g * (a[1] - a[0])
+        # no curve of another gamma on this panel
+        assert {ln.get_gid() for ln in ax_w.get_lines()} == {
+            f"balancing:{g:g}",
+            f"swingup:{g:g}",
+            None,
+        }
+    title = fig.get_suptitle()
+    assert "NOTES" not in title and "swapped" not in title and "0.9 rad" in title
     with pytest.raises(ParameterError):
         plots.switch_figure(theta_c, [0.0])
 
@@ -288,11 +372,13 @@ def test_runaway_run_is_drawn_clipped_but_complete() -> None:
     traj = simulate(Plant(), Controller(balance_sign="chapter"), Simulation())
     assert traj.outcome.fault
     fig = plots.figure5(traj)
-    ax_t = fig.axes[2]
-    np.testing.assert_array_equal(_line(ax_t, "x").get_ydata(), traj.column("x"))
-    assert ax_t.get_ylim() == (-plots.VIEW_LIMIT, plots.VIEW_LIMIT)
-    assert any("clipped" in t.get_text() for t in ax_t.texts)
-    assert len(fig.figure5_parts.switch_lines) == len(traj.switch_times) > 20
+    ax_x = fig.axes[2]
+    np.testing.assert_array_equal(_line(ax_x, "x").get_ydata(), traj.column("x"))
+    assert ax_x.get_ylim() == (-plots.VIEW_LIMIT, plots.VIEW_LIMIT)
+    assert any("clipped" in t.get_text() for t in ax_x.texts)
+    assert len(fig.figure5_parts.switch_lines) == 2 * len(traj.switch_times)
+    assert len(traj.switch_times) > 20
+    assert "blew up" in fig.figure5_parts.caption
 
 
 def test_mp4_goes_through_ffmpeg_on_path(

@@ -32,7 +32,8 @@ from hypothesis import strategies as st
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import read_csv, read_json
-from striatal.learn import LearnerConfig, gain_update
+from striatal.learners import LearnerConfig
+from striatal.learners.chapter import gain_update
 from striatal.params import MAX_STEPS, Controller, Plant, Simulation, check_seed
 from striatal.rollout import Protocol, SensorNoise, run_trial, simulate
 
@@ -168,7 +169,16 @@ def test_gain_update_never_makes_finite_gains_non_finite(
 ) -> None:
     W0 = np.array(W)
     cfg = LearnerConfig(alpha=alpha, max_step=max_step)
-    new = gain_update(W0, np.array(trace), reward, cfg)
+    new = gain_update(
+        W0,
+        np.array(trace),
+        reward,
+        alpha=cfg.alpha,
+        gamma=cfg.gamma,
+        baseline=cfg.baseline,
+        max_step=cfg.max_step,
+        w1_floor=cfg.w1_floor,
+    )
     assert np.all(np.isfinite(new))
     assert new[0] >= cfg.w1_floor
     if math.isfinite(max_step):

@@ -38,7 +38,8 @@ import pytest
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError, StriatalError
 from striatal.files import read_json
-from striatal.learn import LearnerConfig, gain_update, initial_state, learning_step
+from striatal.learners import LearnerConfig, initial_state, learning_step
+from striatal.learners.chapter import gain_update
 from striatal.params import CHAPTER_INITIAL_W, Controller, Plant, Simulation
 from striatal.rollout import Protocol, SensorNoise, run_trial
 
@@ -389,10 +390,152 @@ def learner_fault(tmp: Path) -> tuple[bool, str]:
 def nan_trace(tmp: Path) -> tuple[bool, str]:
     W = np.array(CHAPTER_INITIAL_W)
     same = all(
-        np.array_equal(gain_update(W, np.array([1, bad, 0, 0, 0, 0.0]), -5.0, LearnerConfig()), W)
+        np.array_equal(
+            gain_update(
+                W,
+                np.array([1, bad, 0, 0, 0, 0.0]),
+                -5.0,
+                alpha=5.0,
+                gamma=0.999,
+                baseline=0.0,
+                max_step=1.0,
+                w1_floor=1e-3,
+            ),
+            W,
+        )
         for bad in (math.nan, math.inf, -math.inf)
     )
     return same, f"W unchanged for NaN, +inf, -inf: {same}"
+
+
+# --------------------------------------------------------------------------- runs (issue 16)
+
+
+def fresh_over_old_run(tmp: Path) -> tuple[bool, str]:
+    """A fresh train into an old run's folder, crashing before its first checkpoint."""
+    from unittest import mock
+
+    import striatal.learners.loop as loop
+
+    out = tmp / "OUT"
+    assert cli_in_process("train", "--seed", "1", "--max-trials", "8", "--out", str(out)).rc == 0
+    real = loop.learning_step
+    calls = {"n": 0}
+
+    def crash(*args: Any, **kwargs: Any) -> Any:
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise MemoryError("simulated crash")
+        return real(*args, **kwargs)
+
+    with mock.patch.object(loop, "learning_step", crash):
+        crashed = cli_in_process("train", "--seed", "2", "--max-trials", "40", "--out", str(out))
+    left = sorted(p.name for p in out.iterdir())
+    resumed = cli_in_process("train", "--resume", "--out", str(out))
+    line = one_line(resumed.err).replace(str(out), "OUT")
+    ok = crashed.rc != 0 and left == ["history.csv"] and resumed.rc == 2
+    return ok, (
+        f"the new run crashed (exit {crashed.rc}) after 2 trials; left in OUT: "
+        f"{', '.join(left)} (the old checkpoint.json and result.json were removed at the "
+        f"start); `--resume`: exit {resumed.rc}, `{line}`"
+    )
+
+
+def _two_runs(tmp: Path) -> tuple[Path, Path]:
+    a, b = tmp / "A", tmp / "B"
+    for out, seed in ((a, "1"), (b, "2")):
+        r = cli_in_process(
+            "train", "--seed", seed, "--max-trials", "12", "--checkpoint-every", "5",
+            "--out", str(out),
+        )  # fmt: skip
+        assert r.rc == 0, r.err
+    return a, b
+
+
+def resume_mixed(name: str) -> Callable[[Path], tuple[bool, str]]:
+    """--resume on run A's folder holding run B's ``name``: refused, nothing changed."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        a, b = _two_runs(tmp)
+        (a / name).write_bytes((b / name).read_bytes())
+        before = snapshot(a)
+        r = cli_in_process("train", "--resume", "--out", str(a))
+        line = one_line(r.err).replace(str(a), "OUT")
+        line = re.sub(r"\([0-9a-f]{16}\)", "(ID)", line)
+        ok = r.rc == 2 and len(r.err.strip().splitlines()) == 1 and snapshot(a) == before
+        written = "nothing written" if snapshot(a) == before else "FILES CHANGED"
+        return ok, f"exit {r.rc}: `{line}`; {written}"
+
+    return run
+
+
+def two_trains(tmp: Path) -> tuple[bool, str]:
+    """A second train on a folder another process holds (the lock taken here)."""
+    from striatal.rundir import RunDir
+
+    out = tmp / "OUT"
+    with RunDir(out).lock():
+        r = cli_process("train", "--max-trials", "3", "--out", str(out))
+    line = one_line(r.err).replace(str(out), "OUT")
+    ok = r.rc == 2 and len(r.err.strip().splitlines()) == 1 and not any(out.iterdir())
+    return (
+        ok,
+        f"exit {r.rc}: `{line}`; nothing written: {'yes' if not any(out.iterdir()) else 'no'}",
+    )
+
+
+def resume_extends(tmp: Path) -> tuple[bool, str]:
+    """`--resume --max-trials 40` on a finished 30-trial run = the uninterrupted 40-trial run."""
+    ref, out = tmp / "ref", tmp / "OUT"
+    assert cli_in_process("train", "--seed", "1", "--max-trials", "40", "--out", str(ref)).rc == 0
+    assert cli_in_process("train", "--seed", "1", "--max-trials", "30", "--out", str(out)).rc == 0
+    r = cli_in_process("train", "--resume", "--max-trials", "40", "--seed", "1", "--out", str(out))
+    want, got = read_json(ref / "result.json"), read_json(out / "result.json")
+    same = all(got[k] == want[k] for k in ("success", "trials", "W", "theta_c"))
+    same_history = (out / "history.csv").read_bytes() == (ref / "history.csv").read_bytes()
+    ok = r.rc == 0 and same and same_history
+    return ok, (
+        f"exit {r.rc}; success after {got['trials']} trials as the uninterrupted run: "
+        f"{'yes' if same else 'no'}; history.csv identical: {'yes' if same_history else 'no'}"
+    )
+
+
+def absurd_pgpe_resumes(tmp: Path) -> tuple[bool, str]:
+    """pgpe at the largest exploration and an absurd rate: finite files, resumable."""
+    out = tmp / "OUT"
+    args = ("train", "--learner", "pgpe", "--explore", "100", "--alpha", "1e300", "--decay", "0",
+            "--duration", "2", "--checkpoint-every", "2", "--out", str(out))  # fmt: skip
+    first = cli_in_process(*args, "--max-trials", "3")
+    again = cli_in_process("train", "--resume", "--max-trials", "5", "--out", str(out))
+    texts = [(out / n).read_text() for n in ("checkpoint.json", "result.json")]
+    clean = all("null" not in t and "NaN" not in t for t in texts)
+    rows = (out / "history.csv").read_text().splitlines()[1:]
+    finite = all(math.isfinite(float(c)) for row in rows for c in row.split(",") if c)
+    ok = first.rc == 0 and again.rc == 0 and clean and finite and len(rows) == 5
+    return ok, (
+        f"exit {first.rc}, then `--resume --max-trials 5`: exit {again.rc}; checkpoint.json and "
+        f"result.json hold no null/NaN: {'yes' if clean else 'no'}; history rows {len(rows)}, "
+        f"finite: {'yes' if finite else 'no'}"
+    )
+
+
+def files_follow_umask(tmp: Path) -> tuple[bool, str]:
+    modes = {}
+    for mask in (0o022, 0o077):
+        out = tmp / f"OUT{mask:o}"
+        old = os.umask(mask)
+        try:
+            assert cli_in_process("simulate", "--duration", "1", "--out", str(out)).rc == 0
+        finally:
+            os.umask(old)
+        modes[mask] = {
+            oct((out / n).stat().st_mode & 0o777) for n in ("summary.json", "trajectory.csv")
+        }
+    ok = modes[0o022] == {"0o644"} and modes[0o077] == {"0o600"}
+    return ok, (
+        f"umask 022: {', '.join(sorted(modes[0o022]))}; umask 077: "
+        f"{', '.join(sorted(modes[0o077]))}"
+    )
 
 
 CODE_MODULES = {"pickle", "cPickle", "marshal", "shelve", "dill", "cloudpickle", "joblib"}
@@ -520,7 +663,7 @@ def interrupt_inside_sweep_run(tmp: Path) -> tuple[bool, str]:
     """KeyboardInterrupt (what SIGINT raises) from inside one run's learning loop."""
     from unittest import mock
 
-    import striatal.learn as learn_module
+    import striatal.learners.loop as learn_module
 
     want = sweep_reference(tmp)
     real = learn_module.learning_step
@@ -572,7 +715,7 @@ def interrupt_before_history_row(tmp: Path) -> tuple[bool, str]:
     """
     from unittest import mock
 
-    import striatal.cli.train as train_cli
+    import striatal.rundir as train_cli
 
     real = train_cli.csv_text
     calls = {"rows": 0}
@@ -859,6 +1002,38 @@ SCENARIOS: tuple[Scenario, ...] = (
     S("fault-simulate", "numerical fault",
       "`striatal simulate --chapter-final --balance-sign chapter` (the printed, unstable law)",
       "fault reported; no NaN or inf in the files", printed_sign_fault),
+    # ---- runs: folders, resume, locks (issue 16)
+    S("fresh-over-old", "runs", "`striatal train --seed 2 --out DIR` over a finished run in DIR, "
+      "crashing after 2 trials (before its first checkpoint), then `--resume`",
+      "the old checkpoint.json and result.json are gone; `--resume` refuses",
+      fresh_over_old_run),
+    S("resume-other-result", "runs", "`striatal train --resume` where result.json is another "
+      "run's", "exit 2, one line, files untouched", resume_mixed("result.json")),
+    S("resume-other-history", "runs", "`striatal train --resume` where history.csv is another "
+      "run's", "exit 2, one line, files untouched", resume_mixed("history.csv")),
+    S("two-trains", "runs", "`striatal train --out DIR` while another process holds DIR",
+      "exit 2, one line, nothing written", two_trains),
+    S("resume-changed", "runs", "`striatal train --resume --alpha 3 --seed 4` on a run with "
+      "alpha 5, seed 0", "exit 2, one line naming --alpha and --seed",
+      usage_error(("train", "--resume", "--alpha", "3", "--seed", "4", "--out", "OUT"),
+                  prepare=_checkpointed_run)),
+    S("resume-extend", "runs", "`striatal train --resume --max-trials 40` on a finished "
+      "30-trial run", "the same files as the uninterrupted 40-trial run", resume_extends),
+    S("resume-ckpt-every", "bad input", "`striatal train --resume --checkpoint-every 0`",
+      "exit 2, one line", usage_error(("train", "--resume", "--checkpoint-every", "0", "--out",
+                                       "OUT"), prepare=_checkpointed_run)),
+    S("pgpe-explore-huge", "bad input", "`striatal train --learner pgpe --explore 1.7e308`",
+      "exit 2, one line", usage_error(("train", "--learner", "pgpe", "--explore", "1.7e308",
+                                       "--max-trials", "5", "--duration", "2", "--out", "OUT"))),
+    S("pgpe-absurd", "numerical fault", "`striatal train --learner pgpe --explore 100 --alpha "
+      "1e300 --decay 0 --duration 2 --max-trials 3`, then `--resume --max-trials 5`",
+      "finite files; the resume works", absurd_pgpe_resumes),
+    S("out-empty", "bad input", "`striatal train --out \"\"` (every command's --out)",
+      "exit 2, one line", usage_error(("train", "--max-trials", "2", "--out", ""))),
+    S("out-empty-sim", "bad input", "`striatal simulate --out \"\"`", "exit 2, one line",
+      usage_error(("simulate", "--out", ""))),
+    S("umask", "runs", "`striatal simulate --out DIR` under umask 022 and 077",
+      "files 0644 and 0600, as `open()` makes them", files_follow_umask),
     # ---- files are data, never code
     S("no-code", "files are data", "every module of src/striatal parsed: imports of pickle, "
       "marshal, shelve, dill, cloudpickle, joblib; calls of eval, exec, yaml.load; "

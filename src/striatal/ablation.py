@@ -14,15 +14,14 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from striatal import baselines, experiments
-from striatal.cli.learner_options import LEARNER_DEFAULTS
 from striatal.errors import ParameterError
-from striatal.learn import LearnerConfig, random_initial_gains
+from striatal.learners import LearnerConfig, default_config, random_initial_gains
 from striatal.params import CHAPTER_INITIAL_THETA_C, Controller, Plant, Simulation
 from striatal.rollout import Protocol, simulate
 
@@ -38,11 +37,8 @@ class Variant:
     kind: str = "learner"
 
     def config(self, max_trials: int) -> LearnerConfig:
-        return replace(
-            LEARNER_DEFAULTS[self.learner],
-            max_trials=max_trials,
-            success_on="mean",
-            **dict(self.changes),
+        return default_config(
+            self.learner, max_trials=max_trials, success_on="mean", **dict(self.changes)
         )
 
     @property

@@ -26,7 +26,7 @@ random
 cmaes
     CMA-ES (``cma``, Hansen) over the same 7 numbers from (W(0), theta_c(0)) with step
     size 1, bounded to W1 >= W1_FLOOR and theta_c in [0.2, 1.4], minimising minus the
-    dense score :func:`striatal.learners.shaped_reward` of each candidate's trial (the
+    dense score :func:`striatal.learners.common.shaped_reward` of each candidate's trial (the
     sparse +10/-5 reward of eqs 24-25 is almost flat for a black-box search). Success
     when a candidate's trial passes the success test.
 
@@ -46,8 +46,9 @@ import numpy as np
 
 from striatal.control import balancing_gain_matrix
 from striatal.dynamics import linearization
-from striatal.learn import W1_FLOOR, SuccessOn
-from striatal.learners import THETA_C_LEARNED_RANGE, shaped_reward
+from striatal.learners.common import shaped_reward
+from striatal.learners.config import W1_FLOOR, SuccessOn
+from striatal.learners.pgpe import THETA_C_LEARNED_RANGE
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,

@@ -13,3 +13,7 @@ class ParameterError(StriatalError):
 
 class DataFileError(StriatalError):
     """A result, history, checkpoint or config file is missing, truncated or does not parse."""
+
+
+class MissingExtraError(StriatalError, ImportError):
+    """An optional part of striatal needs a package that is not installed; names the extra."""

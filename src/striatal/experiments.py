@@ -37,7 +37,7 @@ import numpy as np
 from striatal import baselines
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import atomic_write_text, csv_text
-from striatal.learn import LearnerConfig, random_initial_gains, train
+from striatal.learners import LearnerConfig, learn, random_initial_gains
 from striatal.params import CHAPTER_INITIAL_W, N_GAINS, Controller, Plant, Simulation
 from striatal.rollout import Protocol, simulate
 
@@ -115,12 +115,12 @@ def initial_gains(init: Init, seed: int) -> tuple[float, ...]:
 def learning_run(
     plant: Plant, template: Controller, config: LearnerConfig, seed: int, sim: Simulation
 ) -> dict[str, Any]:
-    """success, trials, W and theta_c of one finished ``learn.train`` run.
+    """success, trials, W and theta_c of one finished :func:`striatal.learners.learn` run.
 
     train turns Ctrl-C into a partial result; a cut run must never be recorded as
     finished, so it is raised again here as KeyboardInterrupt.
     """
-    result = train(plant, template, config, seed, sim=sim)
+    result = learn(plant, template, config, seed, sim=sim)
     if result.interrupted:
         raise KeyboardInterrupt
     return {

@@ -37,10 +37,26 @@ def check_out_dir(path: str | os.PathLike[str]) -> Path:
     return p
 
 
+def _umask() -> int:
+    """The process's file-mode creation mask (read without changing it, where possible)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` to ``path`` atomically (temp file + fsync + rename).
 
-    A folder that cannot be made or written raises DataFileError.
+    The file gets the mode an ordinary ``open(path, "w")`` would give it (0666 less
+    the umask), not mkstemp's 0600. A folder that cannot be made or written raises
+    DataFileError.
     """
     target = Path(path)
     try:
@@ -49,6 +65,7 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     except OSError as exc:
         raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
     try:
+        os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
             fh.write(text)
             fh.flush()

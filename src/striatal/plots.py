@@ -21,17 +21,23 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
+from striatal.learners import History
+from striatal.rundir import read_history as read_history
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+    from striatal.profiles import Profile
     from striatal.rollout import Trajectory
 
 #: The chapter: "each motion snapshot was recorded in every 0.2 second" (section 3).
 SNAPSHOT_EVERY = 0.2
-#: Horizontal drift of the snapshot strip of Figure 5's top panel [m/s]: snapshot k is
-#: drawn at x(t_k) + DRIFT t_k so that successive stick figures do not overlap.
-DRIFT = 0.5
+#: Figure 5's snapshots are laid out in rows of this many seconds each.
+ROW_SECONDS = 10.0
+#: Distance between successive poses along a row of snapshots, in pole lengths.
+POSE_GAP = 0.6
+#: Height of one row of snapshots, in pole lengths (a hanging and an upright pole fit).
+ROW_HEIGHT = 2.6
 #: Runs whose cart leaves |x| <= VIEW_LIMIT [m] (a runaway, e.g. the printed balancing sign)
 #: are drawn clipped to that window, so the part before the runaway stays readable.
 VIEW_LIMIT = 15.0
@@ -113,18 +119,40 @@ def snapshot_indices(traj: Trajectory, every: float = SNAPSHOT_EVERY) -> np.ndar
 
 
 def display_theta(traj: Trajectory) -> np.ndarray:
-    """theta(t) unwrapped, shifted by whole turns so that its last value lies in (-pi, pi]
-    (for a runaway: its last value while |x| <= VIEW_LIMIT).
+    """theta(t) as the kernel records it (unwrapped), shifted by whole turns so that
+    theta(0) lies in (-pi, pi]: the start reads the theta(0) of the run.
 
-    The kernel records the continuous angle; a pole that swings up over the other
-    side ends near 2 pi. The shift makes the final upright read 0 without the
-    +-pi jumps a wrapped angle shows while the pole hangs near pi.
+    A pole that swings up over the other side then ends near +-2 pi, which is upright
+    too: Figure 5 marks the upright of the last turn (:func:`final_upright`).
     """
     theta = traj.column("theta")
-    # A runaway cart spins the pole: take the turns at the last instant still in view.
-    sane = np.nonzero((np.abs(traj.column("x")) <= VIEW_LIMIT) & np.isfinite(theta))[0]
+    first = theta[0] if np.isfinite(theta[0]) else 0.0
+    return theta - 2.0 * np.pi * np.round(first / (2.0 * np.pi))
+
+
+def final_upright(theta: np.ndarray) -> float:
+    """The upright angle 2 pi k [rad] nearest the last finite value of ``theta``
+    (for a runaway: the last value whose size is at most VIEW_LIMIT)."""
+    sane = np.nonzero(np.isfinite(theta) & (np.abs(theta) <= VIEW_LIMIT))[0]
     last = theta[sane[-1]] if len(sane) else 0.0
-    return theta - 2.0 * np.pi * np.round(last / (2.0 * np.pi))
+    return float(2.0 * np.pi * np.round(last / (2.0 * np.pi)))
+
+
+def snapshot_layout(
+    t: np.ndarray, every: float, row_seconds: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(row, slot) of snapshots taken at times ``t`` [s]: row r holds
+    [r row_seconds, (r + 1) row_seconds), slot j is the j-th pose of its row.
+
+    A last snapshot that would start a row of its own (t = 60 s with 10-s rows) ends
+    the row before it instead.
+    """
+    if not (math.isfinite(row_seconds) and row_seconds >= every):
+        raise ParameterError(f"row length must be >= the snapshot interval, got {row_seconds}")
+    n_rows = max(1, int(math.ceil(float(t[-1]) / row_seconds - 1e-9)))
+    row = np.minimum(np.floor(t / row_seconds + 1e-9).astype(int), n_rows - 1)
+    slot = np.rint((t - row * row_seconds) / every).astype(int)
+    return row, slot
 
 
 def pole_tip(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
@@ -135,6 +163,7 @@ def pole_tip(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
 
 
 def gains_title(gains: Sequence[float], theta_c: float) -> str:
+    """``W = [W1, ..., W6],  θ_c = ... rad`` with four decimals."""
     w = ", ".join(f"{g:.4f}" for g in gains)
     return f"W = [{w}],  θ_c = {theta_c:.4g} rad"
 
@@ -148,72 +177,106 @@ class Figure5Parts:
     x_line: object
     theta_line: object
     switch_lines: tuple[object, ...]
+    caption: str
+
+
+def figure5_caption(traj: Trajectory, *, every: float = SNAPSHOT_EVERY) -> str:
+    """The caption of Figure 5 for ``traj``: the run's parameters and how to read the panels."""
+    ctrl = traj.controller
+    o = traj.outcome
+    n = len(snapshot_indices(traj, every))
+    switches = ", ".join(f"{s:.2f}" for s in traj.switch_times[:6])
+    if len(traj.switch_times) > 6:
+        switches += f" ... ({len(traj.switch_times)} in all)"
+    return (
+        f"Figure 5. One run with the mean policy: {gains_title(ctrl.gains, ctrl.theta_c)}; "
+        f"balance sign {ctrl.balance_sign}, {ctrl.switch} switch"
+        + (f" (γ = {ctrl.inhibition:g} /rad)" if ctrl.soft else "")
+        + f"; θ(0) = {traj.sim.theta0:g} rad, dt = {traj.sim.dt:g} s; "
+        f"success test at {traj.sim.duration:g} s: {'passed' if o.success else 'failed'}"
+        + (" (numerical fault: the state blew up)" if o.fault else "")
+        + f". Top: the pole every {every:g} s ({n} poses), one row per {ROW_SECONDS:g} s, "
+        "time running left to right; orange while the swing-up controller acts (eq 23), "
+        "blue while balancing (eq 22); each pose is drawn at its own place in the row, "
+        "the cart's position is in the third panel. Second: the path of the pole tip "
+        "(x + l sin θ, l cos θ). Third: the cart position x(t). Bottom: the pole angle "
+        "θ(t), unwrapped from θ(0); the grey line is the upright the run ends at "
+        "(2π k), the dotted lines ±θ_c about it. Dashed vertical lines: switches "
+        f"between the controllers at {switches or 'none'} s."
+    )
 
 
 def figure5(
     traj: Trajectory,
     *,
     every: float = SNAPSHOT_EVERY,
-    drift: float = DRIFT,
     title: str | None = None,
 ) -> Figure:
-    """The chapter's Figure 5 for one run: three panels.
+    """The chapter's Figure 5 for one run: four panels, and its caption.
 
-    Top: a stick figure (cart and pole) every ``every`` seconds, the cart drawn at
-    x(t) + ``drift`` t so that the strip reads left to right in time; orange while the
-    swing-up controller acts, blue while balancing. Middle: the path of the pole tip
-    (x + l sin theta, l cos theta). Bottom: x(t) and theta(t) (see :func:`display_theta`)
-    with the switch times as vertical lines.
-    The artists are on ``fig.figure5_parts`` (:class:`Figure5Parts`).
+    Top: a stick figure of the pole every ``every`` seconds, in rows of
+    :data:`ROW_SECONDS` (:func:`snapshot_layout`), orange while the swing-up
+    controller acts, blue while balancing. Second: the path of the pole tip
+    (x + l sin theta, l cos theta). Third: x(t). Bottom: theta(t) (see
+    :func:`display_theta`) with +-theta_c about the final upright. The switch times
+    are vertical lines in the last two. The title is short; the parameters of the
+    run are in the caption (:func:`figure5_caption`), on ``fig.figure5_parts``
+    (:class:`Figure5Parts`) with the artists.
     """
     from matplotlib.collections import LineCollection
 
-    fig = _figure(13.0, 9.0)
-    ax_snap, ax_xy, ax_t = fig.subplots(3, 1, height_ratios=[0.8, 1.0, 1.1])
     t = traj.t
     x = traj.column("x")
     theta = traj.column("theta")
     mode = traj.column("mode")
     l = traj.plant.length
     idx = snapshot_indices(traj, every)
+    row, slot = snapshot_layout(t[idx], every, ROW_SECONDS)
+    n_rows = int(row.max()) + 1
+    width_poses = float(slot.max()) * POSE_GAP + 2.4
 
-    base = x[idx] + drift * t[idx]
-    tip_x = base + l * np.sin(theta[idx])
-    tip_y = l * np.cos(theta[idx])
-    segments = np.stack([np.stack([base, np.zeros_like(base)], 1), np.stack([tip_x, tip_y], 1)], 1)
-    colours = [BALANCING_COLOUR if m > 0.5 else SWINGUP_COLOUR for m in mode[idx]]
-    snaps = LineCollection(list(segments), colors=colours, linewidths=0.8, gid="snapshots")
-    ax_snap.add_collection(snaps)
-    ax_snap.plot(base, np.zeros_like(base), "s", ms=2.5, color="0.3", gid="carts")
-    ax_snap.axhline(0.0, color="0.6", lw=0.5)
-    pad = 0.3 * l
-    near = np.abs(x[idx]) <= VIEW_LIMIT
-    near[0] = True
-    ax_snap.set_xlim(
-        min(base[near].min(), tip_x[near].min()) - pad,
-        max(base[near].max(), tip_x[near].max()) + pad,
+    snap_height = 12.2 * n_rows * ROW_HEIGHT / width_poses
+    fig = _figure(13.0, snap_height + 8.2)
+    ax_snap, ax_xy, ax_x, ax_th = fig.subplots(
+        4, 1, height_ratios=[snap_height, 3.2, 1.9, 2.1], gridspec_kw={"hspace": 0.08}
     )
-    ax_snap.set_ylim(-1.15 * l, 1.55 * l)
+
+    # Snapshots: pivot of pose k at (slot POSE_GAP l, -row ROW_HEIGHT l).
+    piv_x = slot * POSE_GAP * l
+    piv_y = -row * ROW_HEIGHT * l
+    tip_x = piv_x + l * np.sin(theta[idx])
+    tip_y = piv_y + l * np.cos(theta[idx])
+    segments = np.stack([np.stack([piv_x, piv_y], 1), np.stack([tip_x, tip_y], 1)], 1)
+    colours = [BALANCING_COLOUR if m > 0.5 else SWINGUP_COLOUR for m in mode[idx]]
+    snaps = LineCollection(list(segments), colors=colours, linewidths=1.1, gid="snapshots")
+    ax_snap.add_collection(snaps)
+    ax_snap.plot(piv_x, piv_y, "s", ms=2.0, color="0.3", gid="carts")
+    for r in range(n_rows):
+        y0 = -r * ROW_HEIGHT * l
+        ax_snap.axhline(y0, color="0.85", lw=0.5, zorder=0)
+        in_row = row == r
+        t_row = t[idx][in_row]
+        ax_snap.text(
+            -1.3 * l,
+            y0,
+            f"{t_row[0]:g}–{t_row[-1]:g} s",
+            ha="right",
+            va="center",
+            fontsize=9,
+            color="0.25",
+        )
+    ax_snap.set_xlim(-1.2 * l, float(slot.max()) * POSE_GAP * l + 1.2 * l)
+    ax_snap.set_ylim(-(n_rows - 1) * ROW_HEIGHT * l - 1.15 * l, 1.3 * l)
     ax_snap.set_aspect("equal", adjustable="box")
-    ax_snap.set_xlabel(f"x(t) + {drift:g} m/s · t  [m]   (snapshot every {every:g} s)")
-    ax_snap.set_ylabel("height [m]")
+    ax_snap.set_xticks([])
+    ax_snap.set_yticks([])
+    for side in ("top", "right", "left", "bottom"):
+        ax_snap.spines[side].set_visible(False)
     ax_snap.set_title(
-        f"motion snapshots every {every:g} s ({len(idx)}); "
-        "orange: swing-up (eq 23), blue: balancing (eq 22)",
+        f"the pole every {every:g} s, one row per {ROW_SECONDS:g} s "
+        f"(orange: swing-up, eq 23; blue: balancing, eq 22)",
         fontsize=10,
     )
-    # Time marks along the strip, every 10 s.
-    for tk in np.arange(0.0, t[-1] + 1e-9, 10.0):
-        k = int(round(tk / traj.sim.dt))
-        if k < len(t):
-            ax_snap.annotate(
-                f"{tk:g} s",
-                (x[k] + drift * t[k], 1.1 * l),
-                ha="center",
-                va="bottom",
-                fontsize=8,
-                color="0.3",
-            )
 
     tx, ty = pole_tip(traj)
     (tip_line,) = ax_xy.plot(tx, ty, lw=0.6, color="tab:purple", gid="tip_path")
@@ -229,125 +292,75 @@ def figure5(
         ax_xy.set_aspect("equal", adjustable="datalim")
     ax_xy.set_xlabel("x + l sin θ  [m]")
     ax_xy.set_ylabel("l cos θ  [m]")
-    ax_xy.set_title("pole tip in the x-y plane", fontsize=10)
+    ax_xy.set_title("path of the pole tip", fontsize=10)
     ax_xy.legend(loc="lower right", fontsize=8)
 
-    th_plot = display_theta(traj)
-    (x_line,) = ax_t.plot(t, x, color="tab:green", label="x [m]", gid="x")
-    (th_line,) = ax_t.plot(t, th_plot, color="tab:purple", label="θ [rad]", gid="theta")
     many = len(traj.switch_times) > 20
-    switch_lines = tuple(
-        ax_t.axvline(
-            ts,
-            color="0.3",
-            ls="--",
-            lw=0.4 if many else 0.8,
-            alpha=0.4 if many else 1.0,
-            gid="switch",
+    switch_lines: list[object] = []
+    for ax in (ax_x, ax_th):
+        switch_lines.extend(
+            ax.axvline(
+                ts,
+                color="0.3",
+                ls="--",
+                lw=0.4 if many else 0.8,
+                alpha=0.4 if many else 1.0,
+                gid="switch",
+            )
+            for ts in traj.switch_times
         )
-        for ts in traj.switch_times
-    )
-    theta_c = traj.controller.theta_c
-    ax_t.axhline(theta_c, color="tab:purple", ls=":", lw=0.7)
-    ax_t.axhline(-theta_c, color="tab:purple", ls=":", lw=0.7)
-    ax_t.axhline(0.0, color="0.6", lw=0.5)
-    ax_t.set_xlim(t[0], t[-1])
-    if runaway or not bool(np.all(np.abs(th_plot) <= VIEW_LIMIT)):
-        ax_t.set_ylim(-VIEW_LIMIT, VIEW_LIMIT)
-        ax_t.text(
-            0.01,
-            0.03,
-            f"clipped to ±{VIEW_LIMIT:g}: max |x| = {np.nanmax(np.abs(x)):.3g} m, "
-            f"max |θ| = {np.nanmax(np.abs(th_plot)):.3g} rad",
-            transform=ax_t.transAxes,
-            fontsize=9,
-            color="tab:red",
-        )
-    ax_t.set_xlabel("time t [s]")
-    ax_t.set_ylabel("x [m],  θ [rad]")
-    n_sw = len(switch_lines)
-    sw_text = ", ".join(f"{s:.2f}" for s in traj.switch_times[:6]) + (" ..." if n_sw > 6 else "")
-    ax_t.set_title(
-        "cart position and pole angle (θ unwrapped, shifted by whole turns so the end reads "
-        f"in (-π, π]; dotted: ±θ_c); dashed: switches at {sw_text or 'none'} s",
-        fontsize=10,
-    )
-    ax_t.legend(loc="upper right", fontsize=8)
+        ax.set_xlim(t[0], t[-1])
 
-    ctrl = traj.controller
+    (x_line,) = ax_x.plot(t, x, color="tab:green", gid="x")
+    ax_x.axhline(0.0, color="0.6", lw=0.5)
+    ax_x.set_ylabel("x [m]")
+    ax_x.tick_params(labelbottom=False)
+    ax_x.sharex(ax_th)
+
+    th_plot = display_theta(traj)
+    (th_line,) = ax_th.plot(t, th_plot, color="tab:purple", gid="theta")
+    upright = final_upright(th_plot)
+    theta_c = traj.controller.theta_c
+    ax_th.axhline(upright, color="0.5", lw=0.8, gid="upright")
+    ax_th.axhline(upright + theta_c, color="tab:purple", ls=":", lw=0.8, gid="theta_c")
+    ax_th.axhline(upright - theta_c, color="tab:purple", ls=":", lw=0.8, gid="theta_c")
+    ax_th.set_ylabel("θ [rad]")
+    ax_th.set_xlabel("time t [s]")
+
+    if np.all(np.isfinite(th_plot)):
+        lo = min(float(th_plot.min()), upright - theta_c)
+        hi = max(float(th_plot.max()), upright + theta_c)
+        ax_th.set_ylim(lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo))
+    for ax, series, unit in ((ax_x, x, "m"), (ax_th, th_plot, "rad")):
+        if runaway or not bool(np.all(np.abs(series) <= VIEW_LIMIT)):
+            ax.set_ylim(-VIEW_LIMIT, VIEW_LIMIT)
+            ax.text(
+                0.01,
+                0.05,
+                f"clipped to ±{VIEW_LIMIT:g} {unit}: max = {np.nanmax(np.abs(series)):.3g} {unit}",
+                transform=ax.transAxes,
+                fontsize=9,
+                color="tab:red",
+            )
+
     o = traj.outcome
     default = (
-        f"Figure 5: {gains_title(ctrl.gains, ctrl.theta_c)}\n"
-        f"balance sign {ctrl.balance_sign}, {ctrl.switch} switch"
-        + (f" (γ = {ctrl.inhibition:g})" if ctrl.soft else "")
-        + f", θ(0) = {traj.sim.theta0:g} rad, dt = {traj.sim.dt:g} s, mean policy; "
-        f"success test at {traj.sim.duration:g} s: {'passed' if o.success else 'failed'}"
-        + (" (numerical fault)" if o.fault else "")
+        "Figure 5: swing-up and balancing, mean policy "
+        f"(success test {'passed' if o.success else 'failed'})"
     )
-    fig.suptitle(title or default, fontsize=11)
+    fig.suptitle(title or default, fontsize=12)
     fig.figure5_parts = Figure5Parts(  # type: ignore[attr-defined]
         snapshots=snaps,
         tip_path=tip_line,
         x_line=x_line,
         theta_line=th_line,
-        switch_lines=switch_lines,
+        switch_lines=tuple(switch_lines),
+        caption=figure5_caption(traj, every=every),
     )
     return fig
 
 
 # --------------------------------------------------------------------------- curves
-
-
-HISTORY_NUMERIC = ("trial", "reward", "W1", "W2", "W3", "W4", "W5", "W6", "theta_c", "sigma")
-HISTORY_FLAGS = ("success", "fault", "early")
-
-
-@dataclass(frozen=True)
-class History:
-    """history.csv of ``striatal train`` as arrays; W (n, 6) are the gains USED in each trial."""
-
-    trial: np.ndarray
-    reward: np.ndarray
-    W: np.ndarray
-    theta_c: np.ndarray
-    sigma: np.ndarray
-    success: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.trial)
-
-
-def read_history(path: Path) -> History:
-    """Parse history.csv (header of striatal.learn.HISTORY_COLUMNS) or raise DataFileError."""
-    from striatal.files import read_csv
-
-    rows = read_csv(path, what="history")
-    if not rows:
-        raise DataFileError(f"history {path} has no trials")
-    missing = [c for c in (*HISTORY_NUMERIC, "success") if c not in rows[0]]
-    if missing:
-        raise DataFileError(f"history {path} lacks the column(s) {', '.join(missing)}")
-    cols: dict[str, list[float]] = {c: [] for c in (*HISTORY_NUMERIC, "success")}
-    for line, row in enumerate(rows, start=2):
-        for c in cols:
-            cell = row.get(c)
-            try:
-                v = float(cell)  # type: ignore[arg-type]
-            except (TypeError, ValueError):
-                raise DataFileError(
-                    f"history {path} line {line}: column {c} is not a number ({cell!r})"
-                ) from None
-            if not math.isfinite(v):
-                raise DataFileError(f"history {path} line {line}: column {c} is not finite")
-            cols[c].append(v)
-    return History(
-        trial=np.array(cols["trial"]),
-        reward=np.array(cols["reward"]),
-        W=np.array([cols[f"W{i}"] for i in range(1, 7)]).T,
-        theta_c=np.array(cols["theta_c"]),
-        sigma=np.array(cols["sigma"]),
-        success=np.array(cols["success"]) > 0.5,
-    )
 
 
 def running_mean(values: np.ndarray, window: int) -> np.ndarray:
@@ -359,29 +372,54 @@ def running_mean(values: np.ndarray, window: int) -> np.ndarray:
     return (c[i] - c[lo]) / (i - lo)
 
 
-def learning_curves(history: History, *, window: int = 50, title: str | None = None) -> Figure:
-    """Reward per trial with running rates, the six gains, theta_c and sigma over trials.
+#: Panel of each learner-specific history column: (y label, title).
+RULE_PANELS = {
+    "sigma": ("σ [m/s²]", "policy std σ = 0.1 + sigmoid(W6) of eq 5 (per step)"),
+    "explore": ("s (W1..W5)", "parameter-exploration std s of pgpe (per trial)"),
+}
 
-    Axes (in ``fig.axes`` order): reward, gains, theta_c, sigma, then the twin axis of
-    the running rates (fraction of +10 rewards, fraction passing the success test).
+
+def learning_curves(history: History, *, window: int = 50, title: str | None = None) -> Figure:
+    """Reward per trial with running rates, the six gains, theta_c and the learner's own columns.
+
+    Axes (in ``fig.axes`` order): reward, gains, theta_c, one per learner column
+    (sigma for chapter and rpe, explore for pgpe: :data:`RULE_PANELS`), then the
+    twin axis of the running rates. The sparse reward (eqs 24-25) is drawn as +10,
+    0 and -5 with the running fraction of +10; the shaped reward as its values and
+    running mean. W1..W5 are what the controller acted with (pgpe: the mean of its
+    exploration), W6 sets the per-step sigma (not used by pgpe).
     """
     if window < 1:
         raise ParameterError(f"window must be >= 1, got {window}")
-    fig = _figure(11.0, 10.0)
-    ax_r, ax_w, ax_c, ax_s = fig.subplots(4, 1, sharex=True, height_ratios=[1.0, 1.4, 0.8, 0.8])
+    extra = [c for c in history.rule_columns if c in RULE_PANELS]
+    fig = _figure(11.0, 7.6 + 1.2 * len(extra))
+    axes = fig.subplots(
+        3 + len(extra), 1, sharex=True, height_ratios=[1.0, 1.4, 0.8] + [0.8] * len(extra)
+    )
+    ax_r, ax_w, ax_c = axes[0], axes[1], axes[2]
     n = history.trial
-    pos = history.reward > 0
-    ax_r.plot(n[pos], history.reward[pos], ".", color="tab:green", ms=3, label="reward > 0")
-    ax_r.plot(n[~pos], history.reward[~pos], ".", color="tab:red", ms=3, label="reward < 0")
-    ax_r.set_ylabel("reward (eqs 24-25)")
+    reward = history.reward
+    success = history.success
+    sparse = history.reward_kind == "sparse"
+    ax_rate = ax_r.twinx()
+    if sparse:
+        pos, zero, neg = reward > 0, reward == 0, reward < 0
+        ax_r.plot(n[pos], reward[pos], ".", color="tab:green", ms=3, label="reward > 0")
+        if zero.any():
+            ax_r.plot(n[zero], reward[zero], ".", color="0.5", ms=3, label="reward 0")
+        ax_r.plot(n[neg], reward[neg], ".", color="tab:red", ms=3, label="reward < 0")
+        ax_r.set_ylabel("reward (eqs 24-25)")
+        ax_rate.plot(n, running_mean(pos, window), color="tab:green", lw=1.2, label="fraction > 0")
+    else:
+        ax_r.plot(n, reward, ".", color="tab:blue", ms=3, label="shaped reward")
+        ax_r.plot(n, running_mean(reward, window), color="tab:blue", lw=1.0, label="running mean")
+        ax_r.set_ylabel("shaped reward")
     ax_r.set_title(
         f"reward per trial; running fractions over the last {window} trials", fontsize=10
     )
-    ax_rate = ax_r.twinx()
-    ax_rate.plot(n, running_mean(pos, window), color="tab:green", lw=1.2, label="fraction +10")
     ax_rate.plot(
         n,
-        running_mean(history.success, window),
+        running_mean(success, window),
         color="black",
         lw=1.2,
         label="fraction passing success test",
@@ -394,8 +432,11 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
         h1 + h2, l1 + l2, loc="upper left", bbox_to_anchor=(1.07, 1.0), fontsize=8, frameon=False
     )
 
+    W = history.W
+    w6_unused = "explore" in history.rule_columns  # pgpe acts with the mean policy
     for i in range(6):
-        ax_w.plot(n, history.W[:, i], lw=1.0, label=f"W{i + 1}")
+        label = f"W{i + 1}" + (" (unused)" if i == 5 and w6_unused else "")
+        ax_w.plot(n, W[:, i], lw=1.0, label=label)
     ax_w.axhline(0.0, color="0.6", lw=0.5)
     ax_w.set_ylabel("gain (used in the trial)")
     ax_w.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
@@ -403,14 +444,17 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
     ax_c.plot(n, history.theta_c, color="tab:purple", lw=1.0)
     ax_c.set_ylabel("θ_c [rad]")
     ax_c.set_title("switching threshold (eq 21)", fontsize=10)
-    ax_s.plot(n, history.sigma, color="tab:brown", lw=1.0)
-    ax_s.set_ylabel("σ [m/s²]")
-    ax_s.set_title("exploration σ = 0.1 + sigmoid(W6)", fontsize=10)
-    ax_s.set_xlabel("trial")
+    for ax, name in zip(axes[3:], extra, strict=True):
+        label, panel_title = RULE_PANELS[name]
+        ax.plot(n, history.column(name), color="tab:brown", lw=1.0)
+        ax.set_ylabel(label)
+        ax.set_title(panel_title, fontsize=10)
+    axes[-1].set_xlabel("trial")
+    counted = f"{int((reward > 0).sum())} with reward > 0, " if sparse else ""
     fig.suptitle(
         title
-        or f"Learning curves: {len(history)} trials, {int(pos.sum())} with reward +10, "
-        f"{int(history.success.sum())} passing the success test",
+        or f"Learning curves ({history.learner}): {len(history)} trials, {counted}"
+        f"{int(success.sum())} passing the success test",
         fontsize=11,
     )
     return fig
@@ -420,12 +464,14 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
 
 
 def switch_figure(theta_c: float, gammas: Sequence[float], *, theta_max: float = math.pi) -> Figure:
-    """The cerebellar soft switch of section 4 (NOTES section 4) against |theta|.
+    """The cerebellar soft switch of section 4 against |theta| (docs/paper-notes.md section 4).
 
-    Left: balancing weight clip(gamma (theta_c - |theta|), 0, 1) (solid) and swing-up
-    weight clip(gamma (|theta| - theta_c), 0, 1) (dashed) for each gamma, with the hard
-    switch in black. Right: their sum, which dips below 1 in a dead zone of half-width
-    1/gamma around theta_c where neither pathway fully drives the cart.
+    One column per gamma, so that no two curves lie on each other. Top: balancing
+    weight clip(gamma (theta_c - |theta|), 0, 1) on mu_1 (solid) and swing-up weight
+    clip(gamma (|theta| - theta_c), 0, 1) on mu_2 (dashed); the hard switch of section
+    2.3 hands over at theta_c (dotted). Bottom: their sum, the total drive, which dips
+    below 1 in a dead zone of half-width 1/gamma around theta_c (shaded) where neither
+    pathway fully drives the cart.
     """
     from striatal.control import switch_weights
 
@@ -437,33 +483,39 @@ def switch_figure(theta_c: float, gammas: Sequence[float], *, theta_max: float =
     if not 0.0 < theta_c < math.pi:
         raise ParameterError(f"theta_c must be in (0, pi), got {theta_c}")
     a = np.linspace(0.0, theta_max, 2001)
-    fig = _figure(12.0, 4.8)
-    ax_w, ax_sum = fig.subplots(1, 2, width_ratios=[1.4, 1.0])
-    wb, ws = switch_weights(a, theta_c, False, 1.0)
-    ax_w.plot(a, wb, color="black", lw=2.0, alpha=0.35, label="hard switch (section 2.3)")
-    ax_w.plot(a, ws, color="black", lw=2.0, alpha=0.35, ls="--")
+    n = len(gammas)
+    fig = _figure(max(6.0, 3.2 * n), 5.6)
+    axes = fig.subplots(2, n, sharex=True, sharey="row", height_ratios=[1.6, 1.0], squeeze=False)
     for k, g in enumerate(gammas):
-        colour = f"C{k}"
+        ax_w, ax_sum = axes[0, k], axes[1, k]
         wb, ws = switch_weights(a, theta_c, True, g)
-        ax_w.plot(a, wb, color=colour, lw=1.3, label=f"γ = {g:g} /rad", gid=f"balancing:{g:g}")
-        ax_w.plot(a, ws, color=colour, lw=1.3, ls="--", gid=f"swingup:{g:g}")
-        ax_sum.plot(a, wb + ws, color=colour, lw=1.3, label=f"γ = {g:g} /rad", gid=f"sum:{g:g}")
-    for ax in (ax_w, ax_sum):
-        ax.axvline(theta_c, color="0.4", ls=":", lw=0.8)
-        ax.set_xlabel("|θ| [rad]")
-        ax.set_xlim(0.0, theta_max)
-        ax.set_ylim(-0.05, 1.1)
-    ax_w.set_ylabel("weight")
-    ax_w.set_title(
-        "solid: balancing weight on μ₁, clip(γ(θ_c − |θ|), 0, 1)\n"
-        "dashed: swing-up weight on μ₂, clip(γ(|θ| − θ_c), 0, 1)",
-        fontsize=10,
-    )
-    ax_w.legend(fontsize=8, loc="center right")
-    ax_sum.set_ylabel("balancing + swing-up weight")
-    ax_sum.set_title("total drive: a dead zone of half-width 1/γ at θ_c", fontsize=10)
+        ax_w.plot(
+            a, wb, color=BALANCING_COLOUR, lw=1.6, label="balancing (μ₁)", gid=f"balancing:{g:g}"
+        )
+        ax_w.plot(
+            a,
+            ws,
+            color=SWINGUP_COLOUR,
+            lw=1.6,
+            ls="--",
+            label="swing-up (μ₂)",
+            gid=f"swingup:{g:g}",
+        )
+        total = wb + ws
+        ax_sum.plot(a, total, color="black", lw=1.3, gid=f"sum:{g:g}")
+        ax_sum.fill_between(a, total, 1.0, where=total < 1.0, color="0.8", lw=0, label="dead zone")
+        ax_w.set_title(f"γ = {g:g} /rad (dead zone ±{1.0 / g:.2g} rad)", fontsize=10)
+        for ax in (ax_w, ax_sum):
+            ax.axvline(theta_c, color="0.4", ls=":", lw=0.9, label="hard switch at θ_c")
+            ax.set_xlim(0.0, theta_max)
+        ax_w.set_ylim(-0.05, 1.1)
+        ax_sum.set_ylim(-0.05, 1.1)
+        ax_sum.set_xlabel("|θ| [rad]")
+    axes[0, 0].set_ylabel("weight")
+    axes[1, 0].set_ylabel("total drive")
+    axes[0, 0].legend(fontsize=8, loc="center right")
     fig.suptitle(
-        "Cerebellar soft switch (section 4, labels read swapped: NOTES 4), "
+        "Cerebellar soft switch (section 4): weights of the two controllers, "
         f"θ_c = {theta_c:.4g} rad",
         fontsize=11,
     )
@@ -586,3 +638,40 @@ def _write_mp4(frames: Sequence[np.ndarray], tmp: Path, fps: float) -> None:
     if proc.returncode != 0:
         msg = proc.stderr.decode(errors="replace").strip().splitlines()
         raise DataFileError(f"ffmpeg failed: {msg[-1] if msg else proc.returncode}")
+
+
+# --------------------------------------------------------------------------- performance profiles
+
+
+def performance_profiles(
+    profiles: Sequence[Profile], *, xlabel: str, note: str = "", title: str | None = None
+) -> Figure:
+    """Fraction of seeds solved against budget, one step line per arm with its 95 % band.
+
+    ``profiles`` from :func:`striatal.profiles.sweep_profiles`; the band is the
+    pointwise Wilson interval. ``note`` (e.g. the trials fallback) is printed
+    under the axes.
+    """
+    fig = _figure(8.0, 5.0)
+    ax = fig.subplots()
+    for i, p in enumerate(profiles):
+        colour = f"C{i % 10}"
+        ax.fill_between(p.budget, p.low, p.high, step="post", color=colour, alpha=0.2, lw=0)
+        ax.step(
+            p.budget,
+            p.solved,
+            where="post",
+            color=colour,
+            lw=1.6,
+            label=f"{p.arm}: {p.successes}/{p.runs} solved",
+        )
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlim(left=0.0)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("fraction of seeds solved within budget")
+    ax.grid(True, color="0.9", lw=0.5)
+    ax.legend(loc="upper left", fontsize=9, frameon=False)
+    ax.set_title(title or "Performance profiles (bands: pointwise Wilson 95 %)", fontsize=11)
+    if note:
+        fig.supxlabel(note, fontsize=7, color="0.35")
+    return fig

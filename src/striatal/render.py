@@ -38,6 +38,7 @@ def cartpole_frame(
     width: int = 600,
     height: int = 400,
     x_limit: float = 4.0,
+    camera_x: float = 0.0,
 ) -> np.ndarray:
     """(height, width, 3) uint8 RGB image of the cart-pole in ``state``.
 
@@ -52,8 +53,11 @@ def cartpole_frame(
     theta_c : switching threshold [rad] (eq 21); when given, the balancing zone
         |theta| < theta_c is shaded as a wedge at the pivot.
     width, height : image size [px].
-    x_limit : the track shown spans [-x_limit, x_limit] [m]; a cart beyond it is
-        drawn clipped at the image edge.
+    x_limit : half-width of the view [m]: the track shown spans
+        [camera_x - x_limit, camera_x + x_limit]; a cart beyond it is drawn clipped
+        at the image edge.
+    camera_x : centre of the view on the track [m]; :func:`follow_camera` gives a
+        centre that keeps the cart in the picture.
     """
     s = np.asarray(state, dtype=float).ravel()
     if s.shape[0] < 3:
@@ -62,6 +66,8 @@ def cartpole_frame(
         raise ParameterError(f"image must be at least 16 x 16 px, got {width} x {height}")
     if not (math.isfinite(x_limit) and x_limit > 0.0):
         raise ParameterError(f"x_limit must be a finite number > 0, got {x_limit!r}")
+    if not math.isfinite(camera_x):
+        raise ParameterError(f"camera_x must be a finite number, got {camera_x!r}")
     width = int(width)
     height = int(height)
     x = float(s[0])
@@ -72,23 +78,31 @@ def cartpole_frame(
     track_y = 0.72 * height
     scale = min(width / (2.0 * x_limit), 0.55 * height / length)
     cx = 0.5 * width
+    camera_x = float(camera_x)
 
     def px(xm: float, ym: float) -> tuple[float, float]:
-        return cx + scale * xm, track_y - scale * ym
+        return cx + scale * (xm - camera_x), track_y - scale * ym
 
     img = Image.new("RGB", (width, height), _BACKGROUND)
     draw = ImageDraw.Draw(img)
     line_w = max(1, round(height / 130))
+    small_font = ImageFont.load_default(size=max(8, round(height / 32)))
 
-    draw.line([px(-x_limit, 0.0), px(x_limit, 0.0)], fill=_TRACK, width=line_w)
-    for mark in range(-int(math.floor(x_limit)), int(math.floor(x_limit)) + 1):
+    # The track across the whole view, a tick every metre, labelled every 2 m, so
+    # that a moving camera still shows where the cart is.
+    x_left = camera_x - width / (2.0 * scale)
+    x_right = camera_x + width / (2.0 * scale)
+    draw.line([px(x_left, 0.0), px(x_right, 0.0)], fill=_TRACK, width=line_w)
+    for mark in range(int(math.ceil(x_left)), int(math.floor(x_right)) + 1):
         mx, my = px(float(mark), 0.0)
         draw.line([(mx, my), (mx, my + 2 * line_w)], fill=_TRACK, width=1)
+        if mark % 2 == 0:
+            draw.text((mx, my + 3 * line_w), f"{mark} m", fill=_TRACK, font=small_font, anchor="mt")
 
     finite = math.isfinite(x) and math.isfinite(theta)
     if finite:
         # Keep the drawing coordinates bounded for absurd states (Pillow wants sane ints).
-        x_draw = min(max(x, -10.0 * x_limit), 10.0 * x_limit)
+        x_draw = min(max(x, camera_x - 10.0 * x_limit), camera_x + 10.0 * x_limit)
         pivot = px(x_draw, 0.0)
         if theta_c is not None and 0.0 < theta_c < math.pi:
             r = 1.15 * scale * length
@@ -128,3 +142,17 @@ def cartpole_frame(
         y_text += step
 
     return np.asarray(img, dtype=np.uint8)
+
+
+def follow_camera(x: float, x_limit: float, margin: float) -> float:
+    """Centre of a view of half-width ``x_limit`` [m] that keeps a cart at ``x`` in it.
+
+    The view stays at 0 while |x| <= x_limit - margin and otherwise slides with
+    the cart, keeping it ``margin`` [m] from the edge (give at least the pole length
+    so the pole fits too). A pure function of x: no camera state between frames.
+    A non-finite x gives 0.
+    """
+    if not math.isfinite(x):
+        return 0.0
+    free = max(x_limit - margin, 0.0)
+    return math.copysign(max(abs(x) - free, 0.0), x)

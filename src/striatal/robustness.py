@@ -18,9 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from striatal.errors import ParameterError
+from striatal.errors import DataFileError, ParameterError
 from striatal.params import Controller, Plant, Simulation, check_seed
 from striatal.rollout import Protocol, SensorNoise, TrialOutcome, run_trial
+from striatal.rundir import result_of
 
 
 @dataclass(frozen=True)
@@ -150,18 +151,10 @@ def controller_groups(
     are left out.
     """
     if isinstance(data, dict) and "W" in data and "theta_c" in data:
-        settings = data.get("settings", {})
-        if not isinstance(settings, dict):
-            raise ParameterError(
-                f"the settings of a train result.json must be an object, got {settings!r}"
-            )
-        readings = settings.get("controller", {})
-        if not isinstance(readings, dict):
-            raise ParameterError(
-                "the settings.controller of a train result.json must be an object, "
-                f"got {readings!r}"
-            )
-        return [("learned", [Controller(gains=data["W"], theta_c=data["theta_c"], **readings)])]
+        try:
+            return [("learned", [result_of(data, "").controller])]
+        except DataFileError as exc:
+            raise ParameterError(str(exc)) from None
     if isinstance(data, dict) and all(isinstance(v, dict) and "runs" in v for v in data.values()):
         groups = []
         for name in [v for v in variants if v in data] if variants else list(data):

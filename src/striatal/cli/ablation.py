@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from striatal.ablation import VARIANT_NAMES, markdown_table, run_variant, summary, variant
+from striatal.cli import options
 from striatal.errors import ParameterError
 from striatal.files import atomic_write_text, check_out_dir, write_json
 
@@ -33,7 +33,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--workers", type=int, default=2, help="worker processes")
     parser.add_argument(
-        "--out", type=Path, default=None, help="write ablation.json and ablation.md here"
+        "--out",
+        type=options.out_path,
+        default=None,
+        help="write ablation.json and ablation.md here",
     )
 
 

@@ -26,7 +26,9 @@ MAX_FRAMES = 5000
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_gain_source_arguments(parser)
-    parser.add_argument("--out", type=Path, default=Path("run.gif"), help=".gif or .mp4")
+    parser.add_argument(
+        "--out", type=options.out_path, default=Path("run.gif"), help=".gif or .mp4"
+    )
     parser.add_argument("--fps", type=float, default=15.0, help="frames per second of video")
     parser.add_argument(
         "--speed", type=float, default=3.0, help="simulated seconds per second of video"

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from striatal import experiments
+from striatal.cli import options
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import read_json, write_json
 
@@ -26,7 +27,9 @@ _KEYS = ("arm", "init", "method", "runs", "success_rate", "unsolved_share", "tri
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("summaries", nargs="+", type=Path, help="sweep folders or summary.json")
-    parser.add_argument("--out", type=Path, default=None, help="write the table as JSON here")
+    parser.add_argument(
+        "--out", type=options.out_path, default=None, help="write the table as JSON here"
+    )
 
 
 def load_summary(path: Path) -> dict[str, Any]:

@@ -5,21 +5,28 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from striatal.cli import options
 from striatal.errors import ParameterError
+from striatal.rundir import read_history
 
 COMMAND = "curves"
 ORDER = 41
-HELP = "plot reward, running success rate, W1..W6, theta_c and sigma over the trials"
+HELP = "plot reward, running success rate, W1..W6, theta_c and the learner's own columns"
 DESCRIPTION = (
     "Learning curves from history.csv of striatal train, in one figure: the reward of each "
-    "trial with the running fraction of +10 rewards and of trials passing the success test; "
-    "the six gains used in each trial; theta_c; sigma."
+    "trial (the sparse +10 / 0 / -5 with the running fraction of positive rewards, or the "
+    "shaped reward with its running mean) and the running fraction passing the success "
+    "test; the six gains used in each trial; theta_c; then the learner's own columns "
+    "(chapter, rpe: the policy std sigma; pgpe: its exploration std). The learner and its "
+    "reward are read from the result.json or checkpoint.json beside history.csv."
 )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("history", type=Path, help="history.csv of striatal train")
-    parser.add_argument("--out", type=Path, default=Path("curves.png"), help="PNG (or .pdf/.svg)")
+    parser.add_argument(
+        "--out", type=options.out_path, default=Path("curves.png"), help="PNG (or .pdf/.svg)"
+    )
     parser.add_argument("--window", type=int, default=50, help="trials in the running fractions")
     parser.add_argument("--dpi", type=int, default=120, help="resolution of a PNG")
 
@@ -32,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--window must be >= 1, got {args.window}")
     if not 10 <= args.dpi <= 1000:
         raise ParameterError(f"--dpi must be in [10, 1000], got {args.dpi}")
-    history = plots.read_history(args.history)
+    history = read_history(args.history)
     fig = plots.learning_curves(history, window=args.window)
     plots.save_figure(fig, out, dpi=args.dpi)
     print(f"wrote {out}: {len(history)} trials")

@@ -25,7 +25,9 @@ DESCRIPTION = (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     options.add_gain_source_arguments(parser)
-    parser.add_argument("--out", type=Path, default=Path("fig5.png"), help="PNG (or .pdf/.svg)")
+    parser.add_argument(
+        "--out", type=options.out_path, default=Path("fig5.png"), help="PNG (or .pdf/.svg)"
+    )
     parser.add_argument(
         "--every", type=float, default=0.2, help="time between motion snapshots [s]"
     )

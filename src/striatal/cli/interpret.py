@@ -9,8 +9,9 @@ from typing import Any
 
 from striatal.cli import options
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import dumps_json, read_json
+from striatal.files import dumps_json
 from striatal.params import Plant
+from striatal.rundir import read_history, read_result
 
 COMMAND = "interpret"
 ORDER = 45
@@ -42,22 +43,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _from_result(path: Path) -> tuple[list[float], float, str, Plant, str]:
-    data = read_json(path, what="result")
-    controller, plant = options.controller_of_result(data, path)
-    settings = data.get("settings")
-    learner = data.get("learner", settings.get("learner") if isinstance(settings, dict) else None)
-    return (
-        list(controller.gains),
-        controller.theta_c,
-        controller.balance_sign,
-        plant,
-        str(learner or "chapter"),
-    )
+    r = read_result(path)
+    return list(r.W), r.theta_c, r.controller.balance_sign, r.plant, r.learner
 
 
 def build(args: argparse.Namespace) -> dict[str, Any]:
     """The JSON reading for the parsed command line (validates everything first)."""
-    from striatal import interpret, plots
+    from striatal import interpret
 
     learner = "chapter"
     if args.result is not None:
@@ -84,7 +76,7 @@ def build(args: argparse.Namespace) -> dict[str, Any]:
     out["source"] = source
     out["learner"] = learner
     if history_path is not None:
-        h = plots.read_history(history_path)
+        h = read_history(history_path)
         table = interpret.plasticity_table(h.W, h.reward)
         out["plasticity"] = {
             "history": str(history_path),

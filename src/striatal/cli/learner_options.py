@@ -1,31 +1,18 @@
 """The learner's options, shared by ``train`` and ``sweep``.
 
-Options left unset take the defaults of the chosen ``--learner``
-(:data:`LEARNER_DEFAULTS`); "chapter" keeps the chapter's learner exactly.
+Options left unset take the tuned preset of the chosen ``--learner``
+(:func:`striatal.learners.default_config`); "chapter" keeps the chapter's learner exactly.
 """
 
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
+from typing import Any
 
-from striatal.learn import LEARNERS, LearnerConfig
+from striatal.learners import LEARNERS, RULES, LearnerConfig, default_config
 
-#: Defaults of each learner variant (the measured best settings: docs/ablation.md).
-LEARNER_DEFAULTS: dict[str, LearnerConfig] = {
-    "chapter": LearnerConfig(),
-    "rpe": LearnerConfig(learner="rpe", normalise=True),
-    "pgpe": LearnerConfig(
-        learner="pgpe",
-        alpha=0.3,
-        reward="shaped",
-        normalise=True,
-        explore=1.0,
-        decay=0.1,
-        success_on="mean",
-        theta_c_rule="learned",
-    ),
-}
+#: Defaults of each learner (the tuned presets live with each rule: striatal.learners).
+LEARNER_DEFAULTS: dict[str, LearnerConfig] = {name: default_config(name) for name in LEARNERS}
 
 # Option name -> LearnerConfig field, for the options whose default depends on --learner.
 _FIELDS = {
@@ -56,14 +43,16 @@ def _default_text(name: str) -> str:
 
 
 def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
-    """Every LearnerConfig field as an option (the chapter leaves most open: NOTES section 7)."""
-    lg = parser.add_argument_group("learning (the chapter leaves these open: NOTES section 7)")
+    """Every LearnerConfig field as an option (docs/paper-notes.md, section 7)."""
+    lg = parser.add_argument_group(
+        "learning (the chapter leaves these open: docs/paper-notes.md, section 7)"
+    )
     lg.add_argument(
         "--learner",
         choices=LEARNERS,
         default="chapter",
-        help="chapter: the chapter's rule; rpe: with a reward-prediction-error baseline; "
-        "pgpe: exploration in parameter space once per trial (docs/ablation.md)",
+        help="; ".join(f"{name}: {rule.summary}" for name, rule in RULES.items())
+        + " (an option the chosen learner does not read is refused)",
     )
     lg.add_argument("--max-trials", type=int, default=None, help=_default_text("max_trials"))
     lg.add_argument(
@@ -90,7 +79,13 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
     lg.add_argument(
         "--carry-trace", action="store_true", help="do not reset the trace D between trials"
     )
-    lg.add_argument("--eligibility", choices=("score", "chapter"), default=None)
+    lg.add_argument(
+        "--eligibility",
+        choices=("score", "chapter"),
+        default=None,
+        help="score: the Gaussian score (docs/paper-notes.md, section 2); chapter: the "
+        "printed e1; " + _default_text("eligibility"),
+    )
     lg.add_argument(
         "--success-on",
         choices=("noisy", "mean"),
@@ -161,9 +156,8 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def learner_config_from(args: argparse.Namespace) -> LearnerConfig:
-    """The LearnerConfig the options describe (validated): the learner's defaults, overridden."""
-    base = LEARNER_DEFAULTS[getattr(args, "learner", None) or "chapter"]
+def learner_changes(args: argparse.Namespace) -> dict[str, Any]:
+    """The LearnerConfig fields the options set explicitly (the rest: the learner's preset)."""
     changes = {
         field: getattr(args, option)
         for option, field in _FIELDS.items()
@@ -171,4 +165,9 @@ def learner_config_from(args: argparse.Namespace) -> LearnerConfig:
     }
     if getattr(args, "carry_trace", False):
         changes["reset_trace"] = False
-    return replace(base, **changes)
+    return changes
+
+
+def learner_config_from(args: argparse.Namespace) -> LearnerConfig:
+    """The LearnerConfig the options describe (validated): the learner's preset, overridden."""
+    return default_config(getattr(args, "learner", None) or "chapter", **learner_changes(args))

@@ -7,8 +7,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from striatal.errors import DataFileError, ParameterError
-from striatal.files import read_json
+from striatal.errors import ParameterError
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -20,6 +19,14 @@ from striatal.params import (
     Simulation,
     check_gains,
 )
+from striatal.rundir import read_result
+
+
+def out_path(text: str) -> Path:
+    """The ``--out`` option type of every command: a path, never the empty string."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("--out must name a file or folder, got an empty string")
+    return Path(text)
 
 
 def add_plant_arguments(parser: argparse.ArgumentParser) -> None:
@@ -74,15 +81,15 @@ def add_controller_arguments(parser: argparse.ArgumentParser, *, gains_required:
         "--balance-sign",
         choices=("corrected", "chapter"),
         default="corrected",
-        help="sign of the theta terms of the balancing law (NOTES section 1): 'corrected' "
-        "stabilises; 'chapter' is eq 20 as printed and makes the upright unstable",
+        help="sign of the theta terms of the balancing law (docs/paper-notes.md, section 1): "
+        "'corrected' stabilises; 'chapter' is eq 20 as printed and makes the upright unstable",
     )
     g.add_argument(
         "--switch",
         choices=("hard", "soft"),
         default="hard",
         help="hard switch at |theta| < theta_c (section 2.3) or the cerebellar soft switch "
-        "with lateral inhibition (section 4, NOTES section 4)",
+        "with lateral inhibition (section 4; docs/paper-notes.md, section 4)",
     )
     g.add_argument(
         "--inhibition",
@@ -157,36 +164,8 @@ def add_gain_source_arguments(parser: argparse.ArgumentParser) -> None:
 
 def result_controller(path: Path) -> tuple[Controller, Plant]:
     """The controller (W, theta_c, readings) and plant of a result.json of train."""
-    return controller_of_result(read_json(path, what="result"), path)
-
-
-def controller_of_result(data: Any, path: Path) -> tuple[Controller, Plant]:
-    """:func:`result_controller` of already-parsed JSON ``data`` read from ``path``."""
-    if not isinstance(data, dict):
-        raise DataFileError(f"result {path} is not a striatal result.json")
-    try:
-        settings: dict[str, Any] = data.get("settings") or {}
-        ctrl: dict[str, Any] = settings.get("controller") or {}
-        plant_d: dict[str, Any] = settings.get("plant") or {}
-        controller = Controller(
-            gains=tuple(data["W"]),
-            theta_c=data["theta_c"],
-            balance_sign=ctrl.get("balance_sign", "corrected"),
-            switch=ctrl.get("switch", "hard"),
-            inhibition=ctrl.get("inhibition", 50.0),
-        )
-        plant = Plant(
-            **{
-                k: plant_d[k]
-                for k in ("cart_mass", "pole_mass", "length", "gravity")
-                if k in plant_d
-            }
-        )
-    except (KeyError, TypeError, ValueError, AttributeError) as exc:
-        raise DataFileError(f"result {path} lacks W, theta_c or settings: {exc!r}") from None
-    except ParameterError as exc:
-        raise DataFileError(f"result {path} holds an unusable controller: {exc}") from None
-    return controller, plant
+    r = read_result(path)
+    return r.controller, r.plant
 
 
 def controller_and_plant(args: argparse.Namespace) -> tuple[Controller, Plant]:

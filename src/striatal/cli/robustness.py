@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from striatal import baselines
+from striatal.cli import options
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import atomic_write_text, dumps_json, read_json
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant
@@ -35,7 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--repeats", type=int, default=10, help="sensor-noise runs per controller")
     parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
     parser.add_argument("--json", action="store_true", help="print the rows as JSON")
-    parser.add_argument("--out", type=Path, default=None, help="write the markdown table here")
+    parser.add_argument(
+        "--out", type=options.out_path, default=None, help="write the markdown table here"
+    )
 
 
 def run(args: argparse.Namespace) -> int:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from striatal.cli import options
 from striatal.files import check_out_dir, dumps_json, write_csv, write_json
@@ -27,7 +26,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     options.add_gain_source_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     parser.add_argument(
-        "--out", type=Path, default=None, help="write trajectory.csv and summary.json here"
+        "--out",
+        type=options.out_path,
+        default=None,
+        help="write trajectory.csv and summary.json here",
     )
 
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 from typing import Any
 
 from striatal import baselines, experiments
@@ -69,7 +68,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     eg.add_argument("--backend", choices=("local", "ray"), default="local")
     eg.add_argument("--address", default=None, help="Ray cluster address HOST:PORT (--backend ray)")
     eg.add_argument("--workers", type=int, default=1, help="local worker processes")
-    eg.add_argument("--out", type=Path, default=None, help="write runs.csv, summary.json here")
+    eg.add_argument(
+        "--out", type=options.out_path, default=None, help="write runs.csv, summary.json here"
+    )
     eg.add_argument("--json", action="store_true", help="print summary.json on stdout")
     eg.add_argument("--no-progress", action="store_true", help="no progress bar")
 

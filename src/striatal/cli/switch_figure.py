@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from striatal.cli import options
 from striatal.params import CHAPTER_FINAL_THETA_C, check_theta_c
 
 COMMAND = "switch-figure"
@@ -33,7 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="GAMMA",
         help="strengths of lateral inhibition gamma [1/rad], one curve each",
     )
-    parser.add_argument("--out", type=Path, default=Path("soft_switch.png"), help="PNG file")
+    parser.add_argument(
+        "--out", type=options.out_path, default=Path("soft_switch.png"), help="PNG file"
+    )
     parser.add_argument("--dpi", type=int, default=120, help="resolution of a PNG")
 
 

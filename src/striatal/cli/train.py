@@ -7,42 +7,19 @@ import signal
 import sys
 import threading
 from collections import deque
-from dataclasses import asdict, replace
 from pathlib import Path
 from types import FrameType
-from typing import Any, TextIO
+from typing import Any
 
 import numpy as np
 
 from striatal.cli import EXIT_INTERRUPTED, learner_options, options
-from striatal.errors import DataFileError, ParameterError
-from striatal.files import (
-    atomic_write_text,
-    check_out_dir,
-    csv_text,
-    dumps_json,
-    read_json,
-    write_json,
-)
-from striatal.learn import (
-    HISTORY_COLUMNS,
-    LearnerConfig,
-    LearnerState,
-    TrainResult,
-    TrialRecord,
-    initial_state,
-    random_initial_gains,
-    train,
-)
-from striatal.params import (
-    CHAPTER_INITIAL_THETA_C,
-    CHAPTER_INITIAL_W,
-    Controller,
-    Plant,
-    Simulation,
-    check_seed,
-)
-from striatal.rollout import Protocol, simulate
+from striatal.errors import ParameterError
+from striatal.files import check_out_dir, dumps_json
+from striatal.learners import LearnerState, TrialRecord, default_config
+from striatal.params import CHAPTER_INITIAL_THETA_C, Plant, Simulation
+from striatal.rundir import RunDir
+from striatal.training import DEFAULT_CHECKPOINT_EVERY, train
 
 COMMAND = "train"
 ORDER = 20
@@ -55,8 +32,6 @@ DESCRIPTION = (
     "--learner rpe / pgpe select the variants beyond the chapter (docs/ablation.md); "
     "unset learning options take the chosen learner's defaults."
 )
-CHECKPOINT = "checkpoint.json"
-CHECKPOINT_VERSION = 1
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -82,106 +57,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     rg.add_argument("--duration", type=float, default=60.0, help="trial length T_f [s]")
     options.add_plant_arguments(parser)
     og = parser.add_argument_group("output")
-    og.add_argument("--out", type=Path, default=None, help="write result.json, history.csv here")
+    og.add_argument(
+        "--out", type=options.out_path, default=None, help="write result.json, history.csv here"
+    )
     og.add_argument("--json", action="store_true", help="print result.json on stdout")
     og.add_argument(
-        "--checkpoint-every", type=int, default=50, help="checkpoint every N trials (with --out)"
+        "--checkpoint-every",
+        type=int,
+        default=DEFAULT_CHECKPOINT_EVERY,
+        help="checkpoint every N trials (with --out)",
     )
-    og.add_argument("--resume", action="store_true", help="continue the run checkpointed in --out")
+    og.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the run checkpointed in --out; its settings come from the checkpoint: "
+        "other options given must equal them (refused otherwise), except a larger "
+        "--max-trials (extends the run) and --checkpoint-every",
+    )
     og.add_argument("--no-progress", action="store_true", help="no progress bar")
-
-
-def _settings(
-    args: argparse.Namespace,
-    config: LearnerConfig,
-    template: Controller,
-    plant: Plant,
-    sim: Simulation,
-    W0: tuple[float, ...],
-) -> dict[str, Any]:
-    return {
-        "learner": config.learner,
-        "init": "gains" if args.init_gains is not None else args.init,
-        "W0": list(W0),
-        "theta_c0": template.theta_c,
-        "seed": args.seed,
-        "config": config.to_dict(),
-        "controller": {
-            "balance_sign": template.balance_sign,
-            "switch": template.switch,
-            "inhibition": template.inhibition,
-        },
-        "plant": asdict(plant),
-        "trial": {"dt": sim.dt, "duration": sim.duration, "theta0": sim.theta0, "x0": sim.x0},
-        "protocol": asdict(Protocol()),
-        "integrator": "rk4, u held over each step",
-        "reward_timing": "update at the reward event only (r_t = 0 elsewhere)",
-    }
-
-
-Setup = tuple[LearnerConfig, Controller, Plant, Simulation, int]
-
-
-def _from_settings(s: dict[str, Any], where: str) -> Setup:
-    """The run that ``settings`` describe; DataFileError naming ``where`` if they do not."""
-    try:
-        config = LearnerConfig(**s["config"])
-        template = Controller(gains=s["W0"], theta_c=s["theta_c0"], **s["controller"])
-        plant = Plant(**s["plant"])
-        sim = Simulation(**s["trial"])
-        seed = check_seed(s["seed"])
-    except KeyError as exc:
-        raise DataFileError(f"{where} is corrupted: its settings lack {exc}") from None
-    except (TypeError, ValueError) as exc:  # ParameterError is a ValueError
-        raise DataFileError(f"{where} is corrupted: settings: {exc}") from None
-    return config, template, plant, sim, seed
-
-
-def _fresh(args: argparse.Namespace) -> tuple[dict[str, Any], LearnerState]:
-    seed = check_seed(args.seed)
-    config = learner_options.learner_config_from(args)
-    plant = options.plant_from(args)
-    sim = Simulation(duration=args.duration, dt=args.dt)
-    if args.init_gains is not None:
-        W0 = tuple(args.init_gains)
-    elif args.init == "random":
-        W0 = random_initial_gains(np.random.default_rng([seed, 1]))
-    else:
-        W0 = CHAPTER_INITIAL_W
-    template = options.controller_from(args, W0, args.theta_c0)
-    if args.checkpoint_every < 1:
-        raise ParameterError(f"--checkpoint-every must be >= 1, got {args.checkpoint_every}")
-    settings = _settings(args, config, template, plant, sim, W0)
-    return settings, initial_state(W0, template.theta_c, seed)
-
-
-def _load_checkpoint(out: Path) -> tuple[dict[str, Any], LearnerState]:
-    """(settings, state) of ``out``/checkpoint.json, both checked; else DataFileError."""
-    path = out / CHECKPOINT
-    data = read_json(path, what="checkpoint")
-    if not isinstance(data, dict) or data.get("version") != CHECKPOINT_VERSION:
-        raise DataFileError(f"checkpoint {path} is not a striatal train checkpoint")
-    try:
-        state = LearnerState.from_dict(data["state"])
-        settings = data["settings"]
-    except (KeyError, TypeError, ParameterError) as exc:
-        raise DataFileError(f"checkpoint {path} is corrupted: {exc}") from None
-    if not isinstance(settings, dict):
-        raise DataFileError(f"checkpoint {path} is corrupted: its settings are not an object")
-    return settings, state
-
-
-def _truncate_history(path: Path, n_rows: int) -> None:
-    """Keep the header and the first n_rows rows (those covered by the checkpoint)."""
-    if not path.exists():
-        if n_rows:
-            raise DataFileError(f"history {path} is missing but the checkpoint has {n_rows} trials")
-        atomic_write_text(path, csv_text(HISTORY_COLUMNS, []))
-        return
-    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
-    if len(lines) < 1 + n_rows or lines[0].strip() != ",".join(HISTORY_COLUMNS):
-        raise DataFileError(f"history {path} has fewer rows than the checkpoint's {n_rows} trials")
-    atomic_write_text(path, "".join(lines[: 1 + n_rows]))
 
 
 class _StopRequest:
@@ -215,115 +108,89 @@ class _StopRequest:
             signal.signal(s, old)
 
 
+_PLANT = ("cart_mass", "pole_mass", "length", "gravity")
+_TRIAL = ("dt", "duration")
+_READINGS = ("balance_sign", "switch", "inhibition")
+_START = ("learner", "init", "init_gains", "theta_c0", "seed")
+
+
+def _explicit(args: argparse.Namespace) -> set[str]:
+    """The options given on the command line (those that differ from their defaults)."""
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    defaults = vars(parser.parse_args([]))
+    return {k for k, v in vars(args).items() if k in defaults and v != defaults[k]}
+
+
+def _train_arguments(args: argparse.Namespace) -> dict[str, Any]:
+    """Keyword arguments of :func:`striatal.train`: every option for a fresh run; on
+    ``--resume`` only those given, which train checks against the checkpoint."""
+    if not args.resume:
+        return {
+            **{k: getattr(args, k) for k in (*_START, *_READINGS)},
+            "plant": options.plant_from(args),
+            "sim": Simulation(duration=args.duration, dt=args.dt),
+            **learner_options.learner_changes(args),
+        }
+    given = _explicit(args)
+    kwargs: dict[str, Any] = {k: getattr(args, k) for k in (*_START, *_READINGS) if k in given}
+    kwargs.update(learner_options.learner_changes(args))
+    if given & {*_PLANT, *_TRIAL}:
+        # compare only the fields given: the rest are taken from the checkpoint
+        _, settings, _, _ = RunDir(args.out).read_checkpoint()
+        if given & set(_PLANT):
+            plant = dict(settings["plant"], **{k: getattr(args, k) for k in _PLANT if k in given})
+            kwargs["plant"] = Plant(**plant)
+        if given & set(_TRIAL):
+            trial = dict(settings["trial"], **{k: getattr(args, k) for k in _TRIAL if k in given})
+            kwargs["sim"] = Simulation(**trial)
+    return kwargs
+
+
 def run(args: argparse.Namespace) -> int:
+    """A thin layer over :func:`striatal.train`: options in, progress bar, printout."""
     if args.out is not None:
         check_out_dir(args.out)
-    if args.resume:
-        if args.out is None:
-            raise ParameterError("--resume needs --out DIR holding a checkpoint")
-        settings, state = _load_checkpoint(args.out)
-        where = f"checkpoint {args.out / CHECKPOINT}"
-    else:
-        settings, state = _fresh(args)
-        where = "the options"  # settings built from validated options: never reported
-    config, template, plant, sim, seed = _from_settings(settings, where)
-
-    history: TextIO | None = None
-    if args.out is not None:
-        hpath = args.out / "history.csv"
-        if args.resume:
-            _truncate_history(hpath, state.trials_done)
-        else:
-            atomic_write_text(hpath, csv_text(HISTORY_COLUMNS, []))
-        history = hpath.open("a", encoding="utf-8", newline="")
-
-    def checkpoint(s: LearnerState) -> None:
-        if args.out is not None:
-            if history is not None:
-                history.flush()
-            write_json(
-                args.out / CHECKPOINT,
-                {"version": CHECKPOINT_VERSION, "settings": settings, "state": s.to_dict()},
-            )
+    if args.resume and args.out is None:
+        raise ParameterError("--resume needs --out DIR holding a checkpoint")
+    kwargs = _train_arguments(args)
+    max_trials = kwargs.get("max_trials") or default_config(args.learner).max_trials
 
     from tqdm import tqdm
 
     bar = tqdm(
-        total=config.max_trials,
-        initial=state.trials_done,
+        total=max_trials,
         unit="trial",
         disable=args.no_progress or args.json or not sys.stderr.isatty(),
         file=sys.stderr,
     )
     recent: deque[float] = deque(maxlen=50)
-    recorded = state  # the state after the last trial whose history row is written
-    stop = _StopRequest()
 
     def on_trial(s: LearnerState, rec: TrialRecord) -> None:
-        nonlocal recorded
-        if history is not None:
-            history.write(csv_text(HISTORY_COLUMNS, [rec.row()]).split("\n", 1)[1])
-        recorded = s
         recent.append(rec.reward)
-        bar.update(1)
-        bar.set_postfix(reward=rec.reward, plus10=f"{np.mean([r > 0 for r in recent]):.2f}")
-        if s.trials_done % args.checkpoint_every == 0:
-            checkpoint(s)
-        if stop.requested:
-            raise KeyboardInterrupt
+        bar.n = s.trials_done
+        bar.update(0)
+        bar.set_postfix(reward=rec.reward, mean=f"{np.mean(recent):.2f}")
 
+    stop = _StopRequest()
     try:
         with stop:
-            result = train(plant, template, config, seed, sim=sim, state=state, on_trial=on_trial)
+            result = train(
+                out=args.out,
+                resume=args.resume,
+                checkpoint_every=args.checkpoint_every,
+                on_trial=on_trial,
+                should_stop=lambda: stop.requested,
+                **kwargs,
+            )
     finally:
         bar.close()
-    if result.interrupted and result.state is not recorded:
-        # stopped between a trial's update and its history row: that trial is not kept
-        result = replace(
-            result,
-            success=recorded.success,
-            trials=recorded.trials_done,
-            W=recorded.W,
-            theta_c=recorded.theta_c,
-            state=recorded,
-        )
-    checkpoint(result.state)
-    if history is not None:
-        history.close()
-    payload = _payload(result, settings, plant, template, sim)
-    if args.out is not None:
-        write_json(args.out / "result.json", payload)
+    payload = result.to_dict()
     if args.json:
         sys.stdout.write(dumps_json(payload))
     else:
         _print_human(payload, args.out)
     return EXIT_INTERRUPTED if result.interrupted else 0
-
-
-def _payload(
-    result: TrainResult,
-    settings: dict[str, Any],
-    plant: Plant,
-    template: Controller,
-    sim: Simulation,
-) -> dict[str, Any]:
-    payload = TrainResult(
-        success=result.success,
-        trials=result.trials,
-        W=result.W,
-        theta_c=result.theta_c,
-        seed=result.seed,
-        wall_seconds=result.wall_seconds,
-        state=result.state,
-        interrupted=result.interrupted,
-        settings=settings,
-    ).to_dict()
-    learned = template.with_gains(result.W, result.theta_c)
-    check = simulate(plant, learned, sim).outcome
-    payload["mean_policy_success"] = check.success
-    payload["mean_policy_final_state"] = list(check.final_state)
-    payload["positive_rewards"] = result.state.n_positive
-    return payload
 
 
 def _print_human(p: dict[str, Any], out: Path | None) -> None:

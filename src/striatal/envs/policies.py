@@ -28,6 +28,8 @@ from striatal.params import (
 class SwitchingController:
     """``policy(obs) -> action``: the switching controller of sections 2.2-2.3.
 
+    ``obs`` of shape (n_obs,) gives an action (1,); a batch (B, n_obs) gives (B, 1).
+
     Parameters
     ----------
     W : the six gains W1..W6 (eqs 22-23).
@@ -39,8 +41,6 @@ class SwitchingController:
         must match the environment's.
     rng : if given, actions are drawn from the Gaussian policy of eq 5,
         a = mu + sigma(W6) N(0, 1); otherwise the mean action mu is returned.
-
-    ``obs`` of shape (n_obs,) gives an action (1,); a batch (B, n_obs) gives (B, 1).
     """
 
     def __init__(

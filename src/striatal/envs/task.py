@@ -9,6 +9,7 @@ observations and rewards with the very same NumPy calls.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -50,7 +51,7 @@ class SwingUpTask:
     plant : the point-mass cart-pole (eqs 7-14); the action is x_ddot = u exactly (eq 13).
     dt : control step [s]; each env step is one RK4 step of the kernel with u held.
     duration : episode length [s]; reaching it is a truncation (Gymnasium's time limit).
-    u_max : actions are clipped to [-u_max, u_max] [m/s^2].
+    u_max : actions are clipped to [-u_max, u_max], in m/s^2.
     observation : ``"trig"`` = [x, x_dot, sin theta, cos theta, theta_dot];
         ``"raw"`` = the kernel state [x, x_dot, theta, theta_dot] (theta unwrapped).
     reward : ``"chapter"`` (sparse eqs 24-25 from ``protocol``) or ``"dense"``
@@ -60,7 +61,11 @@ class SwingUpTask:
     initial_state : start state [x, x_dot, theta, theta_dot]; default the chapter's
         x = 0, theta = 3.12 at rest.
     perturbation : half-width of a uniform random offset added to each start state
-        component at reset, drawn from the env's ``np_random`` (0: none).
+        component at reset, drawn from the env's ``np_random`` (0: none; below 1e8,
+        the kernel's blow-up bound).
+    normalised_action : if True the action is a float32 in [-1, 1], scaled to
+        u = a * u_max inside the env (what most RL libraries expect); if False
+        (default) the action is u itself, float64 [m/s^2], bit-exact with the kernel.
     """
 
     plant: Plant = field(default_factory=Plant)
@@ -72,6 +77,7 @@ class SwingUpTask:
     protocol: Protocol = field(default_factory=Protocol)
     initial_state: tuple[float, float, float, float] = (0.0, 0.0, CHAPTER_THETA0, 0.0)
     perturbation: float = 0.0
+    normalised_action: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.plant, Plant):
@@ -86,10 +92,12 @@ class SwingUpTask:
         if self.reward not in ("chapter", "dense"):
             raise ParameterError(f"reward must be 'chapter' or 'dense', got {self.reward!r}")
         object.__setattr__(self, "initial_state", check_state(self.initial_state))
-        p = require_finite("perturbation", self.perturbation)
-        if p < 0.0:
-            raise ParameterError(f"perturbation must be >= 0, got {p}")
-        object.__setattr__(self, "perturbation", p)
+        object.__setattr__(self, "perturbation", check_perturbation(self.perturbation))
+        if not isinstance(self.normalised_action, bool | np.bool_):
+            raise ParameterError(
+                f"normalised_action must be True or False, got {self.normalised_action!r}"
+            )
+        object.__setattr__(self, "normalised_action", bool(self.normalised_action))
         steps = self.duration / self.dt
         if not 1 <= round(steps) <= MAX_STEPS:
             raise ParameterError(
@@ -121,7 +129,50 @@ class SwingUpTask:
 
     @property
     def obs_size(self) -> int:
+        """Length of one observation: 5 for ``"trig"``, 4 for ``"raw"``."""
         return len(OBSERVATION_NAMES[self.observation])
+
+    @property
+    def render_fps(self) -> float:
+        """Frames per second that play a recorded episode in real time: 1 / dt."""
+        fps = 1.0 / self.dt
+        return int(round(fps)) if abs(fps - round(fps)) < 1e-9 * fps else fps
+
+
+#: Keys ``reset(options=...)`` understands, for the scalar environment.
+RESET_OPTIONS = ("initial_state", "perturbation")
+
+
+def check_perturbation(value: float) -> float:
+    """A perturbation half-width in [0, 1e8) [state units], or ParameterError.
+
+    1e8 is the kernel's blow-up bound (:data:`striatal.kernel.BLOW_UP`): a start
+    beyond it would end the episode as a fault on its first step.
+    """
+    p = require_finite("perturbation", value)
+    if not 0.0 <= p < kernel.BLOW_UP:
+        raise ParameterError(f"perturbation must be >= 0 and < {kernel.BLOW_UP:g}, got {p!r}")
+    return p
+
+
+def check_reset_options(
+    options: object, allowed: tuple[str, ...] = RESET_OPTIONS
+) -> dict[str, Any]:
+    """``reset(options=...)`` as a dict with only ``allowed`` keys, or ParameterError.
+
+    The values are checked where they are used (:func:`start_state`), with the same
+    rules as the keyword arguments of ``gymnasium.make``.
+    """
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise ParameterError(
+            f"reset options must be a dict (keys {list(allowed)}), got {type(options).__name__}"
+        )
+    unknown = sorted(str(k) for k in options if k not in allowed)
+    if unknown:
+        raise ParameterError(f"unknown reset option(s) {unknown}; known: {list(allowed)}")
+    return dict(options)
 
 
 def check_state(state: object) -> tuple[float, float, float, float]:
@@ -143,16 +194,15 @@ def start_state(
     """(4,) start state for a reset: ``options["initial_state"]`` or the task's, plus perturbation.
 
     ``options["perturbation"]`` overrides the task's perturbation half-width for this reset.
-    The generator is used only when the perturbation is > 0.
+    The generator is used only when the perturbation is > 0. Unknown keys, a
+    non-dict ``options`` and out-of-range values raise ParameterError.
     """
-    opts = options or {}
+    opts = check_reset_options(options)
     base = opts.get("initial_state")
     state = np.array(task.initial_state if base is None else check_state(base), dtype=float)
     p = task.perturbation
     if opts.get("perturbation") is not None:
-        p = require_finite("perturbation", opts["perturbation"])
-        if p < 0.0:
-            raise ParameterError(f"perturbation must be >= 0, got {p}")
+        p = check_perturbation(opts["perturbation"])
     if p > 0.0:
         state += rng.uniform(-p, p, size=4)
     return state

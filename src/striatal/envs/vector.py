@@ -16,15 +16,21 @@ from gymnasium.vector.utils import batch_space
 
 from striatal import kernel
 from striatal.envs.cartpole import (
-    RENDER_HEIGHT,
-    RENDER_WIDTH,
     action_space,
+    check_render_mode,
     clip_action,
+    env_frame,
     observation_space,
 )
-from striatal.envs.task import SwingUpTask, observe, outcome, start_state
+from striatal.envs.task import (
+    RESET_OPTIONS,
+    SwingUpTask,
+    check_reset_options,
+    observe,
+    outcome,
+    start_state,
+)
 from striatal.errors import ParameterError
-from striatal.render import cartpole_frame
 
 
 class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
@@ -32,9 +38,10 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
     Autoreset (``metadata["autoreset_mode"]`` = ``AutoresetMode.NEXT_STEP``, Gymnasium's
     default): when row b returns terminated or truncated, the *next* ``step`` ignores
-    its action, resets it (same start-state rules as ``reset``, drawing any
-    perturbation from row b's generator) and returns the new first observation with
-    reward 0 and terminated = truncated = False.
+    its action, resets it as ``reset()`` without options would (the task's start
+    state, any perturbation drawn from row b's generator), as Gymnasium's
+    ``SyncVectorEnv`` does, and returns the new first observation with reward 0 and
+    terminated = truncated = False. Options given to ``reset`` hold for that reset only.
 
     ``reset(seed=s)`` seeds row b with ``s + b`` (a list gives one seed per row), as
     Gymnasium's ``SyncVectorEnv`` does. ``options`` as for the scalar env;
@@ -44,19 +51,20 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     ``_key`` masks all True.
     """
 
-    # Gymnasium reads metadata from the class (a plain dict there too).
+    # Gymnasium reads metadata from the class (a plain dict there too); each
+    # instance gets its own copy with render_fps = 1 / dt.
     metadata: dict[str, Any] = {  # noqa: RUF012
         "render_modes": ["rgb_array"],
-        "render_fps": 50,
+        "render_fps": 100,
         "autoreset_mode": AutoresetMode.NEXT_STEP,
     }
 
     def __init__(self, num_envs: int = 1, render_mode: str | None = None, **task_options: Any):
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ParameterError(f"num_envs must be a whole number >= 1, got {num_envs!r}")
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ParameterError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        check_render_mode(render_mode, self.metadata["render_modes"])
         self.task = SwingUpTask.from_kwargs(**task_options)
+        self.metadata = {**type(self).metadata, "render_fps": self.task.render_fps}
         self.num_envs = int(num_envs)
         self.render_mode = render_mode
         self.single_observation_space = observation_space(self.task)
@@ -72,7 +80,6 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._fault = np.zeros(n, dtype=bool)
         self._autoreset = np.zeros(n, dtype=bool)
         self._rngs: list[np.random.Generator] | None = None
-        self._reset_options: dict[str, Any] | None = None
 
     @property
     def states(self) -> np.ndarray:
@@ -98,11 +105,10 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
     def _reset_row(self, b: int, options: dict[str, Any] | None) -> None:
         assert self._rngs is not None
-        opts = dict(options or {})
-        init = opts.get("initial_state")
-        if init is not None and np.ndim(init) == 2:
-            opts["initial_state"] = np.asarray(init)[b]
-        self._states[b] = start_state(self.task, self._rngs[b], opts)
+        self._commit_row(b, start_state(self.task, self._rngs[b], options))
+
+    def _commit_row(self, b: int, state: np.ndarray) -> None:
+        self._states[b] = state
         self._steps[b] = 0
         self._u[b] = 0.0
         self._fault[b] = False
@@ -127,17 +133,31 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         seed: int | list[int | None] | None = None,
         options: dict[str, Any] | None = None,
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        self._seed(seed)
-        opts = dict(options or {})
+        opts = check_reset_options(options, (*RESET_OPTIONS, "reset_mask"))
+        n = self.num_envs
         mask = opts.pop("reset_mask", None)
         if mask is None:
-            mask = np.ones(self.num_envs, dtype=bool)
-        mask = np.asarray(mask, dtype=bool)
-        if mask.shape != (self.num_envs,):
-            raise ParameterError(f"reset_mask must have shape ({self.num_envs},), got {mask.shape}")
-        self._reset_options = opts
-        for b in np.nonzero(mask)[0]:
-            self._reset_row(int(b), opts)
+            mask = np.ones(n, dtype=bool)
+        mask = np.asarray(mask)
+        if mask.shape != (n,) or mask.dtype != bool:
+            raise ParameterError(f"reset_mask must be {n} booleans, got {mask!r}")
+        init = opts.get("initial_state")
+        rows: list[Any] = [init] * n
+        if init is not None and np.ndim(init) == 2:
+            if np.shape(init) != (n, 4):
+                raise ParameterError(
+                    f"initial_state must be (4,) or ({n}, 4), got shape {np.shape(init)}"
+                )
+            rows = list(np.asarray(init, dtype=float))
+        self._seed(seed)
+        assert self._rngs is not None
+        # Every row's start is computed (and checked) before any row changes.
+        starts = {
+            int(b): start_state(self.task, self._rngs[b], {**opts, "initial_state": rows[b]})
+            for b in np.nonzero(mask)[0]
+        }
+        for b, state in starts.items():
+            self._commit_row(b, state)
         return observe(self._states, self.task.observation), self._infos()
 
     def step(
@@ -146,7 +166,7 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         if self._rngs is None:
             raise ParameterError("call reset() before step()")
         n = self.num_envs
-        u = clip_action(actions, self.task.u_max, n)
+        u = clip_action(actions, self.task.u_max, n, self.task.normalised_action)
         kernel.step_batch(
             self._states, u, self.task.dt, 1, self._plant, self._plant, False, self._next
         )
@@ -157,7 +177,7 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._fault = fault
         was_done = self._autoreset.copy()
         for b in np.nonzero(was_done)[0]:
-            self._reset_row(int(b), self._reset_options)
+            self._reset_row(int(b), None)
         reward[was_done] = 0.0
         terminated[was_done] = False
         truncated[was_done] = False
@@ -170,12 +190,6 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         if self.render_mode != "rgb_array":
             return None
         return tuple(
-            cartpole_frame(
-                self._states[b],
-                self.task.plant,
-                t=float(self._steps[b] * self.task.dt),
-                width=RENDER_WIDTH,
-                height=RENDER_HEIGHT,
-            )
+            env_frame(self._states[b], self.task, float(self._steps[b] * self.task.dt))
             for b in range(self.num_envs)
         )

@@ -1,0 +1,141 @@
+"""The chapter's switching REINFORCE rule (eqs 1-5, 21): the per-step policy and trace D.
+
+One learning step is one 60-s trial (eqs 24-25) followed by the update of
+eqs 3-4 and the theta_c rule of eq 21. The reward is sparse: r_t = 0 except at
+the end of the trial (or at the t = 30 s check), so with baseline b = 0 the
+per-step rule of section 1.2 changes W only at that instant:
+W <- W + alpha (1 - gamma) (r - b) D(T_end). striatal applies the baseline at
+that reward event too (docs/paper-notes.md, reading 9).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from striatal.kernel import sigma_of
+from striatal.learners.common import theta_c_rule
+from striatal.learners.config import Eligibility, LearnerConfig, ThetaCRule, pick
+from striatal.learners.rule import Rule, TrialPlan, Update
+from striatal.learners.state import LearnerState
+from striatal.params import N_GAINS, Plant
+from striatal.rollout import TrialOutcome
+
+__all__ = ["CHAPTER", "ChapterConfig", "ChapterRule", "gain_update", "policy_trace"]
+
+
+@dataclass(frozen=True)
+class ChapterConfig:
+    """The chapter rule's options (see :class:`LearnerConfig` for each)."""
+
+    alpha: float
+    gamma: float
+    baseline: float
+    reset_trace: bool
+    eligibility: Eligibility
+    theta_c_rule: ThetaCRule
+    max_step: float
+    w1_floor: float
+
+
+def gain_update(
+    W: np.ndarray,
+    trace: np.ndarray,
+    reward: float,
+    *,
+    alpha: float,
+    gamma: float,
+    baseline: float,
+    max_step: float,
+    w1_floor: float,
+) -> np.ndarray:
+    """Eqs 3-4 at the reward event: W + clip(alpha (1 - gamma)(r - b) D), W1 floored.
+
+    A non-finite trace or result leaves W unchanged (a numerical fault never reaches W).
+    """
+    if not np.all(np.isfinite(trace)):
+        return W.copy()
+    step = alpha * (1.0 - gamma) * (reward - baseline) * trace
+    step = np.clip(step, -max_step, max_step)
+    new = W + step
+    new[0] = max(new[0], w1_floor)
+    if not np.all(np.isfinite(new)):
+        return W.copy()
+    return new
+
+
+def policy_trace(state: LearnerState, reset: bool) -> np.ndarray:
+    """The trace D a trial starts from: 0, or the one the last trial left (memory "trace")."""
+    old = state.get("trace")
+    if reset or not old:
+        return np.zeros(N_GAINS)
+    return np.array(old, dtype=float)
+
+
+def finite_trace(trace: np.ndarray) -> tuple[float, ...]:
+    """The trace to carry over: itself, or 0 if the trial left it non-finite."""
+    if not np.all(np.isfinite(trace)):
+        return (0.0,) * N_GAINS
+    return tuple(float(v) for v in trace)
+
+
+class ChapterRule(Rule):
+    """The chapter's rule: Gaussian policy per step (eq 5), trace D (eq 3), update eq 4."""
+
+    name = "chapter"
+    summary = "the chapter's rule (eqs 1-5, 21)"
+    config_type = ChapterConfig
+    preset = MappingProxyType({})
+    control = MappingProxyType({"alpha": 0.0})
+    history_columns = ("sigma",)
+    memory_names = ("trace",)
+
+    def plan(
+        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
+    ) -> TrialPlan:
+        return TrialPlan(
+            W=np.array(state.W, dtype=float),
+            theta_c=state.theta_c,
+            trace=policy_trace(state, config.reset_trace),
+            gamma=config.gamma,
+            rng=rng,
+            eligibility=config.eligibility,
+        )
+
+    def update(
+        self,
+        state: LearnerState,
+        config: LearnerConfig,
+        plan: TrialPlan,
+        outcome: TrialOutcome,
+        reward: float,
+        success: bool,
+    ) -> Update:
+        c = pick(ChapterConfig, config)
+        W, theta_c = plan.W, state.theta_c
+        if not success:
+            W = gain_update(
+                plan.W,
+                plan.trace,
+                reward,
+                alpha=c.alpha,
+                gamma=c.gamma,
+                baseline=c.baseline,
+                max_step=c.max_step,
+                w1_floor=c.w1_floor,
+            )
+            theta_c = theta_c_rule(outcome, state.theta_c, c.theta_c_rule)
+        return Update(
+            W=tuple(float(w) for w in W),
+            theta_c=float(theta_c),
+            memory=(("trace", finite_trace(plan.trace)),),
+        )
+
+    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
+        """sigma = exp(W6)-like policy std of eq 5 (:func:`striatal.kernel.sigma_of`)."""
+        return (("sigma", float(sigma_of(plan.W[5]))),)
+
+
+CHAPTER = ChapterRule()

@@ -1,0 +1,203 @@
+"""Exploration in parameter space, once per trial ("pgpe").
+
+Parameter-exploring policy gradients (Sehnke et al. 2010): the policy over the
+parameters p = (W1..W5, theta_c) is Gaussian, p' = p + eps, eps ~ N(0, diag(s^2)),
+and the trial runs the mean action of eqs 22-23 with p'. Eligibility = eps,
+factor = delta / rms(delta) with the tracked baseline, p <- p + alpha * factor *
+eps - alpha * decay * p (the decay on W1..W5 only). With ``theta_c_rule`` other
+than "learned", theta_c is not perturbed and follows that rule (eq 21). With
+``plant_jitter`` J > 0 the trial's true plant has pole mass and length scaled by
+factors uniform in [1 - J, 1 + J], the controller still believing the nominal
+plant, and success must also hold on the four corner plants. With ``sigma_rate``
+> 0 the exploration adapts, s <- s exp(sigma_rate * factor * (z^2 - 1)), z = eps / s.
+W6 (the per-step sigma) is not used: the trial acts with the mean policy. The
+success test is judged on the unperturbed p (success_on "mean"). Its no-learning
+control keeps the same exploration and changes nothing (alpha = 0, sigma_rate = 0).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from striatal.errors import ParameterError
+from striatal.learners.common import (
+    baseline_memory,
+    prediction_error,
+    theta_c_rule,
+    three_factor_update,
+)
+from striatal.learners.config import LearnerConfig, RewardKind, ThetaCRule, pick
+from striatal.learners.rule import Rule, TrialPlan, Update
+from striatal.learners.state import LearnerState
+from striatal.params import N_GAINS, Plant
+from striatal.rollout import TrialOutcome
+
+__all__ = [
+    "EXPLORE_RANGE",
+    "PGPE",
+    "THETA_C_EXPLORE",
+    "THETA_C_LEARNED_RANGE",
+    "PgpeConfig",
+    "PgpeRule",
+    "adapt_explore",
+    "initial_explore",
+]
+
+#: Exploration std of theta_c relative to that of the gains (theta_c is in rad, ~0.6).
+THETA_C_EXPLORE = 0.3
+#: Range of a learned theta_c [rad]: a floor keeps the balancing region from vanishing;
+#: eq 21 resets anything above 1.4.
+THETA_C_LEARNED_RANGE = (0.2, 1.4)
+#: Adapted exploration stays within these multiples of its initial value.
+EXPLORE_RANGE = (0.1, 3.0)
+
+
+@dataclass(frozen=True)
+class PgpeConfig:
+    """The pgpe rule's options (see :class:`LearnerConfig` for each)."""
+
+    alpha: float
+    theta_c_rule: ThetaCRule
+    max_step: float
+    w1_floor: float
+    reward: RewardKind
+    rpe_rate: float
+    normalise: bool
+    explore: float
+    sigma_rate: float
+    decay: float
+    plant_jitter: float
+
+
+def initial_explore(explore: float) -> np.ndarray:
+    """Exploration std (6,) of (W1..W5, theta_c) at the start of a run."""
+    s = np.full(6, explore)
+    s[5] *= THETA_C_EXPLORE
+    return s
+
+
+def adapt_explore(
+    s: np.ndarray, z: np.ndarray, factor: float, *, explore: float, sigma_rate: float
+) -> np.ndarray:
+    """s exp(sigma_rate * factor * (z^2 - 1)), kept within EXPLORE_RANGE of its start.
+
+    z^2 - 1 is s times d ln N(eps; 0, s^2) / d s at eps = z s: more exploration
+    after a better-than-expected perturbation far from the mean, less otherwise.
+    """
+    if sigma_rate == 0.0 or not math.isfinite(factor):
+        return s.copy()
+    s0 = initial_explore(explore)
+    new = s * np.exp(np.clip(sigma_rate * factor * (z * z - 1.0), -1.0, 1.0))
+    return np.clip(new, EXPLORE_RANGE[0] * s0, EXPLORE_RANGE[1] * s0)
+
+
+def _clamp_params(p: np.ndarray, w1_floor: float) -> np.ndarray:
+    out = p.copy()
+    out[0] = max(out[0], w1_floor)
+    out[5] = min(max(out[5], THETA_C_LEARNED_RANGE[0]), THETA_C_LEARNED_RANGE[1])
+    return out
+
+
+class PgpeRule(Rule):
+    """Parameter-exploring policy gradients over (W1..W5, theta_c), one draw per trial."""
+
+    name = "pgpe"
+    summary = "exploration in parameter space once per trial (docs/ablation.md)"
+    config_type = PgpeConfig
+    preset = MappingProxyType(
+        {
+            "alpha": 0.3,
+            "reward": "shaped",
+            "normalise": True,
+            "explore": 1.0,
+            "decay": 0.1,
+            "success_on": "mean",
+            "theta_c_rule": "learned",
+        }
+    )
+    control = MappingProxyType({"alpha": 0.0, "sigma_rate": 0.0})
+    history_columns = ("explore",)
+    memory_names = ("explore", "reward_mean", "rpe_square")
+    learns_theta_c = True
+
+    def check(self, config: LearnerConfig) -> None:
+        super().check(config)
+        if config.success_on != "mean":
+            raise ParameterError(
+                "learner 'pgpe' acts with the mean policy of perturbed gains: "
+                "its success test is judged on the mean policy (success_on 'mean')"
+            )
+        if config.alpha * config.decay >= 1.0:
+            raise ParameterError(
+                f"the decay per update (rate x decay = {config.alpha * config.decay:g}) must be < 1"
+            )
+
+    def plan(
+        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
+    ) -> TrialPlan:
+        c = pick(PgpeConfig, config)
+        learn_theta_c = c.theta_c_rule == "learned"
+        p = np.array([*state.W[:5], state.theta_c])
+        s = np.array(state.get("explore")) if state.get("explore") else initial_explore(c.explore)
+        z = rng.standard_normal(6)
+        if not learn_theta_c:
+            z[5] = 0.0
+        eps = z * s
+        p_trial = _clamp_params(p + eps, c.w1_floor) if learn_theta_c else p + eps
+        p_trial[0] = max(p_trial[0], c.w1_floor)
+        true_plant = None
+        if c.plant_jitter > 0.0:
+            j = c.plant_jitter
+            scale = rng.uniform(1.0 - j, 1.0 + j, size=2)
+            true_plant = plant.scaled(pole_mass=float(scale[0]), length=float(scale[1]))
+        return TrialPlan(
+            W=np.array([*p_trial[:5], state.W[5]]),
+            theta_c=float(p_trial[5]),
+            trace=np.zeros(N_GAINS),
+            gamma=0.0,
+            rng=None,
+            plant=true_plant,
+            scratch={"p": p, "eps": p_trial - p, "s": s, "z": z},
+        )
+
+    def update(
+        self,
+        state: LearnerState,
+        config: LearnerConfig,
+        plan: TrialPlan,
+        outcome: TrialOutcome,
+        reward: float,
+        success: bool,
+    ) -> Update:
+        c = pick(PgpeConfig, config)
+        p, eps, s, z = (plan.scratch[k] for k in ("p", "eps", "s", "z"))
+        factor, b, square = prediction_error(state, reward, c.rpe_rate, c.normalise)
+        new_p, new_s = p, s
+        if not success:
+            new_p = three_factor_update(p, eps, factor, c.alpha, c.max_step)
+            new_p[:5] -= c.alpha * c.decay * p[:5]
+            if c.theta_c_rule == "learned":
+                new_p = _clamp_params(new_p, c.w1_floor)
+            else:
+                new_p[5] = theta_c_rule(outcome, state.theta_c, c.theta_c_rule)
+            new_p[0] = max(new_p[0], c.w1_floor)
+            new_s = adapt_explore(s, z, factor, explore=c.explore, sigma_rate=c.sigma_rate)
+        return Update(
+            W=(*(float(v) for v in new_p[:5]), float(state.W[5])),
+            theta_c=float(new_p[5]),
+            memory=(
+                ("explore", tuple(float(v) for v in new_s)),
+                *baseline_memory(state, b, square),
+            ),
+        )
+
+    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
+        """explore: the exploration std s of W1..W5 used in this trial."""
+        return (("explore", float(plan.scratch["s"][0])),)
+
+
+PGPE = PgpeRule()

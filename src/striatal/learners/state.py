@@ -1,0 +1,258 @@
+"""What a learning run carries between trials and what it records of each trial.
+
+:class:`LearnerState` is plain data, JSON-serialisable with the random
+generator's state, so a run can be checkpointed and resumed to the same result.
+Each rule keeps its own memory in ``memory`` (a flat name -> numbers mapping):
+no field holds one rule's quantity under another's name.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from striatal.errors import ParameterError
+from striatal.params import N_GAINS, check_theta_c
+
+__all__ = [
+    "BASE_COLUMNS",
+    "FLAG_COLUMNS",
+    "History",
+    "LearnerState",
+    "TrainResult",
+    "TrialRecord",
+    "checked_rng_state",
+    "history_columns",
+]
+
+#: history.csv columns every learner writes before its own ones (the W and theta_c used).
+BASE_COLUMNS = ("trial", "reward", "W1", "W2", "W3", "W4", "W5", "W6", "theta_c")
+#: ... and after them: what happened in the trial.
+FLAG_COLUMNS = ("min_abs_theta_swingup", "ended_at", "success", "fault", "early")
+
+
+def history_columns(rule_columns: Sequence[str]) -> tuple[str, ...]:
+    """The header of history.csv for a rule whose own columns are ``rule_columns``."""
+    return (*BASE_COLUMNS, *rule_columns, *FLAG_COLUMNS)
+
+
+Memory = tuple[tuple[str, tuple[float, ...]], ...]
+
+
+@dataclass(frozen=True)
+class LearnerState:
+    """Everything a run needs to continue: JSON-serialisable via :meth:`to_dict`.
+
+    ``memory``: the rule's own quantities, name -> numbers (e.g. the chapter's
+    eligibility trace D, pgpe's exploration std); see each rule's ``memory_names``.
+    """
+
+    trials_done: int
+    W: tuple[float, ...]
+    theta_c: float
+    rng_state: dict[str, Any]
+    success: bool = False
+    n_positive: int = 0
+    memory: Memory = ()
+
+    def get(self, name: str) -> tuple[float, ...]:
+        """The memory entry ``name`` (empty if the rule has not set it yet)."""
+        return dict(self.memory).get(name, ())
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "trials_done": self.trials_done,
+            "W": list(self.W),
+            "theta_c": self.theta_c,
+            "rng_state": self.rng_state,
+            "success": self.success,
+            "n_positive": self.n_positive,
+            "memory": {k: list(v) for k, v in self.memory},
+        }
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> LearnerState:
+        """Rebuild from :meth:`to_dict` output; raises ParameterError if anything is off."""
+        try:
+            W = tuple(float(w) for w in d["W"])
+            memory = tuple(
+                (str(k), tuple(float(x) for x in v)) for k, v in dict(d.get("memory", {})).items()
+            )
+            state = cls(
+                trials_done=int(d["trials_done"]),
+                W=W,
+                theta_c=float(d["theta_c"]),
+                rng_state=checked_rng_state(d["rng_state"]),
+                success=bool(d["success"]),
+                n_positive=int(d.get("n_positive", 0)),
+                memory=memory,
+            )
+        except ParameterError:
+            raise
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
+            raise ParameterError(f"learner state is incomplete or malformed: {exc!r}") from None
+        if len(W) != N_GAINS or state.trials_done < 0 or state.n_positive < 0:
+            raise ParameterError("learner state has the wrong number of gains or trials")
+        numbers = (*W, state.theta_c, *(x for _, v in memory for x in v))
+        if not all(math.isfinite(v) for v in numbers):
+            raise ParameterError("learner state holds a non-finite number")
+        check_theta_c(state.theta_c)
+        return state
+
+
+def checked_rng_state(value: object) -> dict[str, Any]:
+    """``value`` as the state of a PCG64 generator (the learner's), or ParameterError."""
+    rng = np.random.default_rng()
+    try:
+        rng.bit_generator.state = dict(value)  # type: ignore[call-overload]
+    except (TypeError, ValueError, KeyError, OverflowError) as exc:
+        raise ParameterError(
+            f"learner state rng_state is not the state of a PCG64 generator: {exc}"
+        ) from None
+    return dict(rng.bit_generator.state)
+
+
+@dataclass(frozen=True)
+class TrialRecord:
+    """One row of history.csv: the W and theta_c used in the trial and what happened.
+
+    ``extra``: the rule's own columns (name, value), e.g. ("sigma", ...) for the
+    chapter's per-step policy std, ("explore", ...) for pgpe's exploration std.
+    """
+
+    trial: int
+    reward: float
+    W: tuple[float, ...]
+    theta_c: float
+    min_abs_theta_swingup: float
+    ended_at: float
+    success: bool
+    fault: bool
+    early: bool
+    extra: tuple[tuple[str, float], ...] = ()
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        return history_columns([k for k, _ in self.extra])
+
+    def row(self) -> list[Any]:
+        return [
+            self.trial,
+            self.reward,
+            *self.W,
+            self.theta_c,
+            *(v for _, v in self.extra),
+            self.min_abs_theta_swingup,
+            self.ended_at,
+            int(self.success),
+            int(self.fault),
+            int(self.early),
+        ]
+
+
+def _cell(v: Any) -> float:
+    """A history value as history.csv gives it back: non-finite numbers become NaN."""
+    x = float(v)
+    return x if math.isfinite(x) else math.nan
+
+
+@dataclass(frozen=True)
+class History:
+    """A run's history, one row per trial (in memory, or read from history.csv).
+
+    ``columns``: the header (:func:`history_columns` of the learner's own columns);
+    ``rows``: the numbers; NaN where history.csv holds an empty cell (a non-finite
+    value, e.g. min_abs_theta_swingup of a trial that never swung up).
+    """
+
+    learner: str
+    columns: tuple[str, ...]
+    rows: tuple[tuple[float, ...], ...] = ()
+    reward_kind: str = "sparse"
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def column(self, name: str) -> np.ndarray:
+        """One column as a float array (KeyError if the learner does not record it)."""
+        if name not in self.columns:
+            raise KeyError(f"history of learner {self.learner!r} has no column {name!r}")
+        i = self.columns.index(name)
+        return np.array([r[i] for r in self.rows], dtype=float)
+
+    @property
+    def rule_columns(self) -> tuple[str, ...]:
+        """The learner's own columns (between theta_c and the trial's flags)."""
+        return self.columns[len(BASE_COLUMNS) : len(self.columns) - len(FLAG_COLUMNS)]
+
+    @property
+    def trial(self) -> np.ndarray:
+        return self.column("trial")
+
+    @property
+    def reward(self) -> np.ndarray:
+        return self.column("reward")
+
+    @property
+    def W(self) -> np.ndarray:
+        """(n, 6) the gains used in each trial."""
+        return np.stack([self.column(f"W{i}") for i in range(1, 7)], axis=1).reshape(-1, 6)
+
+    @property
+    def theta_c(self) -> np.ndarray:
+        return self.column("theta_c")
+
+    @property
+    def success(self) -> np.ndarray:
+        return self.column("success").astype(bool)
+
+    @classmethod
+    def of(
+        cls, learner: str, records: Sequence[TrialRecord], reward_kind: str = "sparse"
+    ) -> History:
+        """The history of in-memory records (all of one learner)."""
+        columns = records[0].columns if records else ()
+        rows = tuple(tuple(_cell(v) for v in r.row()) for r in records)
+        return cls(learner=learner, columns=columns, rows=rows, reward_kind=reward_kind)
+
+    def plus(self, records: Sequence[TrialRecord]) -> History:
+        """This history followed by ``records``."""
+        more = History.of(self.learner, records, self.reward_kind)
+        if not self.rows:
+            return more
+        if records and more.columns != self.columns:
+            raise ParameterError("history rows of a different learner cannot be appended")
+        return History(self.learner, self.columns, self.rows + more.rows, self.reward_kind)
+
+
+@dataclass(frozen=True)
+class TrainResult:
+    """The outcome of a learning loop (:func:`striatal.learners.learn`)."""
+
+    success: bool
+    trials: int
+    W: tuple[float, ...]
+    theta_c: float
+    seed: int
+    wall_seconds: float
+    state: LearnerState
+    learner: str = "chapter"
+    interrupted: bool = False
+    settings: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "success": self.success,
+            "trials": self.trials,
+            "W": list(self.W),
+            "theta_c": self.theta_c,
+            "seed": self.seed,
+            "wall_seconds": self.wall_seconds,
+            "interrupted": self.interrupted,
+            "learner": self.learner,
+            "settings": self.settings,
+        }

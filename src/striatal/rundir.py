@@ -1,0 +1,469 @@
+"""A training run's folder: settings, checkpoint, history.csv and result.json.
+
+One place owns the file formats of a run, so ``striatal train``, the Python API
+(:func:`striatal.train`) and every command that reads a result (``simulate
+--result``, ``figure``, ``interpret``, ``robustness``) agree on them:
+
+- ``checkpoint.json``: {"version", "run_id", "settings", "state", "history_sha256"}
+  (:class:`LearnerState`; the hash of the history.csv rows it covers);
+- ``history.csv``: one row per trial, header :func:`striatal.learners.state.history_columns`
+  of the learner's own columns ("sigma" for chapter and rpe, "explore" for pgpe);
+- ``result.json``: the run's outcome, its settings and run id (:func:`read_result`
+  is the one reader).
+
+Every file is written atomically (:mod:`striatal.files`); the settings carry a
+schema version (:data:`SETTINGS_SCHEMA`). A run's id (:func:`run_id`, a hash of its
+starting settings) is stored in checkpoint.json and result.json, and the checkpoint
+holds the hash of the history rows it covers, so a resume proves that the three
+files belong to one run. :meth:`RunDir.lock` keeps a second process out of a folder
+in use.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import hashlib
+import json
+import math
+import os
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from striatal.errors import DataFileError, ParameterError
+from striatal.files import atomic_write_text, csv_text, read_csv, read_json, write_json
+from striatal.learners import (
+    RULES,
+    History,
+    LearnerConfig,
+    LearnerState,
+    TrialRecord,
+    check_config,
+    rule_of,
+)
+from striatal.learners.state import history_columns
+from striatal.params import Controller, Plant, Simulation, check_seed
+from striatal.rollout import Protocol
+
+__all__ = [
+    "CHECKPOINT",
+    "CHECKPOINT_VERSION",
+    "HISTORY",
+    "RESULT",
+    "SETTINGS_SCHEMA",
+    "ResultFile",
+    "RunDir",
+    "Setup",
+    "history_line",
+    "read_history",
+    "read_result",
+    "result_of",
+    "run_id",
+    "run_settings",
+    "setup_of",
+]
+
+CHECKPOINT = "checkpoint.json"
+HISTORY = "history.csv"
+RESULT = "result.json"
+#: Version of checkpoint.json (2: the learner's memory by name, settings with a schema).
+CHECKPOINT_VERSION = 2
+#: Version of the settings object in checkpoint.json and result.json.
+SETTINGS_SCHEMA = 2
+
+
+@dataclass(frozen=True)
+class Setup:
+    """Everything a run is made of, rebuilt from its settings."""
+
+    config: LearnerConfig
+    template: Controller
+    plant: Plant
+    sim: Simulation
+    seed: int
+    protocol: Protocol
+
+
+def run_settings(
+    config: LearnerConfig,
+    template: Controller,
+    plant: Plant,
+    sim: Simulation,
+    *,
+    seed: int,
+    init: str,
+    W0: Sequence[float],
+    protocol: Protocol | None = None,
+) -> dict[str, Any]:
+    """The settings object of a run (stored in checkpoint.json and result.json)."""
+    return {
+        "learner": config.learner,
+        "init": init,
+        "W0": list(W0),
+        "theta_c0": template.theta_c,
+        "seed": seed,
+        "config": config.to_dict(),
+        "controller": {
+            "balance_sign": template.balance_sign,
+            "switch": template.switch,
+            "inhibition": template.inhibition,
+        },
+        "plant": asdict(plant),
+        "trial": {"dt": sim.dt, "duration": sim.duration, "theta0": sim.theta0, "x0": sim.x0},
+        "protocol": asdict(protocol or Protocol()),
+        "integrator": "rk4, u held over each step",
+        "reward_timing": "update at the reward event only (r_t = 0 elsewhere)",
+        "schema": SETTINGS_SCHEMA,
+    }
+
+
+def run_id(settings: Mapping[str, Any]) -> str:
+    """The id of a run: a hash of its starting settings (a run is determined by them)."""
+    text = json.dumps(settings, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+
+
+def setup_of(settings: Any, where: str) -> Setup:
+    """The run that ``settings`` describe; DataFileError naming ``where`` if they do not."""
+    if not isinstance(settings, dict):
+        raise DataFileError(f"{where} is corrupted: its settings are not an object")
+    if settings.get("schema") != SETTINGS_SCHEMA:
+        raise DataFileError(
+            f"{where} has settings schema {settings.get('schema')!r}; this striatal reads "
+            f"schema {SETTINGS_SCHEMA} (start a fresh run)"
+        )
+    try:
+        fields = dict(settings["config"])
+        if "max_step" in fields and fields["max_step"] is None:
+            fields["max_step"] = math.inf  # JSON has no inf: null is "no bound"
+        config = check_config(LearnerConfig(**fields))
+        template = Controller(
+            gains=settings["W0"], theta_c=settings["theta_c0"], **settings["controller"]
+        )
+        plant = Plant(**settings["plant"])
+        sim = Simulation(**settings["trial"])
+        seed = check_seed(settings["seed"])
+        protocol = Protocol(**settings["protocol"])
+    except KeyError as exc:
+        raise DataFileError(f"{where} is corrupted: its settings lack {exc}") from None
+    except (TypeError, ValueError) as exc:  # ParameterError is a ValueError
+        raise DataFileError(f"{where} is corrupted: settings: {exc}") from None
+    return Setup(config, template, plant, sim, seed, protocol)
+
+
+class RunDir:
+    """The files of one run in folder ``path`` (created on the first write)."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self._history: Any = None
+        self._hash = hashlib.sha256()
+
+    @property
+    def checkpoint_path(self) -> Path:
+        return self.path / CHECKPOINT
+
+    @property
+    def history_path(self) -> Path:
+        return self.path / HISTORY
+
+    @property
+    def result_path(self) -> Path:
+        return self.path / RESULT
+
+    # -- one process at a time
+    @contextlib.contextmanager
+    def lock(self) -> Iterator[None]:
+        """Hold an exclusive lock on the folder (``fcntl.flock``) or raise DataFileError.
+
+        The lock is on the folder itself (no lock file is left behind) and goes away
+        with the process, even after SIGKILL.
+        """
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+            fd = os.open(self.path, os.O_RDONLY)
+        except OSError as exc:
+            raise DataFileError(f"cannot use output folder {self.path}: {exc.strerror}") from None
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                raise DataFileError(
+                    f"output folder {self.path} is in use by another striatal process"
+                ) from None
+            yield
+        finally:
+            os.close(fd)
+
+    def clear(self) -> None:
+        """Remove a previous run's checkpoint and result (a fresh start over an old run)."""
+        for p in (self.checkpoint_path, self.result_path):
+            with contextlib.suppress(FileNotFoundError):
+                p.unlink()
+
+    # -- checkpoint
+    def write_checkpoint(self, run: str, settings: Mapping[str, Any], state: LearnerState) -> None:
+        """checkpoint.json for ``state``: flushes history.csv first, so it covers its rows."""
+        if self._history is not None:
+            self._history.flush()
+        write_json(
+            self.checkpoint_path,
+            {
+                "version": CHECKPOINT_VERSION,
+                "run_id": run,
+                "settings": settings,
+                "state": state.to_dict(),
+                "history_sha256": self._hash.hexdigest(),
+            },
+        )
+
+    def read_checkpoint(self) -> tuple[str, dict[str, Any], LearnerState, str]:
+        """(run id, settings, state, history hash) of checkpoint.json; else DataFileError."""
+        path = self.checkpoint_path
+        data = read_json(path, what="checkpoint")
+        if not isinstance(data, dict) or data.get("version") != CHECKPOINT_VERSION:
+            raise DataFileError(
+                f"checkpoint {path} is not a striatal train checkpoint "
+                f"(version {CHECKPOINT_VERSION})"
+            )
+        try:
+            state = LearnerState.from_dict(data["state"])
+            settings = data["settings"]
+            run = str(data["run_id"])
+            digest = str(data["history_sha256"])
+        except (KeyError, TypeError, ParameterError) as exc:
+            raise DataFileError(f"checkpoint {path} is corrupted: {exc}") from None
+        if not isinstance(settings, dict):
+            raise DataFileError(f"checkpoint {path} is corrupted: its settings are not an object")
+        return run, settings, state, digest
+
+    # -- history
+    def start_history(self, columns: Sequence[str]) -> None:
+        """An empty history.csv with ``columns``, opened for appending."""
+        header = csv_text(columns, [])
+        atomic_write_text(self.history_path, header)
+        self._hash = hashlib.sha256(header.encode("utf-8"))
+        self._open()
+
+    def keep_history(self, n_rows: int, columns: Sequence[str], digest: str) -> None:
+        """Keep the header and the first ``n_rows`` rows (those a checkpoint covers).
+
+        DataFileError unless they hash to ``digest`` (the checkpoint's): history.csv
+        belongs to another run, or was edited.
+        """
+        path = self.history_path
+        try:
+            lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+        except FileNotFoundError:
+            raise DataFileError(
+                f"history {path} is missing but the checkpoint has {n_rows} trials"
+            ) from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise DataFileError(f"history {path} cannot be read: {exc}") from None
+        if len(lines) < 1 + n_rows or lines[0].strip() != ",".join(columns):
+            raise DataFileError(
+                f"history {path} has fewer rows than the checkpoint's {n_rows} trials "
+                "or another header"
+            )
+        kept = "".join(lines[: 1 + n_rows])
+        h = hashlib.sha256(kept.encode("utf-8"))
+        if h.hexdigest() != digest:
+            raise DataFileError(
+                f"history {path} does not belong to the run in {self.checkpoint_path} "
+                "(its rows differ from the checkpointed ones)"
+            )
+        if len(lines) > 1 + n_rows:
+            atomic_write_text(path, kept)
+        self._hash = h
+        self._open()
+
+    def _open(self) -> None:
+        self._history = self.history_path.open("a", encoding="utf-8", newline="")
+
+    def append(self, record: TrialRecord) -> None:
+        """One row of history.csv (buffered; flushed at each checkpoint and at close)."""
+        line = history_line(record)
+        if self._history is not None:
+            self._history.write(line)
+        self._hash.update(line.encode("utf-8"))
+
+    def close_history(self) -> None:
+        if self._history is not None:
+            self._history.close()
+            self._history = None
+
+    def read_history(self) -> History:
+        return read_history(self.history_path)
+
+    # -- result
+    def write_result(self, payload: Mapping[str, Any]) -> None:
+        write_json(self.result_path, payload)
+
+    def read_result(self) -> ResultFile:
+        return read_result(self.result_path)
+
+    def check_result_run(self, run: str) -> None:
+        """DataFileError if a result.json in the folder belongs to another run than ``run``."""
+        if not self.result_path.exists():
+            return
+        data = read_json(self.result_path, what="result")
+        other = data.get("run_id") if isinstance(data, dict) else None
+        if other != run:
+            raise DataFileError(
+                f"result {self.result_path} belongs to another run ({other}) than the "
+                f"checkpoint ({run}); move it away to resume"
+            )
+
+
+def history_line(record: TrialRecord) -> str:
+    """One history.csv line (no header) for ``record``."""
+    return csv_text(record.columns, [record.row()]).split("\n", 1)[1]
+
+
+def _learner_of_columns(columns: Sequence[str]) -> str:
+    for name, rule in RULES.items():
+        if tuple(columns) == history_columns(rule.history_columns):
+            return name
+    return "unknown"
+
+
+def read_history(path: str | Path, *, learner: str | None = None) -> History:
+    """Parse a history.csv of ``striatal train`` or raise DataFileError.
+
+    The learner is taken from the result.json or checkpoint.json beside it, else
+    from the columns (sigma: chapter or rpe; explore: pgpe).
+    """
+    p = Path(path)
+    rows = read_csv(p, what="history")
+    if not rows:
+        raise DataFileError(f"history {p} has no trials")
+    columns = tuple(rows[0].keys())
+    reward_kind = "sparse"
+    settings = _sibling_settings(p)
+    if settings is not None:
+        learner = learner or settings.get("learner")
+        cfg = settings.get("config")
+        if isinstance(cfg, dict) and cfg.get("reward") in ("sparse", "shaped"):
+            reward_kind = cfg["reward"]
+    learner = learner or _learner_of_columns(columns)
+    if learner in RULES:
+        want = history_columns(RULES[learner].history_columns)
+        missing = [c for c in want if c not in columns]
+        if missing:
+            raise DataFileError(f"history {p} lacks the column(s) {', '.join(missing)}")
+    for c in ("trial", "reward", "W1", "W2", "W3", "W4", "W5", "W6", "theta_c", "success"):
+        if c not in columns:
+            raise DataFileError(f"history {p} lacks the column {c}")
+    out: list[tuple[float, ...]] = []
+    for line, row in enumerate(rows, start=2):
+        values = []
+        for c in columns:
+            cell = row.get(c)
+            try:
+                v = float(cell) if cell != "" else math.nan  # type: ignore[arg-type]
+            except (TypeError, ValueError):
+                raise DataFileError(
+                    f"history {p} line {line}: column {c} is not a number ({cell!r})"
+                ) from None
+            if not math.isfinite(v) and c not in ("min_abs_theta_swingup",):
+                raise DataFileError(f"history {p} line {line}: column {c} is not finite")
+            values.append(v)
+        out.append(tuple(values))
+    if settings is None and "reward" in columns:
+        # no settings beside it: the sparse reward takes only the values of eqs 24-25
+        i = columns.index("reward")
+        if any(r[i] not in (10.0, 0.0, -5.0) for r in out):
+            reward_kind = "shaped"
+    return History(learner=learner, columns=columns, rows=tuple(out), reward_kind=reward_kind)
+
+
+def _sibling_settings(history_path: Path) -> dict[str, Any] | None:
+    """The settings in the result.json or checkpoint.json beside a history.csv, if readable."""
+    for name in (RESULT, CHECKPOINT):
+        f = history_path.parent / name
+        if f.exists():
+            try:
+                data = read_json(f)
+            except DataFileError:
+                continue
+            s = data.get("settings") if isinstance(data, dict) else None
+            if isinstance(s, dict):
+                return s
+    return None
+
+
+@dataclass(frozen=True)
+class ResultFile:
+    """What every command takes from a result.json of ``striatal train``."""
+
+    path: Path
+    W: tuple[float, ...]
+    theta_c: float
+    controller: Controller
+    plant: Plant
+    learner: str
+    success: bool | None
+    trials: int | None
+    settings: dict[str, Any]
+    data: dict[str, Any]
+
+
+def result_of(data: Any, path: str | Path) -> ResultFile:
+    """:func:`read_result` of already-parsed JSON ``data`` read from ``path``."""
+    p = Path(path)
+    where = f"result {p}" if str(path) else "result"
+    if not isinstance(data, dict) or "W" not in data or "theta_c" not in data:
+        raise DataFileError(f"{where} is not a striatal result.json (no W and theta_c)")
+    settings = data.get("settings", {})
+    if not isinstance(settings, dict):
+        raise DataFileError(f"{where}: its settings must be an object, got {settings!r}")
+    ctrl = settings.get("controller", {})
+    plant_d = settings.get("plant", {})
+    if not isinstance(ctrl, dict) or not isinstance(plant_d, dict):
+        raise DataFileError(f"{where}: settings.controller and settings.plant must be objects")
+    try:
+        controller = Controller(
+            gains=tuple(data["W"]),
+            theta_c=data["theta_c"],
+            balance_sign=ctrl.get("balance_sign", "corrected"),
+            switch=ctrl.get("switch", "hard"),
+            inhibition=ctrl.get("inhibition", 50.0),
+        )
+        plant = Plant(
+            **{
+                k: plant_d[k]
+                for k in ("cart_mass", "pole_mass", "length", "gravity")
+                if k in plant_d
+            }
+        )
+    except ParameterError as exc:
+        raise DataFileError(f"{where} holds an unusable controller: {exc}") from None
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise DataFileError(f"{where} lacks W, theta_c or settings: {exc!r}") from None
+    learner = data.get("learner", settings.get("learner")) or "chapter"
+    success = data.get("success")
+    trials = data.get("trials")
+    return ResultFile(
+        path=p,
+        W=controller.gains,
+        theta_c=controller.theta_c,
+        controller=controller,
+        plant=plant,
+        learner=str(learner),
+        success=bool(success) if isinstance(success, bool) else None,
+        trials=trials if isinstance(trials, int) else None,
+        settings=settings,
+        data=data,
+    )
+
+
+def read_result(path: str | Path) -> ResultFile:
+    """The one reader of a result.json of ``striatal train`` (DataFileError if unusable)."""
+    return result_of(read_json(path, what="result"), path)
+
+
+def rule_columns(config: LearnerConfig) -> tuple[str, ...]:
+    """The history.csv header of a run with ``config``."""
+    return history_columns(rule_of(config).history_columns)

@@ -1,0 +1,422 @@
+"""The Python API of a whole training run: :func:`train` (what ``striatal train`` runs).
+
+``striatal.train(learner="pgpe", init="random", seed=0, max_trials=300)`` gives
+exactly what ``striatal train --learner pgpe --init random --seed 0 --max-trials 300``
+gives: the same defaults (the learner's tuned preset, :func:`striatal.learners.default_config`),
+the same W(0), the same files with ``out=``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from striatal.errors import DataFileError, ParameterError
+from striatal.files import check_out_dir
+from striatal.learners import (
+    History,
+    LearnerState,
+    TrainResult,
+    TrialRecord,
+    default_config,
+    initial_state,
+    learn,
+    random_initial_gains,
+)
+from striatal.params import (
+    CHAPTER_FINAL_THETA_C,
+    CHAPTER_FINAL_W,
+    CHAPTER_INITIAL_THETA_C,
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+    check_seed,
+)
+from striatal.rollout import Trajectory
+from striatal.rollout import simulate as _simulate
+from striatal.rundir import RunDir, Setup, rule_columns, run_id, run_settings, setup_of
+
+__all__ = [
+    "DEFAULT_CHECKPOINT_EVERY",
+    "RESUME_MAY_CHANGE",
+    "Run",
+    "initial_gains",
+    "simulate",
+    "train",
+]
+
+#: Trials between checkpoints when a run writes to a folder.
+DEFAULT_CHECKPOINT_EVERY = 50
+
+
+@dataclass(frozen=True)
+class Run:
+    """A finished (or interrupted) training run.
+
+    ``history``: one row per trial (all of them, also those before a resume);
+    ``settings``: the run's settings as stored in result.json; :meth:`to_dict` is
+    result.json itself.
+    """
+
+    success: bool
+    trials: int
+    W: tuple[float, ...]
+    theta_c: float
+    seed: int
+    learner: str
+    interrupted: bool
+    wall_seconds: float
+    state: LearnerState
+    history: History
+    settings: dict[str, Any]
+    mean_policy_success: bool
+    mean_policy_final_state: tuple[float, ...]
+    run_id: str = ""
+    out: Path | None = None
+
+    @property
+    def controller(self) -> Controller:
+        """The learned controller (W, theta_c and the run's readings)."""
+        c = self.settings["controller"]
+        return Controller(gains=self.W, theta_c=self.theta_c, **c)
+
+    @property
+    def plant(self) -> Plant:
+        return Plant(**self.settings["plant"])
+
+    def to_dict(self) -> dict[str, Any]:
+        payload = TrainResult(
+            success=self.success,
+            trials=self.trials,
+            W=self.W,
+            theta_c=self.theta_c,
+            seed=self.seed,
+            wall_seconds=self.wall_seconds,
+            state=self.state,
+            learner=self.learner,
+            interrupted=self.interrupted,
+            settings=self.settings,
+        ).to_dict()
+        payload["mean_policy_success"] = self.mean_policy_success
+        payload["mean_policy_final_state"] = list(self.mean_policy_final_state)
+        payload["positive_rewards"] = self.state.n_positive
+        payload["run_id"] = self.run_id
+        return payload
+
+
+def initial_gains(init: str, seed: int, init_gains: Sequence[float] | None = None) -> tuple:
+    """W(0): ``init_gains``, the chapter's ("chapter") or uniform in [-1, 1]^6 ("random")."""
+    if init_gains is not None:
+        return tuple(float(w) for w in init_gains)
+    if init == "chapter":
+        return CHAPTER_INITIAL_W
+    if init == "random":
+        return random_initial_gains(np.random.default_rng([check_seed(seed), 1]))
+    raise ParameterError(f"init must be 'chapter' or 'random', got {init!r}")
+
+
+def _fresh_setup(
+    learner: str,
+    init: str,
+    init_gains: Sequence[float] | None,
+    theta_c0: float,
+    seed: int,
+    plant: Plant | None,
+    sim: Simulation | None,
+    controller: dict[str, Any],
+    options: dict[str, Any],
+) -> tuple[dict[str, Any], Setup]:
+    seed = check_seed(seed)
+    config = default_config(learner, **options)
+    W0 = initial_gains(init, seed, init_gains)
+    template = Controller(gains=W0, theta_c=theta_c0, **controller)
+    plant = plant or Plant()
+    sim = sim or Simulation()
+    settings = run_settings(
+        config,
+        template,
+        plant,
+        sim,
+        seed=seed,
+        init="gains" if init_gains is not None else init,
+        W0=W0,
+    )
+    return settings, setup_of(settings, "the options")
+
+
+#: Options that may differ on resume: where the files go, how often to checkpoint,
+#: and a larger max_trials (to extend a run).
+RESUME_MAY_CHANGE = ("out", "checkpoint_every", "max_trials")
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _resume_changes(
+    settings: dict[str, Any], setup: Setup, state: LearnerState, given: dict[str, Any]
+) -> dict[str, Any]:
+    """The settings of a resumed run: ParameterError naming every given option that
+    differs from the checkpoint's (only a larger max_trials may)."""
+    have: dict[str, Any] = {
+        "learner": setup.config.learner,
+        "init": settings.get("init"),
+        "init_gains": tuple(setup.template.gains) if settings.get("init") == "gains" else None,
+        "theta_c0": setup.template.theta_c,
+        "seed": setup.seed,
+        "plant": setup.plant,
+        "sim": setup.sim,
+        "balance_sign": setup.template.balance_sign,
+        "switch": setup.template.switch,
+        "inhibition": setup.template.inhibition,
+        **setup.config.to_dict(),
+    }
+    differ = []
+    for name, value in given.items():
+        if name == "max_trials":
+            continue
+        if name not in have:
+            differ.append(f"{_flag(name)} (no such setting)")
+        elif name == "init_gains":
+            if have[name] is None or tuple(float(w) for w in value) != have[name]:
+                differ.append(f"{_flag(name)}")
+        elif value != have[name]:
+            differ.append(f"{_flag(name)} (the run has {have[name]!r})")
+    if differ:
+        raise ParameterError(
+            "--resume continues the run in its checkpoint; these options differ from it: "
+            + ", ".join(differ)
+            + " (only --max-trials may grow, --checkpoint-every may change)"
+        )
+    new = dict(settings)
+    if "max_trials" in given:
+        m = given["max_trials"]
+        if m < state.trials_done or m < setup.config.max_trials:
+            raise ParameterError(
+                f"--resume may only raise --max-trials (the run has "
+                f"{setup.config.max_trials}, {state.trials_done} done), got {m}"
+            )
+        new["config"] = {**settings["config"], "max_trials": m}
+    return new
+
+
+def train(
+    learner: str | None = None,
+    *,
+    init: str | None = None,
+    init_gains: Sequence[float] | None = None,
+    theta_c0: float | None = None,
+    seed: int | None = None,
+    plant: Plant | None = None,
+    sim: Simulation | None = None,
+    balance_sign: str | None = None,
+    switch: str | None = None,
+    inhibition: float | None = None,
+    out: str | Path | None = None,
+    resume: bool = False,
+    checkpoint_every: int = DEFAULT_CHECKPOINT_EVERY,
+    on_trial: Callable[[LearnerState, TrialRecord], None] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+    **options: Any,
+) -> Run:
+    """Train a learner from W(0) until the success test holds or ``max_trials``.
+
+    ``learner``: a key of :data:`striatal.learners.RULES` (default "chapter");
+    ``**options``: any :class:`striatal.learners.LearnerConfig` field
+    (``max_trials``, ``alpha``, ``eligibility="chapter"``...), applied over the
+    learner's tuned preset. ``init``: "chapter" (W(0) of the chapter, the default)
+    or "random" (uniform in [-1, 1]^6 from ``seed``, default 0), unless
+    ``init_gains`` gives W(0); ``theta_c0`` default 0.6. ``plant``, ``sim`` and the
+    controller readings default to the chapter's. With ``out`` the run writes
+    history.csv, checkpoint.json (every ``checkpoint_every`` trials) and result.json
+    there, holding an exclusive lock on the folder; a fresh run first removes an
+    older run's checkpoint and result. ``resume=True`` continues the run
+    checkpointed in ``out``: every other argument given must equal the run's
+    (ParameterError naming those that differ), except a larger ``max_trials``.
+    ``on_trial`` is called after each trial's row is recorded; ``should_stop`` is
+    asked after it (True: stop there, the result is ``interrupted``). Ctrl-C
+    stops likewise.
+    """
+    if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, int):
+        raise ParameterError(f"checkpoint_every must be a whole number, got {checkpoint_every!r}")
+    if checkpoint_every < 1:
+        raise ParameterError(f"--checkpoint-every must be >= 1, got {checkpoint_every}")
+    given = {
+        k: v
+        for k, v in {
+            "learner": learner,
+            "init": init,
+            "init_gains": init_gains,
+            "theta_c0": theta_c0,
+            "seed": seed,
+            "plant": plant,
+            "sim": sim,
+            "balance_sign": balance_sign,
+            "switch": switch,
+            "inhibition": inhibition,
+            **options,
+        }.items()
+        if v is not None
+    }
+    if resume:
+        if out is None:
+            raise ParameterError("--resume needs --out DIR holding a checkpoint")
+        rundir = RunDir(check_out_dir(out))
+        if not rundir.checkpoint_path.exists():
+            raise DataFileError(f"checkpoint {rundir.checkpoint_path} does not exist")
+        with rundir.lock():
+            run, settings, state, digest = rundir.read_checkpoint()
+            setup = setup_of(settings, f"checkpoint {rundir.checkpoint_path}")
+            settings = _resume_changes(settings, setup, state, given)
+            setup = setup_of(settings, f"checkpoint {rundir.checkpoint_path}")
+            rundir.check_result_run(run)
+            rundir.keep_history(state.trials_done, rule_columns(setup.config), digest)
+            past = rundir.read_history() if state.trials_done else None
+            return _run(
+                run, settings, setup, state, rundir, past, checkpoint_every, on_trial, should_stop
+            )
+    settings, setup = _fresh_setup(
+        learner or "chapter",
+        init or "chapter",
+        init_gains,
+        CHAPTER_INITIAL_THETA_C if theta_c0 is None else theta_c0,
+        0 if seed is None else seed,
+        plant,
+        sim,
+        {
+            "balance_sign": balance_sign or "corrected",
+            "switch": switch or "hard",
+            "inhibition": 50.0 if inhibition is None else inhibition,
+        },
+        options,
+    )
+    state = initial_state(setup.template.gains, setup.template.theta_c, setup.seed)
+    run = run_id(settings)
+    if out is None:
+        return _run(
+            run, settings, setup, state, None, None, checkpoint_every, on_trial, should_stop
+        )
+    rundir = RunDir(check_out_dir(out))
+    with rundir.lock():
+        rundir.clear()
+        rundir.start_history(rule_columns(setup.config))
+        return _run(
+            run, settings, setup, state, rundir, None, checkpoint_every, on_trial, should_stop
+        )
+
+
+def _run(
+    run: str,
+    settings: dict[str, Any],
+    setup: Setup,
+    state: LearnerState,
+    rundir: RunDir | None,
+    past: History | None,
+    checkpoint_every: int,
+    on_trial: Callable[[LearnerState, TrialRecord], None] | None,
+    should_stop: Callable[[], bool] | None,
+) -> Run:
+    """The learning loop of :func:`train` with its files (``rundir``, set up and locked)."""
+    config = setup.config
+    records: list[TrialRecord] = []
+    recorded = state  # the state after the last trial whose history row is written
+
+    def checkpoint(s: LearnerState) -> None:
+        if rundir is not None:
+            rundir.write_checkpoint(run, settings, s)
+
+    def record(s: LearnerState, rec: TrialRecord) -> None:
+        nonlocal recorded
+        if rundir is not None:
+            rundir.append(rec)
+        records.append(rec)
+        recorded = s
+        if s.trials_done % checkpoint_every == 0:
+            checkpoint(s)
+        if on_trial is not None:
+            on_trial(s, rec)
+        if should_stop is not None and should_stop():
+            raise KeyboardInterrupt
+
+    t0 = time.perf_counter()
+    try:
+        result = learn(
+            setup.plant,
+            setup.template,
+            config,
+            setup.seed,
+            sim=setup.sim,
+            protocol=setup.protocol,
+            state=state,
+            on_trial=record,
+        )
+        if result.interrupted and result.state is not recorded:
+            # stopped between a trial's update and its history row: that trial is not kept
+            result = replace(
+                result,
+                success=recorded.success,
+                trials=recorded.trials_done,
+                W=recorded.W,
+                theta_c=recorded.theta_c,
+                state=recorded,
+            )
+        checkpoint(result.state)
+    finally:
+        if rundir is not None:
+            rundir.close_history()
+    columns = rule_columns(config)
+    history = (
+        past.plus(records)
+        if past is not None
+        else History.of(config.learner, records, config.reward)
+    )
+    if not history.columns:
+        history = History(config.learner, columns, (), config.reward)
+    learned = setup.template.with_gains(result.W, result.theta_c)
+    check = _simulate(setup.plant, learned, setup.sim).outcome
+    out = Run(
+        success=result.success,
+        trials=result.trials,
+        W=result.W,
+        theta_c=result.theta_c,
+        seed=setup.seed,
+        learner=config.learner,
+        interrupted=result.interrupted,
+        wall_seconds=time.perf_counter() - t0,
+        state=result.state,
+        history=history,
+        settings=settings,
+        mean_policy_success=check.success,
+        mean_policy_final_state=tuple(check.final_state),
+        run_id=run,
+        out=rundir.path if rundir is not None else None,
+    )
+    if rundir is not None:
+        rundir.write_result(out.to_dict())
+    return out
+
+
+def simulate(
+    plant: Plant | None = None,
+    controller: Controller | None = None,
+    sim: Simulation | None = None,
+    **kwargs: Any,
+) -> Trajectory:
+    """One run of the switching controller with ``striatal simulate``'s defaults.
+
+    Defaults: the chapter's plant, its learned W and theta_c (``--chapter-final``),
+    60 s from theta = 3.12 at rest, the mean policy. ``kwargs`` go to
+    :func:`striatal.rollout.simulate` (protocol, rng, model, sensor, action_every).
+    """
+    return _simulate(
+        plant or Plant(),
+        controller or Controller(gains=CHAPTER_FINAL_W, theta_c=CHAPTER_FINAL_THETA_C),
+        sim or Simulation(),
+        **kwargs,
+    )
