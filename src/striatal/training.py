@@ -432,7 +432,8 @@ def simulate(
 
     Defaults: the chapter's plant, its learned W and theta_c (``--chapter-final``),
     60 s from theta = 3.12 at rest, the mean policy. ``kwargs`` go to
-    :func:`striatal.rollout.simulate` (protocol, rng, model, sensor, action_every).
+    :func:`striatal.rollout.simulate` (protocol, rng, model, sensor, action_every,
+    hardware: the motor's hold and limit and the track, docs/paper-notes.md section 10).
     """
     return _simulate(
         plant or Plant(),
