@@ -91,6 +91,11 @@ def run(args: argparse.Namespace) -> int:
         f"{100 * res.reward_positive / res.draws:.3g} %"
     )
     print(f"mean policy (no noise) passes: {'yes' if res.mean_policy_pass else 'no'}")
+    if not hardware.idealised:
+        print(
+            f"motor: {hardware.hold} held, max force {hardware.max_force or 'none'} N, "
+            f"track {hardware.track or 'endless'} m"
+        )
     print(
         f"gains W = {list(res.gains)}, theta_c = {res.theta_c:g}, seed {res.seed}; "
         f"{res.simulations} simulations, {res.simulated_seconds:.6g} simulated s"
