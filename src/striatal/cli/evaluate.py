@@ -93,8 +93,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"mean policy (no noise) passes: {'yes' if res.mean_policy_pass else 'no'}")
     if not hardware.idealised:
         print(
-            f"motor: {hardware.hold} held, max force {hardware.max_force or 'none'} N, "
-            f"track {hardware.track or 'endless'} m"
+            f"motor: {hardware.hold} held; max force: "
+            f"{'none' if hardware.max_force is None else f'{hardware.max_force:g} N'}; "
+            f"track: {'endless' if hardware.track is None else f'{hardware.track:g} m'}"
         )
     print(
         f"gains W = {list(res.gains)}, theta_c = {res.theta_c:g}, seed {res.seed}; "
