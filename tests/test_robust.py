@@ -148,3 +148,22 @@ def test_simulate_hold_force_and_track_options(capsys: pytest.CaptureFixture[str
     assert main(["simulate", "--track", "4", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["end_reason"] == "track" and data["success"] is False
+
+
+def test_pass_probability_runs_its_trials_on_the_hardware_given() -> None:
+    """evaluate's trials take the motor and track: a 4-m track fails the mean policy
+    (final W reaches |x| = 6 m) and every noisy trial that goes as far."""
+    from striatal.evaluate import pass_probability
+    from striatal.rollout import Protocol
+
+    free = pass_probability(Plant(), Controller(), Simulation(), Protocol(), 5, 0)
+    track = pass_probability(
+        Plant(), Controller(), Simulation(), Protocol(), 5, 0, hardware=Hardware(track=4.0)
+    )
+    assert free.mean_policy_pass and not track.mean_policy_pass
+    assert track.simulated_seconds < free.simulated_seconds
+
+
+def test_evaluate_prints_the_motor(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["evaluate", "--draws", "2", "--hold", "force", "--track", "20"]) == 0
+    assert "motor: force held; max force: none; track: 20 m" in capsys.readouterr().out
