@@ -9,6 +9,8 @@ Ctrl-C, before NumPy and Numba load (docs/reliability.md). The Python API:
 
 - :func:`train`: a whole learning run, as ``striatal train`` runs it (same defaults);
 - :func:`simulate`: one run of a controller, as ``striatal simulate`` (same defaults);
+- :func:`check_robust`: the robustness set of ``striatal simulate --robust`` (9 runs,
+  the motor force held: :class:`Hardware`);
 - :mod:`striatal.learners`: the learning rules, their presets and the trial loop;
 - :mod:`striatal.rundir`: the files of a run (checkpoint, history.csv, result.json);
 - :mod:`striatal.plots`: ``learning_curves(run.history)``, ``figure5(trajectory)``.
@@ -37,10 +39,12 @@ if TYPE_CHECKING:
         CHAPTER_INITIAL_THETA_C,
         CHAPTER_INITIAL_W,
         Controller,
+        Hardware,
         Plant,
         Simulation,
         SuccessTest,
     )
+    from striatal.robust import check_robust
     from striatal.rollout import Protocol, Trajectory, TrialOutcome, run_trial
     from striatal.rundir import read_history, read_result
     from striatal.training import Run, simulate, train
@@ -53,6 +57,8 @@ _FROM = {
     "CHAPTER_INITIAL_THETA_C": "striatal.params",
     "CHAPTER_INITIAL_W": "striatal.params",
     "Controller": "striatal.params",
+    "Hardware": "striatal.params",
+    "check_robust": "striatal.robust",
     "Plant": "striatal.params",
     "Simulation": "striatal.params",
     "SuccessTest": "striatal.params",
@@ -133,6 +139,7 @@ __all__ = [
     "CHAPTER_INITIAL_W",
     "LEARNERS",
     "Controller",
+    "Hardware",
     "History",
     "LearnerConfig",
     "Plant",
@@ -143,6 +150,7 @@ __all__ = [
     "Trajectory",
     "TrialOutcome",
     "__version__",
+    "check_robust",
     "default_config",
     "learners",
     "plots",

@@ -18,7 +18,15 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.params import N_GAINS, Controller, Plant, Simulation, check_seed
+from striatal.params import (
+    CHAPTER_HARDWARE,
+    N_GAINS,
+    Controller,
+    Hardware,
+    Plant,
+    Simulation,
+    check_seed,
+)
 from striatal.rollout import Protocol, SensorNoise, run_trial
 from striatal.stats import wilson_interval
 
@@ -88,6 +96,7 @@ def pass_probability(
     action_every: int = 1,
     model: Plant | None = None,
     sensor: SensorNoise | None = None,
+    hardware: Hardware = CHAPTER_HARDWARE,
 ) -> PassProbability:
     """Chance that one noisy trial with ``controller``'s gains passes the success test.
 
@@ -96,8 +105,10 @@ def pass_probability(
     sequence, and one with the mean policy. Each noisy trial's success is
     :attr:`striatal.rollout.TrialOutcome.success`, the one the learner uses when
     success is judged on the noisy trial (docs/paper-notes.md, table row 8 and
-    section 8). ``sensor``: noise on what the controller sees (default none).
-    Same seed, same result.
+    section 8). ``sensor``: noise on what the controller sees (default none);
+    ``hardware``: the motor's hold and limit and the track (default: the chapter's
+    idealisation; docs/paper-notes.md section 9). Same seed, same result. For the
+    robustness set see :func:`striatal.robust.check_robust`.
     """
     n = check_draws(draws)
     sensor = sensor or SensorNoise()
@@ -117,6 +128,7 @@ def pass_probability(
             model=model,
             sensor=sensor,
             mean_policy=mean_policy,
+            hardware=hardware,
         )
         return o.success, o.reward, o.ended_at
 

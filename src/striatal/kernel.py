@@ -38,7 +38,8 @@ OUT_EARLY = 9
 OUT_N_SWITCHES = 10
 OUT_MAX_ABS_X = 11
 OUT_MAX_ABS_FORCE = 12
-N_OUT = 13
+OUT_TRACK = 13
+N_OUT = 14
 
 # Columns of a recorded trajectory row.
 TRAJ_COLUMNS = ("t", "x", "x_dot", "theta", "theta_dot", "u", "force", "mode")
@@ -53,6 +54,7 @@ STATUS_FAULT = 1
 STATUS_EARLY = 2
 STATUS_SUCCESS = 3
 STATUS_FAILURE = 4
+STATUS_TRACK = 5
 
 
 # The kernel's arguments, grouped (frozen, Numba-compatible NamedTuples). Build them
@@ -71,12 +73,20 @@ class Gains(NamedTuple):
 
 
 class PlantArgs(NamedTuple):
-    """The true plant and the controller's model of it, each [M, m, l, g]; the RK4 step [s]."""
+    """The true plant and the controller's model of it, each [M, m, l, g]; the RK4 step [s].
+
+    ``hold_force``: hold the motor force of eq 12 (computed at the step's start with the
+    model) over the step and integrate the plant's eqs 8-9, instead of holding u
+    (the chapter's idealisation); ``max_force``: the motor's limit [N] (inf: none).
+    See :func:`run_trial` and docs/paper-notes.md section 9.
+    """
 
     plant: np.ndarray
     model: np.ndarray
     mismatch: bool
     dt: float
+    hold_force: bool = False
+    max_force: float = math.inf
 
 
 class ControlArgs(NamedTuple):
@@ -94,7 +104,10 @@ class ControlArgs(NamedTuple):
 
 
 class ProtocolArgs(NamedTuple):
-    """The trial protocol of eqs 24-25 in steps: see :func:`judge`. check_step -1: never."""
+    """The trial protocol of eqs 24-25 in steps: see :func:`judge`. check_step -1: never.
+
+    ``track``: the half-length of the track [m]; |x| beyond it ends the trial (inf: none).
+    """
 
     n_steps: int
     check_step: int
@@ -104,6 +117,7 @@ class ProtocolArgs(NamedTuple):
     goal_theta: float
     reward_success: float
     reward_failure: float
+    track: float = math.inf
 
 
 class NoiseArgs(NamedTuple):
@@ -324,6 +338,145 @@ def _force_terms(
     return (cart_mass + m - m * c * c) * u + m * g * c * s - m * length * theta_dot * theta_dot * s
 
 
+@njit(cache=True, error_model="numpy")
+def _force_accelerations(
+    s: float,
+    c: float,
+    theta_dot: float,
+    f: float,
+    cart_mass: float,
+    m: float,
+    length: float,
+    g: float,
+) -> tuple[float, float]:
+    """(x_ddot, theta_ddot) of the true plant [M, m, l, g] pushed by a cart force f [N].
+
+    Eqs 8-9 solved for the accelerations (the point mass of eq 10):
+    x_ddot = (f + m l theta_dot^2 s - m g s c) / (M + m - m c^2),
+    theta_ddot = (g s - x_ddot c) / l, with s = sin theta, c = cos theta.
+    """
+    x_ddot = (f + m * length * theta_dot * theta_dot * s - m * g * s * c) / (
+        cart_mass + m - m * c * c
+    )
+    return x_ddot, (g * s - x_ddot * c) / length
+
+
+@njit(cache=True)
+def rk4_force_step(
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    f: float,
+    dt: float,
+    plant: np.ndarray,
+) -> tuple[float, float, float, float]:
+    """One classical RK4 step of length dt of eqs 8-9 with the cart force f [N] held."""
+    cart_mass = plant[0]
+    m = plant[1]
+    length = plant[2]
+    g = plant[3]
+    a1, b1 = _force_accelerations(
+        math.sin(theta), math.cos(theta), theta_dot, f, cart_mass, m, length, g
+    )
+    h = 0.5 * dt
+    xd2 = x_dot + h * a1
+    thd2 = theta_dot + h * b1
+    t2 = theta + h * theta_dot
+    a2, b2 = _force_accelerations(math.sin(t2), math.cos(t2), thd2, f, cart_mass, m, length, g)
+    xd3 = x_dot + h * a2
+    thd3 = theta_dot + h * b2
+    t3 = theta + h * thd2
+    a3, b3 = _force_accelerations(math.sin(t3), math.cos(t3), thd3, f, cart_mass, m, length, g)
+    xd4 = x_dot + dt * a3
+    thd4 = theta_dot + dt * b3
+    t4 = theta + dt * thd3
+    a4, b4 = _force_accelerations(math.sin(t4), math.cos(t4), thd4, f, cart_mass, m, length, g)
+    w = dt / 6.0
+    return (
+        x + w * (x_dot + 2.0 * xd2 + 2.0 * xd3 + xd4),
+        x_dot + w * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
+        theta + w * (theta_dot + 2.0 * thd2 + 2.0 * thd3 + thd4),
+        theta_dot + w * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
+    )
+
+
+@njit(cache=True, error_model="numpy")
+def _accelerations_limited(
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    u: float,
+    plant: np.ndarray,
+    model: np.ndarray,
+    mismatch: bool,
+    max_force: float,
+) -> tuple[float, float]:
+    """:func:`accelerations` (u held) behind a motor limited to |f| <= max_force [N].
+
+    The force of eq 12 that realises u (with the ``model``) is computed at this state;
+    within the limit the accelerations are :func:`accelerations`' (the same arithmetic),
+    beyond it the true ``plant`` answers the clipped force through eqs 8-9.
+    """
+    s = math.sin(theta)
+    c = math.cos(theta)
+    f = _force_terms(s, c, theta_dot, u, model[0], model[1], model[2], model[3])
+    if abs(f) <= max_force:
+        return _accelerations_sc(x_dot, s, c, theta_dot, u, plant, model, mismatch)
+    fc = max_force if f > 0.0 else -max_force
+    return _force_accelerations(s, c, theta_dot, fc, plant[0], plant[1], plant[2], plant[3])
+
+
+@njit(cache=True)
+def _rk4_limited(
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    u: float,
+    dt: float,
+    plant: np.ndarray,
+    model: np.ndarray,
+    mismatch: bool,
+    max_force: float,
+) -> tuple[float, float, float, float]:
+    """:func:`rk4_step` (u held), every stage's force clipped (:func:`_accelerations_limited`)."""
+    a1, b1 = _accelerations_limited(x_dot, theta, theta_dot, u, plant, model, mismatch, max_force)
+    h = 0.5 * dt
+    xd2 = x_dot + h * a1
+    thd2 = theta_dot + h * b1
+    a2, b2 = _accelerations_limited(
+        xd2, theta + h * theta_dot, thd2, u, plant, model, mismatch, max_force
+    )
+    xd3 = x_dot + h * a2
+    thd3 = theta_dot + h * b2
+    a3, b3 = _accelerations_limited(
+        xd3, theta + h * thd2, thd3, u, plant, model, mismatch, max_force
+    )
+    xd4 = x_dot + dt * a3
+    thd4 = theta_dot + dt * b3
+    a4, b4 = _accelerations_limited(
+        xd4, theta + dt * thd3, thd4, u, plant, model, mismatch, max_force
+    )
+    w = dt / 6.0
+    return (
+        x + w * (x_dot + 2.0 * xd2 + 2.0 * xd3 + xd4),
+        x_dot + w * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
+        theta + w * (theta_dot + 2.0 * thd2 + 2.0 * thd3 + thd4),
+        theta_dot + w * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
+    )
+
+
+@njit(cache=True)
+def _clip_force(f: float, max_force: float) -> float:
+    """f clipped to [-max_force, max_force] (NaN stays NaN)."""
+    if f > max_force:
+        return max_force
+    if f < -max_force:
+        return -max_force
+    return f
+
+
 @njit(cache=True)
 def energy_error(theta: float, theta_dot: float, plant: np.ndarray) -> float:
     """E~ = E_p - E_d, eqs 15-16 [J]."""
@@ -487,11 +640,12 @@ def judge(
     section 5), shared by :func:`run_trial` and the Gymnasium task
     (:func:`striatal.envs.task.outcome`). In order: a non-finite state or one with a
     component beyond :data:`BLOW_UP` is a numerical fault (STATUS_FAULT, failure
-    reward); at ``step == protocol.check_step`` (t = 30 s) before the last step, eq 24
-    ends the trial (STATUS_EARLY, failure reward) if |x| > check_x or |theta| >
-    check_theta; at ``step >= protocol.n_steps`` the trial ends with eq 25's reward
-    (STATUS_SUCCESS if |x| < goal_x and |theta| < goal_theta, else STATUS_FAILURE).
-    Otherwise STATUS_RUNNING and reward 0.
+    reward); |x| beyond ``protocol.track`` ends the trial at the track's end
+    (STATUS_TRACK, failure reward); at ``step == protocol.check_step`` (t = 30 s)
+    before the last step, eq 24 ends the trial (STATUS_EARLY, failure reward) if
+    |x| > check_x or |theta| > check_theta; at ``step >= protocol.n_steps`` the trial
+    ends with eq 25's reward (STATUS_SUCCESS if |x| < goal_x and |theta| < goal_theta,
+    else STATUS_FAILURE). Otherwise STATUS_RUNNING and reward 0.
     """
     if not (
         abs(x) < BLOW_UP
@@ -500,6 +654,8 @@ def judge(
         and abs(theta_dot) < BLOW_UP
     ):
         return STATUS_FAULT, protocol.reward_failure
+    if abs(x) > protocol.track:
+        return STATUS_TRACK, protocol.reward_failure
     if (
         step == protocol.check_step
         and step < protocol.n_steps
@@ -553,6 +709,17 @@ def run_trial(
     state after every step. Results go to ``buffers.out`` (layout OUT_*);
     ``buffers.traj`` of shape (n_steps + 1, 8) records t, state (theta unwrapped),
     u, force, mode when it has rows.
+
+    What the motor holds over a step dt (the controller's sample period; the policy
+    draws every ``control.action_every`` steps): by default u (the chapter's
+    idealisation, a feedback linearisation running continuously inside the step).
+    With ``plant.hold_force`` the force f of eq 12 is computed once at the step's
+    start from the sampled state (the angle the controller sees) with the ``model``,
+    held, and the true plant's eqs 8-9 are integrated (:func:`rk4_force_step`).
+    ``plant.max_force`` (finite) clips f: with the force held, the held f; with u held,
+    the force of every RK4 stage (:func:`_rk4_limited`), so the plant gets u only while
+    the motor can deliver it (docs/paper-notes.md section 9). The recorded force and
+    OUT_MAX_ABS_FORCE are the (clipped) force at the step's start.
     """
     W = gains.W
     theta_c = gains.theta_c
@@ -589,6 +756,9 @@ def run_trial(
     d3 = trace[3]
     d4 = trace[4]
     d5 = trace[5]
+    hold_force = plant.hold_force
+    max_force = plant.max_force
+    limited = max_force < math.inf
     min_swing = math.inf
     min_all = math.inf
     n_switches = 0
@@ -658,7 +828,13 @@ def run_trial(
                     a = mu
                 draw += 1
             hold -= 1
-            f = _force_sc(s, c, theta_dot, a, model)
+            if hold_force and noisy_sensor:
+                # the digital controller computes eq 12 from the angle it sees
+                f = _force_sc(math.sin(otheta), math.cos(otheta), theta_dot, a, model)
+            else:
+                f = _force_sc(s, c, theta_dot, a, model)
+            if limited:
+                f = _clip_force(f, max_force)
             if abs(f) > max_abs_f:
                 max_abs_f = abs(f)
             if record:
@@ -670,9 +846,16 @@ def run_trial(
                 traj[k, 5] = a
                 traj[k, 6] = f
                 traj[k, 7] = mode
-            x, x_dot, theta, theta_dot = _rk4_sc(
-                x, x_dot, theta, theta_dot, s, c, a, dt, p, model, mismatch
-            )
+            if hold_force:
+                x, x_dot, theta, theta_dot = rk4_force_step(x, x_dot, theta, theta_dot, f, dt, p)
+            elif limited:
+                x, x_dot, theta, theta_dot = _rk4_limited(
+                    x, x_dot, theta, theta_dot, a, dt, p, model, mismatch, max_force
+                )
+            else:
+                x, x_dot, theta, theta_dot = _rk4_sc(
+                    x, x_dot, theta, theta_dot, s, c, a, dt, p, model, mismatch
+                )
             status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
             if status == STATUS_FAULT:
                 end_step = k + 1
@@ -696,7 +879,8 @@ def run_trial(
         traj[end_step, 3] = theta
         traj[end_step, 4] = theta_dot
         traj[end_step, 5] = a
-        traj[end_step, 6] = force(theta, theta_dot, a, model)
+        f_end = force(theta, theta_dot, a, model)
+        traj[end_step, 6] = _clip_force(f_end, max_force) if limited else f_end
         traj[end_step, 7] = MODE_BALANCE if abs(wrap_angle(theta)) < theta_c else MODE_SWINGUP
     out[OUT_REWARD] = reward
     out[OUT_END_STEP] = end_step
@@ -711,6 +895,7 @@ def run_trial(
     out[OUT_N_SWITCHES] = n_switches
     out[OUT_MAX_ABS_X] = max_abs_x
     out[OUT_MAX_ABS_FORCE] = max_abs_f
+    out[OUT_TRACK] = 1.0 if status == STATUS_TRACK else 0.0
 
 
 @njit(cache=True, parallel=True)
@@ -1105,6 +1290,7 @@ def _lockstep_block(
         out[OUT_N_SWITCHES] = S[_F_NSW, j]
         out[OUT_MAX_ABS_X] = S[_F_MAXX, j]
         out[OUT_MAX_ABS_FORCE] = S[_F_MAXF, j]
+        out[OUT_TRACK] = 0.0
         if stochastic:
             for i in range(6):
                 learning.trace[b, i] = S[_F_D0 + i, j]
@@ -1130,8 +1316,14 @@ def run_trials_lockstep(
     ended trial is frozen by a mask. The trial rules are :func:`judge`'s. Results
     equal the scalar kernel's up to the round-off of the polynomial sin/cos, which
     the chaotic swing-up can amplify over a trial (tests/test_lockstep.py states the
-    tolerance).
+    tolerance). It refuses (ValueError) the force hold, a force limit and a track:
+    run those with :func:`run_trials_batch`.
     """
+    if plant.hold_force or plant.max_force < math.inf or protocol.track < math.inf:
+        raise ValueError(
+            "run_trials_lockstep supports only u held, no force limit and no track: "
+            "use run_trials_batch for hold force, max_force or track"
+        )
     B = states0.shape[0]
     n_blocks = (B + LOCKSTEP_BLOCK - 1) // LOCKSTEP_BLOCK
     for i in prange(n_blocks):

@@ -30,6 +30,7 @@ MAX_STEPS = 10_000_000
 
 BalanceSign = Literal["corrected", "chapter"]
 SwitchKind = Literal["hard", "soft"]
+HoldKind = Literal["u", "force"]
 
 
 def as_float(name: str, value: object) -> float:
@@ -262,3 +263,47 @@ class Simulation:
     def initial_state(self) -> np.ndarray:
         """[x0, 0, theta0, 0]: at rest, as in the chapter's trials."""
         return np.array([self.x0, 0.0, self.theta0, 0.0], dtype=float)
+
+
+@dataclass(frozen=True)
+class Hardware:
+    """The motor and the track the chapter idealises away (docs/paper-notes.md section 9).
+
+    Attributes
+    ----------
+    hold : what the motor holds over a control step dt. ``"u"`` (default, the chapter's
+        idealisation): the commanded acceleration, as if the feedback linearisation of
+        eq 12 ran continuously. ``"force"``: a digital controller; the force f of eq 12 is
+        computed at the sample with the controller's model and held while the true
+        plant's eqs 8-9 integrate.
+    max_force : the motor's limit [N] (None: unlimited). With ``hold="force"`` the held
+        f is clipped; with ``hold="u"`` the force realising u is clipped at every RK4
+        stage, so the plant follows u only while |f| stays within the limit.
+    track : half-length of the track [m] (None: endless). |x| beyond it ends the trial
+        as a failure (end reason ``"track"``).
+    """
+
+    hold: HoldKind = "u"
+    max_force: float | None = None
+    track: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.hold not in ("u", "force"):
+            raise ParameterError(f"hold must be 'u' or 'force', got {self.hold!r}")
+        for name in ("max_force", "track"):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, require_finite_positive(name, value))
+
+    @property
+    def idealised(self) -> bool:
+        """True for the chapter's setting: u held, no force limit, no track."""
+        return self.hold == "u" and self.max_force is None and self.track is None
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready (None for no limit)."""
+        return asdict(self)
+
+
+#: The chapter's idealisation: u held over each step, no force limit, an endless track.
+CHAPTER_HARDWARE = Hardware()

@@ -14,7 +14,15 @@ import numpy as np
 
 from striatal import kernel
 from striatal.errors import ParameterError
-from striatal.params import Controller, Plant, Simulation, require_finite, require_finite_positive
+from striatal.params import (
+    CHAPTER_HARDWARE,
+    Controller,
+    Hardware,
+    Plant,
+    Simulation,
+    require_finite,
+    require_finite_positive,
+)
 
 
 @dataclass(frozen=True)
@@ -69,7 +77,10 @@ class SensorNoise:
 
 @dataclass(frozen=True)
 class TrialOutcome:
-    """What one trial returns. ``final_state`` has theta wrapped to (-pi, pi]."""
+    """What one trial returns. ``final_state`` has theta wrapped to (-pi, pi].
+
+    ``track``: the cart ran off the track (|x| > Hardware.track), which ends the trial.
+    """
 
     reward: float
     ended_at: float
@@ -82,6 +93,18 @@ class TrialOutcome:
     max_abs_x: float
     max_abs_force: float
     success: bool
+    track: bool = False
+
+    @property
+    def end_reason(self) -> str:
+        """Why the trial ended: fault, track, early (eq 24), success or failure (at T_f)."""
+        if self.fault:
+            return "fault"
+        if self.track:
+            return "track"
+        if self.early:
+            return "early"
+        return "success" if self.success else "failure"
 
     @classmethod
     def from_row(cls, out: np.ndarray, sim: Simulation) -> TrialOutcome:
@@ -94,6 +117,7 @@ class TrialOutcome:
         )
         fault = bool(out[kernel.OUT_FAULT])
         early = bool(out[kernel.OUT_EARLY])
+        track = bool(out[kernel.OUT_TRACK])
         return cls(
             reward=float(out[kernel.OUT_REWARD]),
             ended_at=float(out[kernel.OUT_END_STEP]) * sim.dt,
@@ -105,7 +129,11 @@ class TrialOutcome:
             n_switches=int(out[kernel.OUT_N_SWITCHES]),
             max_abs_x=float(out[kernel.OUT_MAX_ABS_X]),
             max_abs_force=float(out[kernel.OUT_MAX_ABS_FORCE]),
-            success=(not fault) and (not early) and sim.success.passed(np.array(final)),
+            success=(not fault)
+            and (not early)
+            and (not track)
+            and sim.success.passed(np.array(final)),
+            track=track,
         )
 
 
@@ -191,14 +219,19 @@ BatchArgs = tuple[
 ]
 
 
-def plant_args(plant: Plant, dt: float, model: Plant | None = None) -> kernel.PlantArgs:
-    """The true ``plant``, the controller's ``model`` of it (default: the same) and dt [s]."""
+def plant_args(
+    plant: Plant, dt: float, model: Plant | None = None, hardware: Hardware = CHAPTER_HARDWARE
+) -> kernel.PlantArgs:
+    """The true ``plant``, the controller's ``model`` of it (default: the same), dt [s] and
+    the motor of ``hardware`` (what it holds, its force limit)."""
     model_plant = plant if model is None else model
     return kernel.PlantArgs(
         plant=plant.as_array(),
         model=model_plant.as_array(),
         mismatch=model_plant != plant,
         dt=dt,
+        hold_force=hardware.hold == "force",
+        max_force=math.inf if hardware.max_force is None else hardware.max_force,
     )
 
 
@@ -217,8 +250,11 @@ def control_args(
     )
 
 
-def protocol_args(protocol: Protocol, dt: float, n_steps: int) -> kernel.ProtocolArgs:
-    """``protocol`` counted in steps of ``dt``, for a trial of ``n_steps`` steps."""
+def protocol_args(
+    protocol: Protocol, dt: float, n_steps: int, track: float | None = None
+) -> kernel.ProtocolArgs:
+    """``protocol`` counted in steps of ``dt``, for a trial of ``n_steps`` steps, on a
+    track of half-length ``track`` [m] (None: endless)."""
     return kernel.ProtocolArgs(
         n_steps=n_steps,
         check_step=protocol.check_step(dt),
@@ -228,6 +264,7 @@ def protocol_args(protocol: Protocol, dt: float, n_steps: int) -> kernel.Protoco
         goal_theta=protocol.goal_theta,
         reward_success=protocol.reward_success,
         reward_failure=protocol.reward_failure,
+        track=math.inf if track is None else track,
     )
 
 
@@ -249,6 +286,7 @@ def trial_args(
     gamma: float = 0.0,
     trace: np.ndarray | None = None,
     record: bool = False,
+    hardware: Hardware = CHAPTER_HARDWARE,
 ) -> TrialArgs:
     """The arguments of :func:`striatal.kernel.run_trial`, in its order.
 
@@ -256,18 +294,19 @@ def trial_args(
     ``sensor_noise`` (n_steps, 2): standard normals scaled by ``sensor``'s stds;
     ``gains`` / ``theta_c`` / ``state0`` override the controller's W, theta_c and
     the simulation's start state; ``trace`` (6,) is updated in place (default
-    zeros); ``record`` allocates the (n_steps + 1, N_TRAJ) trajectory. The kernel
-    writes ``args[-1].out`` and ``args[-1].traj``.
+    zeros); ``record`` allocates the (n_steps + 1, N_TRAJ) trajectory; ``hardware``: the
+    motor's hold and limit and the track (default: the chapter's idealisation). The
+    kernel writes ``args[-1].out`` and ``args[-1].traj``.
     """
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
     return (
         sim.initial_state if state0 is None else np.asarray(state0, dtype=float),
         kernel.Gains(W=W, theta_c=controller.theta_c if theta_c is None else float(theta_c)),
-        plant_args(plant, sim.dt, model),
+        plant_args(plant, sim.dt, model, hardware),
         control_args(
             controller, action_every=action_every, chapter_eligibility=chapter_eligibility
         ),
-        protocol_args(protocol, sim.dt, sim.n_steps),
+        protocol_args(protocol, sim.dt, sim.n_steps, hardware.track),
         kernel.NoiseArgs(
             action=np.empty(0) if noise is None else noise,
             sensor=np.empty((0, 2)) if sensor_noise is None else sensor_noise,
@@ -297,14 +336,16 @@ def batch_args(
     chapter_eligibility: bool = False,
     gamma: float = 0.0,
     traces: np.ndarray | None = None,
+    hardware: Hardware = CHAPTER_HARDWARE,
 ) -> BatchArgs:
     """The arguments of :func:`striatal.kernel.run_trials_batch`, in its order.
 
     B trials: ``gains`` (B, 6) and ``theta_c`` (B,) per trial; ``noise`` (B, n_draws)
     action normals (None: the mean policy); ``states0`` (B, 4) (default: the
     simulation's start state on every row); ``traces`` (B, 6) updated in place
-    (default zeros). ``controller`` gives the readings (sign, switch) only. The
-    kernel writes ``args[-1]`` (B, N_OUT).
+    (default zeros). ``controller`` gives the readings (sign, switch) only;
+    ``hardware`` as in :func:`trial_args` (run_trials_lockstep refuses all but the
+    default). The kernel writes ``args[-1]`` (B, N_OUT).
     """
     W = np.ascontiguousarray(gains, dtype=float)
     B = W.shape[0]
@@ -317,11 +358,11 @@ def batch_args(
     return (
         np.ascontiguousarray(s0, dtype=float),
         kernel.Gains(W=W, theta_c=tc),
-        plant_args(plant, sim.dt, model),
+        plant_args(plant, sim.dt, model, hardware),
         control_args(
             controller, action_every=action_every, chapter_eligibility=chapter_eligibility
         ),
-        protocol_args(protocol, sim.dt, sim.n_steps),
+        protocol_args(protocol, sim.dt, sim.n_steps, hardware.track),
         np.empty((B, 0)) if noise is None else noise,
         kernel.TraceArgs(gamma=gamma, trace=np.zeros((B, 6)) if traces is None else traces),
         np.empty((B, kernel.N_OUT)),
@@ -338,12 +379,14 @@ def simulate(
     model: Plant | None = None,
     sensor: SensorNoise = SensorNoise(),
     action_every: int = 1,
+    hardware: Hardware = CHAPTER_HARDWARE,
 ) -> Trajectory:
     """Record one run of the switching controller from ``sim.initial_state``.
 
     With ``rng`` None the mean policy acts (deterministic); with a generator the
     Gaussian policy of eq 5 draws its actions from it. ``model`` is the plant the
-    controller believes in (default: the true ``plant``).
+    controller believes in (default: the true ``plant``); ``hardware``: the motor's hold
+    and limit and the track (default: the chapter's idealisation).
     """
     noise, sensor_noise = _noise_arrays(sim, action_every, rng, sensor)
     args = trial_args(
@@ -357,6 +400,7 @@ def simulate(
         model=model,
         action_every=action_every,
         record=True,
+        hardware=hardware,
     )
     kernel.run_trial(*args)
     out, traj = args[-1]
@@ -386,6 +430,7 @@ def run_trial(
     model: Plant | None = None,
     sensor: SensorNoise = SensorNoise(),
     mean_policy: bool = False,
+    hardware: Hardware = CHAPTER_HARDWARE,
 ) -> TrialOutcome:
     """One trial of the protocol; the eligibility trace ``trace`` (6,) is updated in place.
 
@@ -408,6 +453,7 @@ def run_trial(
         sensor=sensor,
         mean_policy=mean_policy,
         record=False,
+        hardware=hardware,
     )
     return outcome
 
@@ -425,6 +471,7 @@ def recorded_trial(
     action_every: int = 1,
     chapter_eligibility: bool = False,
     model: Plant | None = None,
+    hardware: Hardware = CHAPTER_HARDWARE,
 ) -> tuple[TrialOutcome, np.ndarray]:
     """:func:`run_trial` that also returns the recorded rows (n, 8), columns kernel.TRAJ_COLUMNS.
 
@@ -445,6 +492,7 @@ def recorded_trial(
         sensor=SensorNoise(),
         mean_policy=False,
         record=True,
+        hardware=hardware,
     )
 
 
@@ -464,6 +512,7 @@ def _trial(
     sensor: SensorNoise,
     mean_policy: bool,
     record: bool,
+    hardware: Hardware = CHAPTER_HARDWARE,
 ) -> tuple[TrialOutcome, np.ndarray]:
     noise, sensor_noise = _noise_arrays(sim, action_every, rng, sensor, mean_policy)
     args = trial_args(
@@ -481,6 +530,7 @@ def _trial(
         gamma=gamma,
         trace=trace,
         record=record,
+        hardware=hardware,
     )
     kernel.run_trial(*args)
     out, traj = args[-1]

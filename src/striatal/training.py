@@ -19,6 +19,7 @@ import numpy as np
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import check_out_dir
 from striatal.learners import (
+    W1_FLOOR,
     History,
     LearnerState,
     TrainResult,
@@ -36,6 +37,7 @@ from striatal.params import (
     Controller,
     Plant,
     Simulation,
+    check_gains,
     check_seed,
 )
 from striatal.rollout import Trajectory
@@ -110,10 +112,25 @@ class Run:
         return payload
 
 
+def floor_w1(gains: Sequence[float]) -> tuple[float, ...]:
+    """The six gains with W1 floored at W1_FLOOR = 0.001, the guard of sqrt(W1 g) (eq 22).
+
+    The one treatment of W1 <= 0 in W(0), for ``init_gains`` as for ``init="random"``
+    (which draws W1 uniformly in [-1, 1] and floors it the same way; docs/paper-notes.md
+    section 11). Other values of W are checked (finite, six of them) and kept.
+    """
+    w = check_gains(gains, need_positive_w1=False)
+    return (max(w[0], W1_FLOOR), *w[1:])
+
+
 def initial_gains(init: str, seed: int, init_gains: Sequence[float] | None = None) -> tuple:
-    """W(0): ``init_gains``, the chapter's ("chapter") or uniform in [-1, 1]^6 ("random")."""
+    """W(0): ``init_gains``, the chapter's ("chapter") or uniform in [-1, 1]^6 ("random").
+
+    W1 <= W1_FLOOR is floored at W1_FLOOR in both ``init_gains`` and the random draw
+    (:func:`floor_w1`), so every random starting point can also be given by hand.
+    """
     if init_gains is not None:
-        return tuple(float(w) for w in init_gains)
+        return floor_w1(init_gains)
     if init == "chapter":
         return CHAPTER_INITIAL_W
     if init == "random":
@@ -147,6 +164,9 @@ def _fresh_setup(
         init="gains" if init_gains is not None else init,
         W0=W0,
     )
+    if init_gains is not None and float(init_gains[0]) < W1_FLOOR:
+        # the floor is recorded (this key only appears when it acted: older run ids stay)
+        settings["w1_floored_from"] = float(init_gains[0])
     return settings, setup_of(settings, "the options")
 
 
@@ -184,7 +204,7 @@ def _resume_changes(
         if name not in have:
             differ.append(f"{_flag(name)} (no such setting)")
         elif name == "init_gains":
-            if have[name] is None or tuple(float(w) for w in value) != have[name]:
+            if have[name] is None or floor_w1(value) != have[name]:
                 differ.append(f"{_flag(name)}")
         elif value != have[name]:
             differ.append(f"{_flag(name)} (the run has {have[name]!r})")
@@ -412,7 +432,8 @@ def simulate(
 
     Defaults: the chapter's plant, its learned W and theta_c (``--chapter-final``),
     60 s from theta = 3.12 at rest, the mean policy. ``kwargs`` go to
-    :func:`striatal.rollout.simulate` (protocol, rng, model, sensor, action_every).
+    :func:`striatal.rollout.simulate` (protocol, rng, model, sensor, action_every,
+    hardware: the motor's hold and limit and the track, docs/paper-notes.md section 10).
     """
     return _simulate(
         plant or Plant(),

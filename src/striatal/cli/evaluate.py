@@ -8,6 +8,7 @@ import sys
 from striatal.cli import options
 from striatal.errors import ParameterError
 from striatal.files import dumps_json
+from striatal.params import Controller, Plant, Simulation
 from striatal.rollout import Protocol
 
 COMMAND = "evaluate"
@@ -19,7 +20,10 @@ DESCRIPTION = (
     "the noisy trial as striatal train does (docs/paper-notes.md section 8). Prints the "
     "pass rate with its Wilson 95 % interval, the share that earned the +10 of eq 25, and "
     "the verdict of the mean policy. Gains: --chapter-final (default), --chapter-initial, "
-    "--gains with --theta-c, or --result result.json of striatal train."
+    "--gains with --theta-c, or --result result.json of striatal train. --hold force, "
+    "--max-force and --track add the digital motor, its limit and a finite track "
+    "(docs/paper-notes.md section 9). --robust instead runs the robustness set (9 "
+    "mean-policy runs, force held) and reports robust yes/no and the cases failed."
 )
 
 
@@ -45,6 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=_count, default=0, help="seed of the noise generator")
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    options.add_hardware_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -56,14 +61,20 @@ def run(args: argparse.Namespace) -> int:
     # the result.json reader lives with the CLI options for now
     controller, plant = options.controller_and_plant(args)
     sim = options.simulation_from(args)
+    hardware = options.hardware_from(args)
+    if args.robust:
+        return _robust(args, controller, plant, sim)
     if sim.duration < Protocol().check_time:
         raise ParameterError(
             f"--duration must be at least the {Protocol().check_time:g}-s check of eq 24"
         )
-    res = pass_probability(plant, controller, sim, Protocol(), args.draws, args.seed)
+    res = pass_probability(
+        plant, controller, sim, Protocol(), args.draws, args.seed, hardware=hardware
+    )
     if args.json:
         out = res.to_dict()
         out["duration"] = sim.duration
+        out["hardware"] = hardware.to_dict()
         out["success_test"] = (
             "|theta|<0.05, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.005 at T_f, on the noisy trial"
         )
@@ -80,8 +91,32 @@ def run(args: argparse.Namespace) -> int:
         f"{100 * res.reward_positive / res.draws:.3g} %"
     )
     print(f"mean policy (no noise) passes: {'yes' if res.mean_policy_pass else 'no'}")
+    if not hardware.idealised:
+        print(
+            f"motor: {hardware.hold} held; max force: "
+            f"{'none' if hardware.max_force is None else f'{hardware.max_force:g} N'}; "
+            f"track: {'endless' if hardware.track is None else f'{hardware.track:g} m'}"
+        )
     print(
         f"gains W = {list(res.gains)}, theta_c = {res.theta_c:g}, seed {res.seed}; "
         f"{res.simulations} simulations, {res.simulated_seconds:.6g} simulated s"
+    )
+    return 0
+
+
+def _robust(args: argparse.Namespace, controller: Controller, plant: Plant, sim: Simulation) -> int:
+    """``evaluate --robust``: the verdict of the robustness set and the cases failed."""
+    from striatal.cli.simulate import run_robust
+
+    report = run_robust(args, controller, plant, sim)
+    if args.json:
+        sys.stdout.write(dumps_json(report.to_dict()))
+        return 0
+    print(f"robust: {'yes' if report.robust else 'no'}")
+    if report.failed:
+        print("cases failed: " + "; ".join(report.failed))
+    print(
+        f"{report.simulations} mean-policy runs of {report.duration:g} s, force held; "
+        "striatal simulate --robust prints every case"
     )
     return 0

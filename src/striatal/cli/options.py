@@ -15,6 +15,8 @@ from striatal.params import (
     CHAPTER_INITIAL_W,
     CHAPTER_THETA0,
     Controller,
+    Hardware,
+    HoldKind,
     Plant,
     Simulation,
     check_gains,
@@ -140,6 +142,58 @@ def add_simulation_arguments(parser: argparse.ArgumentParser, *, duration: float
 
 def simulation_from(args: argparse.Namespace) -> Simulation:
     return Simulation(theta0=args.theta0, x0=args.x0, duration=args.duration, dt=args.dt)
+
+
+def add_hardware_arguments(parser: argparse.ArgumentParser) -> None:
+    """--hold, --max-force, --track and --robust (docs/paper-notes.md section 9)."""
+    g = parser.add_argument_group("motor and track (docs/paper-notes.md section 9)")
+    g.add_argument(
+        "--hold",
+        choices=("u", "force"),
+        default=None,
+        help="what the motor holds over each step dt: 'u' (default, the chapter's "
+        "idealisation) or 'force' (eq 12 computed at the sample with the controller's "
+        "model, held while the plant's eqs 8-9 integrate)",
+    )
+    g.add_argument(
+        "--max-force",
+        type=float,
+        default=None,
+        metavar="F",
+        help="motor limit [N]: the force is clipped to [-F, F] (default: none)",
+    )
+    g.add_argument(
+        "--track",
+        type=float,
+        default=None,
+        metavar="L",
+        help="track half-length [m]: |x| > L ends the run as a failure (default: none)",
+    )
+    g.add_argument(
+        "--robust",
+        action="store_true",
+        help="run the robustness set (force held; nominal plant, the four pole mass x "
+        "length corners at x0.8/x1.2, theta0 = pi -/+ 0.3, x0 = -/+ 0.5 m; 9 runs of "
+        "60 s, mean policy) instead of one run; --max-force and --track apply to every case",
+    )
+
+
+def hardware_from(args: argparse.Namespace) -> Hardware:
+    """The motor and track of --hold/--max-force/--track (with --robust: the force held)."""
+    if args.robust and args.hold == "u":
+        raise ParameterError("--robust always holds the force: drop --hold u")
+    hold: HoldKind = "force" if args.robust or args.hold == "force" else "u"
+    return Hardware(hold=hold, max_force=args.max_force, track=args.track)
+
+
+def check_robust_run(args: argparse.Namespace) -> None:
+    """--robust sets its own starts and T_f: refuse the run options that it would ignore."""
+    defaults = {"theta0": CHAPTER_THETA0, "x0": 0.0, "duration": 60.0}
+    given = [f"--{k.replace('_', '-')}" for k, v in defaults.items() if getattr(args, k) != v]
+    if given:
+        raise ParameterError(
+            f"--robust sets the starts and T_f = 60 s itself: drop {', '.join(given)}"
+        )
 
 
 def json_ready(obj: Any) -> Any:

@@ -28,7 +28,8 @@ DESCRIPTION = (
     "Learn the six gains and theta_c with the chapter's REINFORCE rule (eqs 1-5, 21-25): "
     "60-s trials from theta = 3.12 at rest, a Gaussian policy, eligibility traces and the "
     "sparse reward, until the chapter's success test holds or --max-trials. "
-    "--init random draws W(0) uniformly in [-1, 1]^6 (W1 floored at 0.001) from the seed. "
+    "--init random draws W(0) uniformly in [-1, 1]^6 from the seed; there and in "
+    "--init-gains a W1 below 0.001 is floored at 0.001 (docs/paper-notes.md section 11). "
     "--learner rpe / pgpe select the variants beyond the chapter (docs/ablation.md); "
     "unset learning options take the chosen learner's defaults."
 )
@@ -44,7 +45,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="chapter: W(0) of the chapter; random: uniform in [-1, 1]^6 drawn from --seed",
     )
     start.add_argument(
-        "--init-gains", type=float, nargs=6, metavar=("W1", "W2", "W3", "W4", "W5", "W6")
+        "--init-gains",
+        type=float,
+        nargs=6,
+        metavar=("W1", "W2", "W3", "W4", "W5", "W6"),
+        help="W(0) given by hand; W1 < 0.001 is floored at 0.001, as --init random does",
     )
     g.add_argument(
         "--theta-c0", type=float, default=CHAPTER_INITIAL_THETA_C, help="theta_c(0) [rad]"

@@ -1,0 +1,191 @@
+"""The robustness set of GitHub issue 15: does a controller work from any start?
+
+A controller is *robust* when its mean policy passes the chapter's success test at
+T_f = 60 s (end of section 2.4) in every case of :data:`ROBUST_CASES`, all run with
+the motor force of eq 12 held over each 10-ms step (``Hardware(hold="force")``,
+docs/paper-notes.md section 9) and the controller keeping its nominal model:
+
+1. the nominal plant from the chapter's start (theta0 = 3.12 rad, at rest);
+2. the four plant corners: pole mass and length each x0.8 and x1.2 (the true plant
+   changes, the controller's model does not);
+3. other starts: theta0 = pi - 0.3 and pi + 0.3 rad (x0 = 0); x0 = -0.5 and +0.5 m
+   (theta0 = 3.12); everything else at rest.
+
+Nine simulations, no exploration noise and no eq-24 check (a plain run judged at
+T_f, as ``striatal simulate`` does). A force limit or a track, when given, applies to
+every case.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation
+from striatal.rollout import NO_PROTOCOL, simulate
+
+#: The chapter's final time T_f [s] of the robust test.
+ROBUST_DURATION = 60.0
+
+
+@dataclass(frozen=True)
+class RobustCase:
+    """One case: the true plant's pole mass and length factors and the start (at rest)."""
+
+    name: str
+    pole_mass: float = 1.0
+    length: float = 1.0
+    theta0: float = CHAPTER_THETA0
+    x0: float = 0.0
+
+
+#: The nine cases of the robustness set (module docstring).
+ROBUST_CASES: tuple[RobustCase, ...] = (
+    RobustCase("nominal"),
+    RobustCase("pole mass x0.8, length x0.8", pole_mass=0.8, length=0.8),
+    RobustCase("pole mass x0.8, length x1.2", pole_mass=0.8, length=1.2),
+    RobustCase("pole mass x1.2, length x0.8", pole_mass=1.2, length=0.8),
+    RobustCase("pole mass x1.2, length x1.2", pole_mass=1.2, length=1.2),
+    RobustCase("theta0 = pi - 0.3", theta0=math.pi - 0.3),
+    RobustCase("theta0 = pi + 0.3", theta0=math.pi + 0.3),
+    RobustCase("x0 = -0.5 m", x0=-0.5),
+    RobustCase("x0 = +0.5 m", x0=0.5),
+)
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    """The mean-policy run of one case: success test at T_f, how it ended, its extremes."""
+
+    case: RobustCase
+    success: bool
+    end_reason: str
+    ended_at: float
+    final_state: tuple[float, float, float, float]
+    max_abs_x: float
+    max_abs_force: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "case": self.case.name,
+            "pole_mass_factor": self.case.pole_mass,
+            "length_factor": self.case.length,
+            "theta0": self.case.theta0,
+            "x0": self.case.x0,
+            "success": self.success,
+            "end_reason": self.end_reason,
+            "ended_at": self.ended_at,
+            "final_state": list(self.final_state),
+            "max_abs_x": self.max_abs_x,
+            "max_abs_force": self.max_abs_force,
+        }
+
+
+@dataclass(frozen=True)
+class RobustReport:
+    """Every case's result; ``robust`` when all pass. ``simulations``: runs made."""
+
+    controller: Controller
+    plant: Plant
+    hardware: Hardware
+    duration: float
+    dt: float
+    cases: tuple[CaseResult, ...]
+
+    @property
+    def robust(self) -> bool:
+        return all(c.success for c in self.cases)
+
+    @property
+    def failed(self) -> tuple[str, ...]:
+        """Names of the cases whose mean-policy run fails the success test."""
+        return tuple(c.case.name for c in self.cases if not c.success)
+
+    @property
+    def simulations(self) -> int:
+        return len(self.cases)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "robust": self.robust,
+            "failed": list(self.failed),
+            "simulations": self.simulations,
+            "duration": self.duration,
+            "dt": self.dt,
+            "hardware": self.hardware.to_dict(),
+            "controller": self.controller.to_dict(),
+            "nominal_plant": {
+                "cart_mass": self.plant.cart_mass,
+                "pole_mass": self.plant.pole_mass,
+                "length": self.plant.length,
+                "gravity": self.plant.gravity,
+            },
+            "policy": "mean (no exploration noise)",
+            "success_test": "|theta|<0.05, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.005 at T_f",
+            "cases": [c.to_dict() for c in self.cases],
+        }
+
+
+def robust_hardware(max_force: float | None = None, track: float | None = None) -> Hardware:
+    """The motor of the robustness set: the force held, with an optional limit and track."""
+    return Hardware(hold="force", max_force=max_force, track=track)
+
+
+def run_case(
+    controller: Controller,
+    case: RobustCase,
+    *,
+    plant: Plant | None = None,
+    hardware: Hardware | None = None,
+    duration: float = ROBUST_DURATION,
+    dt: float = 0.01,
+) -> CaseResult:
+    """The mean-policy run of one case: the true plant is ``plant`` scaled by the case,
+    the controller's model is ``plant`` itself (default: the chapter's plant)."""
+    nominal = plant or Plant()
+    hw = hardware or robust_hardware()
+    true_plant = nominal.scaled(pole_mass=case.pole_mass, length=case.length)
+    sim = Simulation(theta0=case.theta0, x0=case.x0, duration=duration, dt=dt)
+    o = simulate(true_plant, controller, sim, protocol=NO_PROTOCOL, model=nominal, hardware=hw)
+    outcome = o.outcome
+    return CaseResult(
+        case=case,
+        success=outcome.success,
+        end_reason=outcome.end_reason,
+        ended_at=outcome.ended_at,
+        final_state=outcome.final_state,
+        max_abs_x=outcome.max_abs_x,
+        max_abs_force=outcome.max_abs_force,
+    )
+
+
+def check_robust(
+    controller: Controller,
+    *,
+    plant: Plant | None = None,
+    max_force: float | None = None,
+    track: float | None = None,
+    duration: float = ROBUST_DURATION,
+    dt: float = 0.01,
+    cases: tuple[RobustCase, ...] = ROBUST_CASES,
+) -> RobustReport:
+    """Run every case of the robustness set (module docstring) and report.
+
+    ``plant``: the nominal plant, which the controller keeps as its model (default:
+    the chapter's); ``max_force`` [N] and ``track`` [m]: a motor limit and a track
+    for every case (default: none). Deterministic: no random draws.
+    """
+    nominal = plant or Plant()
+    hw = robust_hardware(max_force, track)
+    results = tuple(
+        run_case(controller, c, plant=nominal, hardware=hw, duration=duration, dt=dt) for c in cases
+    )
+    return RobustReport(
+        controller=controller,
+        plant=nominal,
+        hardware=hw,
+        duration=duration,
+        dt=dt,
+        cases=results,
+    )
