@@ -23,7 +23,7 @@ from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Plant
 from striatal.rollout import TrialOutcome
 
-__all__ = ["CHAPTER", "ChapterConfig", "ChapterRule", "gain_update", "policy_trace"]
+__all__ = ["CHAPTER", "ChapterConfig", "ChapterRule", "gain_update", "policy_plan", "policy_trace"]
 
 
 @dataclass(frozen=True)
@@ -74,6 +74,19 @@ def policy_trace(state: LearnerState, reset: bool) -> np.ndarray:
     return np.array(old, dtype=float)
 
 
+def policy_plan(state: LearnerState, config: LearnerConfig, rng: np.random.Generator) -> TrialPlan:
+    """A trial of the Gaussian policy (eq 5) with the state's W and theta_c, its trace
+    D (eq 3) carried over or reset: the plan of every rule that explores per step."""
+    return TrialPlan(
+        W=np.array(state.W, dtype=float),
+        theta_c=state.theta_c,
+        trace=policy_trace(state, config.reset_trace),
+        gamma=config.gamma,
+        rng=rng,
+        eligibility=config.eligibility,
+    )
+
+
 def finite_trace(trace: np.ndarray) -> tuple[float, ...]:
     """The trace to carry over: itself, or 0 if the trial left it non-finite."""
     if not np.all(np.isfinite(trace)):
@@ -95,14 +108,7 @@ class ChapterRule(Rule):
     def plan(
         self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
     ) -> TrialPlan:
-        return TrialPlan(
-            W=np.array(state.W, dtype=float),
-            theta_c=state.theta_c,
-            trace=policy_trace(state, config.reset_trace),
-            gamma=config.gamma,
-            rng=rng,
-            eligibility=config.eligibility,
-        )
+        return policy_plan(state, config, rng)
 
     def update(
         self,

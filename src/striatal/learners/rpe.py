@@ -17,7 +17,7 @@ import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.kernel import sigma_of
-from striatal.learners.chapter import finite_trace, policy_trace
+from striatal.learners.chapter import finite_trace, policy_plan
 from striatal.learners.common import (
     baseline_memory,
     prediction_error,
@@ -77,14 +77,7 @@ class RpeRule(Rule):
     def plan(
         self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
     ) -> TrialPlan:
-        return TrialPlan(
-            W=np.array(state.W, dtype=float),
-            theta_c=state.theta_c,
-            trace=policy_trace(state, config.reset_trace),
-            gamma=config.gamma,
-            rng=rng,
-            eligibility=config.eligibility,
-        )
+        return policy_plan(state, config, rng)
 
     def update(
         self,
