@@ -291,3 +291,26 @@ def test_instance_lists_human_only_with_pygame(monkeypatch: pytest.MonkeyPatch) 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         check_env(env.unwrapped)
+
+
+@pytest.mark.parametrize(
+    "code",
+    [
+        "import striatal.envs",
+        "from striatal.envs import SwitchingController",
+        "import striatal.envs.task",
+        "import striatal, gymnasium; gymnasium.make('striatal/CartPoleSwingUp-v0')",
+        "import gymnasium, striatal; gymnasium.make('striatal/CartPoleSwingUpDense-v0')",
+    ],
+)
+def test_envs_import_in_a_fresh_process_in_any_order(code: str) -> None:
+    """The hook that registers the ids when Gymnasium loads must not run into a half
+    imported striatal.envs (its cartpole module is what imports Gymnasium)."""
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-c", f"{code}; print('ok')"], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "ok"

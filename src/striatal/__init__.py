@@ -97,7 +97,9 @@ def __dir__() -> list[str]:
 
 
 def _register_env() -> None:
-    from striatal.envs import register_envs
+    # the submodule, not the package: striatal.envs may be half imported here (its
+    # cartpole module importing Gymnasium is what fired the hook)
+    from striatal.envs.registration import register_envs
 
     register_envs()
 

@@ -33,6 +33,18 @@ from striatal.params import (
     Simulation,
 )
 
+__all__ = [
+    "VARIANTS",
+    "VARIANT_NAMES",
+    "Variant",
+    "build",
+    "markdown_table",
+    "runs_of",
+    "summary",
+    "table_rows",
+    "variant",
+]
+
 
 @dataclass(frozen=True)
 class Variant:

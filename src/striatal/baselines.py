@@ -72,6 +72,20 @@ from striatal.params import (
 )
 from striatal.rollout import Protocol, recorded_trial, run_trial
 
+__all__ = [
+    "BASELINES",
+    "LQR_Q",
+    "LQR_R",
+    "RANDOM_BOX",
+    "LqrFit",
+    "cmaes",
+    "fixed_controller",
+    "lqr_controller",
+    "lqr_fit",
+    "lqr_gain",
+    "random_search",
+]
+
 BASELINES: tuple[str, ...] = ("lqr", "hand", "random", "cmaes")
 
 #: LQR weights on (x, x_dot, theta, theta_dot) and on u.

@@ -26,6 +26,20 @@ from striatal.errors import ParameterError
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
 from striatal.rollout import Protocol
 
+__all__ = [
+    "BENCHMARKS_ENV",
+    "TRACE_GAMMA",
+    "TrialSetup",
+    "benchmarks_dir",
+    "cache_misses",
+    "calibrate",
+    "load_harness",
+    "run_batch_trials",
+    "run_kernel_trial",
+    "run_scalar_trial",
+    "timed",
+]
+
 #: The eligibility-trace discount of the chapter's learner (LearnerConfig.gamma).
 TRACE_GAMMA = 0.999
 

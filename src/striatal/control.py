@@ -12,6 +12,14 @@ import numpy as np
 from striatal.dynamics import energy_error, wrap_angle
 from striatal.params import Controller, Plant
 
+__all__ = [
+    "balancing_gain_matrix",
+    "balancing_mean",
+    "mean_action",
+    "swingup_mean",
+    "switch_weights",
+]
+
 
 def balancing_mean(state: np.ndarray, W: np.ndarray, plant: Plant, sign: float = 1.0) -> np.ndarray:
     """mu_1, eq 22: sign ((1 + W1 l) g theta + 2 l sqrt(W1 g) theta_dot) - W2 x - W3 x_dot.

@@ -12,6 +12,18 @@ import numpy as np
 from striatal import kernel
 from striatal.params import Plant
 
+__all__ = [
+    "accelerations",
+    "derivative",
+    "energy_error",
+    "force",
+    "force_level_accelerations",
+    "linearization",
+    "pendulum_energy",
+    "rk4_step",
+    "wrap_angle",
+]
+
 
 def accelerations(state: np.ndarray, u: np.ndarray | float, plant: Plant) -> np.ndarray:
     """(..., 2) [x_ddot, theta_ddot] under partial feedback linearization, eqs 13-14."""

@@ -2,6 +2,13 @@
 
 from __future__ import annotations
 
+__all__ = [
+    "DataFileError",
+    "MissingExtraError",
+    "ParameterError",
+    "StriatalError",
+]
+
 
 class StriatalError(ValueError):
     """Base class: an input or a file that striatal cannot use, with a message a user can act on."""

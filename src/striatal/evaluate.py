@@ -30,6 +30,13 @@ from striatal.params import (
 from striatal.rollout import Protocol, SensorNoise, run_trial
 from striatal.stats import wilson_interval
 
+__all__ = [
+    "MAX_DRAWS",
+    "PassProbability",
+    "check_draws",
+    "pass_probability",
+]
+
 #: Most noise draws one estimate may take: at ~2 ms a 60-s trial, about half an hour.
 MAX_DRAWS = 1_000_000
 

@@ -62,6 +62,43 @@ from striatal.params import CHAPTER_INITIAL_W, N_GAINS, Controller, Plant, Simul
 from striatal.rollout import Protocol, simulate
 from striatal.rundir import RunDir
 
+__all__ = [
+    "CONNECT_TIMEOUT",
+    "CONTROL_ARM",
+    "EVAL_DRAWS",
+    "METHODS",
+    "NOTE_BUDGET",
+    "NOTE_CONTROL",
+    "ROLES",
+    "RUN_COLUMNS",
+    "WATCHDOG_SECONDS",
+    "Arm",
+    "Backend",
+    "Init",
+    "RunSpec",
+    "SweepResult",
+    "arm_label",
+    "arm_statistics",
+    "bootstrap_rng",
+    "build_specs",
+    "control_note",
+    "execute",
+    "initial_gains",
+    "json_roundtrip",
+    "learning_run",
+    "markdown_table",
+    "read_runs",
+    "row_text",
+    "run_one",
+    "search",
+    "sort_rows",
+    "spawn_seeds",
+    "specs_of",
+    "summarise",
+    "sweep",
+    "wait_for_address",
+]
+
 Init = Literal["chapter", "random"]
 Backend = Literal["local", "ray"]
 METHODS: tuple[str, ...] = ("learn", *baselines.BASELINES)

@@ -22,6 +22,23 @@ if TYPE_CHECKING:
 
 from striatal.errors import DataFileError
 
+__all__ = [
+    "MAX_INPUT_BYTES",
+    "array_rows",
+    "atomic_write_stream",
+    "atomic_write_text",
+    "check_no_dangling_link",
+    "check_out_dir",
+    "csv_text",
+    "dumps_json",
+    "read_csv",
+    "read_json",
+    "read_text",
+    "replace_into",
+    "write_csv",
+    "write_json",
+]
+
 
 def check_out_dir(path: str | os.PathLike[str], files: Sequence[str] = ()) -> Path:
     """``path`` as a Path if it is, or can be made, a writable folder; creates nothing.

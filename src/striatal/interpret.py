@@ -20,6 +20,21 @@ import numpy as np
 from striatal.errors import ParameterError
 from striatal.params import Plant, check_gains, check_theta_c
 
+__all__ = [
+    "CHAPTER_PRINTED_MU1",
+    "CHAPTER_PRINTED_MU2",
+    "SIGN_NOTE",
+    "Pathway",
+    "Plasticity",
+    "Term",
+    "balancing_terms",
+    "linear_form",
+    "pathway",
+    "plasticity_table",
+    "reading",
+    "swingup_terms",
+]
+
 Pathway = Literal["direct", "indirect", "silent"]
 
 #: mu_1 as section 4 prints it, for the chapter's final W (coefficients of theta,

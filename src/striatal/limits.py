@@ -12,6 +12,10 @@ import math
 
 from striatal.errors import ParameterError
 
+__all__ = [
+    "count_of_steps",
+]
+
 
 def count_of_steps(span: float, step: float, *, cap: int, what: str, fix: str) -> int:
     """``floor(span / step) + 1``: the points 0, step, 2 step, ... <= span, at most ``cap``.

@@ -15,6 +15,32 @@ import numpy as np
 
 from striatal.errors import ParameterError
 
+__all__ = [
+    "CHAPTER_FINAL_THETA_C",
+    "CHAPTER_FINAL_W",
+    "CHAPTER_HARDWARE",
+    "CHAPTER_INITIAL_THETA_C",
+    "CHAPTER_INITIAL_W",
+    "CHAPTER_THETA0",
+    "MAX_STEPS",
+    "N_GAINS",
+    "BalanceSign",
+    "Controller",
+    "Hardware",
+    "HoldKind",
+    "Plant",
+    "Simulation",
+    "SuccessTest",
+    "SwitchKind",
+    "as_float",
+    "check_dt",
+    "check_gains",
+    "check_seed",
+    "check_theta_c",
+    "require_finite",
+    "require_finite_positive",
+]
+
 #: W(0) of the chapter's run (section 3), with theta_c(0) = 0.6.
 CHAPTER_INITIAL_W: tuple[float, ...] = (0.6813, -0.3795, -0.8318, 0.5028, 0.7095, 0.4289)
 CHAPTER_INITIAL_THETA_C = 0.6

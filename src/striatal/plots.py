@@ -25,6 +25,39 @@ from striatal.learners import History
 from striatal.limits import count_of_steps
 from striatal.rundir import read_history as read_history
 
+__all__ = [
+    "BALANCING_COLOUR",
+    "MAX_FRAMES",
+    "MAX_SNAPSHOTS",
+    "MAX_TRACK",
+    "POSE_GAP",
+    "ROW_HEIGHT",
+    "ROW_SECONDS",
+    "RULE_PANELS",
+    "SNAPSHOT_EVERY",
+    "SWINGUP_COLOUR",
+    "VIEW_LIMIT",
+    "Figure5Parts",
+    "animation_frames",
+    "check_image_path",
+    "display_theta",
+    "ffmpeg_path",
+    "figure5",
+    "figure5_caption",
+    "final_upright",
+    "frame_times",
+    "gains_title",
+    "learning_curves",
+    "performance_profiles",
+    "pole_tip",
+    "running_mean",
+    "save_animation",
+    "save_figure",
+    "snapshot_indices",
+    "snapshot_layout",
+    "switch_figure",
+]
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 

@@ -15,6 +15,15 @@ import numpy as np
 from striatal.control import mean_action
 from striatal.params import Controller, Plant
 
+__all__ = [
+    "eligibilities",
+    "log_prob",
+    "log_prob_of",
+    "mean_gradient",
+    "rescaling",
+    "sigma",
+]
+
 
 def sigma(w6: np.ndarray | float) -> np.ndarray:
     """sigma = 0.1 + 1 / (1 + exp(-W6)), eqs 22-23."""

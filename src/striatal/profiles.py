@@ -32,6 +32,18 @@ from striatal.errors import DataFileError, ParameterError
 from striatal.files import read_text
 from striatal.stats import wilson_interval
 
+__all__ = [
+    "NOTE_TRIALS_FALLBACK",
+    "X_COLUMNS",
+    "X_LABELS",
+    "Profile",
+    "SweepRun",
+    "choose_x",
+    "performance_profile",
+    "read_sweep_runs",
+    "sweep_profiles",
+]
+
 #: The costs a profile can be drawn against, in order of preference.
 X_COLUMNS: tuple[str, ...] = ("simulations", "simulated_seconds", "trials")
 X_LABELS: Mapping[str, str] = {

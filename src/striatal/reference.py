@@ -14,6 +14,10 @@ from striatal.params import Controller, Plant, Simulation
 from striatal.policy import eligibilities, sigma
 from striatal.rollout import Protocol
 
+__all__ = [
+    "reference_trial",
+]
+
 
 def reference_trial(
     plant: Plant,

@@ -15,6 +15,12 @@ from PIL import Image, ImageDraw, ImageFont
 from striatal.errors import ParameterError
 from striatal.params import Plant
 
+__all__ = [
+    "MODE_LABELS",
+    "cartpole_frame",
+    "follow_camera",
+]
+
 #: Text shown for the active controller, by kernel mode (0 swing-up, 1 balancing).
 MODE_LABELS = {0: "swing-up", 1: "balancing"}
 

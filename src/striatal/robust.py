@@ -25,6 +25,17 @@ from typing import Any
 from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation
 from striatal.rollout import NO_PROTOCOL, simulate
 
+__all__ = [
+    "ROBUST_CASES",
+    "ROBUST_DURATION",
+    "CaseResult",
+    "RobustCase",
+    "RobustReport",
+    "check_robust",
+    "robust_hardware",
+    "run_case",
+]
+
 #: The chapter's final time T_f [s] of the robust test.
 ROBUST_DURATION = 60.0
 

@@ -23,6 +23,14 @@ from striatal.params import N_GAINS, Controller, Plant, Simulation, check_seed
 from striatal.rollout import Protocol, SensorNoise, run_trial
 from striatal.rundir import result_of
 
+__all__ = [
+    "CONDITIONS",
+    "Condition",
+    "controller_groups",
+    "evaluate",
+    "robustness_table",
+]
+
 
 @dataclass(frozen=True)
 class Condition:

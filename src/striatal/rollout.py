@@ -24,6 +24,24 @@ from striatal.params import (
     require_finite_positive,
 )
 
+__all__ = [
+    "NO_PROTOCOL",
+    "BatchArgs",
+    "Protocol",
+    "SensorNoise",
+    "Trajectory",
+    "TrialArgs",
+    "TrialOutcome",
+    "batch_args",
+    "control_args",
+    "plant_args",
+    "protocol_args",
+    "recorded_trial",
+    "run_trial",
+    "simulate",
+    "trial_args",
+]
+
 
 @dataclass(frozen=True)
 class Protocol:

@@ -30,6 +30,25 @@ from scipy import stats as sps
 
 from striatal.errors import ParameterError
 
+__all__ = [
+    "CONFIDENCE",
+    "COSTS",
+    "N_RESAMPLES",
+    "FisherResult",
+    "Interval",
+    "McNemarResult",
+    "SeedRecord",
+    "arm_summary",
+    "bootstrap_interval",
+    "compare_arms",
+    "cost_summary",
+    "fisher_test",
+    "iqm",
+    "mcnemar_test",
+    "median",
+    "wilson_interval",
+]
+
 CONFIDENCE = 0.95
 #: Resamples of every bootstrap interval; 9999 is scipy's default.
 N_RESAMPLES = 9999

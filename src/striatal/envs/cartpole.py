@@ -22,6 +22,22 @@ from striatal.envs.task import SwingUpTask, observe, outcome, start_state
 from striatal.errors import MissingExtraError, ParameterError
 from striatal.render import cartpole_frame, follow_camera
 
+__all__ = [
+    "RENDER_HEIGHT",
+    "RENDER_WIDTH",
+    "CartPoleSwingUpEnv",
+    "HumanWindow",
+    "action_space",
+    "check_render_mode",
+    "clip_action",
+    "env_frame",
+    "import_pygame",
+    "make_env",
+    "observation_space",
+    "pygame_available",
+    "view",
+]
+
 RENDER_WIDTH = 600
 RENDER_HEIGHT = 400
 

@@ -24,6 +24,10 @@ from striatal.params import (
     SwitchKind,
 )
 
+__all__ = [
+    "SwitchingController",
+]
+
 
 class SwitchingController:
     """``policy(obs) -> action``: the switching controller of sections 2.2-2.3.

@@ -27,6 +27,23 @@ from striatal.params import (
 )
 from striatal.rollout import Protocol, protocol_args
 
+__all__ = [
+    "DEFAULT_U_MAX",
+    "OBSERVATION_NAMES",
+    "RESET_OPTIONS",
+    "ObservationKind",
+    "RewardKind",
+    "SwingUpTask",
+    "check_perturbation",
+    "check_reset_options",
+    "check_state",
+    "dense_reward",
+    "observe",
+    "outcome",
+    "start_state",
+    "wrap",
+]
+
 ObservationKind = Literal["trig", "raw"]
 RewardKind = Literal["chapter", "dense"]
 

@@ -32,6 +32,10 @@ from striatal.envs.task import (
 )
 from striatal.errors import ParameterError
 
+__all__ = [
+    "CartPoleSwingUpVectorEnv",
+]
+
 
 class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     """``num_envs`` independent swing-up environments on the batched kernel.

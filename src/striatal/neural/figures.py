@@ -10,6 +10,13 @@ from striatal import kernel
 from striatal.interpret import balancing_terms, swingup_terms
 from striatal.params import Controller, Plant
 
+__all__ = [
+    "EXCITATORY",
+    "INHIBITORY",
+    "activity_figure",
+    "circuit_figure",
+]
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 

@@ -23,6 +23,18 @@ from striatal.errors import ParameterError
 from striatal.interpret import Term, balancing_terms, swingup_terms
 from striatal.params import Controller, Plant
 
+__all__ = [
+    "MIN_PER_POPULATION",
+    "SENSED",
+    "SHARES",
+    "Handles",
+    "NetworkConfig",
+    "Selection",
+    "build",
+    "criterion",
+    "require_nengo",
+]
+
 Selection = Literal["cerebellum", "basal-ganglia"]
 
 #: Sensed-state layout of the plant Node's output and of the sensor input of the network.

@@ -12,6 +12,18 @@ from striatal import kernel
 from striatal.neural.network import NetworkConfig, build, require_nengo
 from striatal.params import Controller, Plant, Simulation, check_seed
 
+__all__ = [
+    "NEURAL_TRAJ_COLUMNS",
+    "UPRIGHT_THETA",
+    "UPRIGHT_WINDOW",
+    "KernelPlant",
+    "NeuralRun",
+    "SpikeBins",
+    "held_state_response",
+    "run_network",
+    "upright_throughout",
+]
+
 #: Columns of the recorded trajectory (one row per control step of ``Simulation.dt``).
 NEURAL_TRAJ_COLUMNS = ("t", "x", "x_dot", "theta", "theta_dot", "u", "force", "mode")
 #: Upright test of the issue: |theta| below this [rad] throughout the last ``UPRIGHT_WINDOW`` s.
