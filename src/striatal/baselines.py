@@ -38,6 +38,16 @@ cmaes
     candidate is one counted trial (BIPOP is not used: cma draws its population
     sizes from NumPy's global generator, which the seed does not govern).
 
+Robust (``robust=True``, ``sweep --baselines random,cmaes --robust``): the protocol of
+the learner's robust stop rule. Every trial holds the motor force of eq 12
+(``striatal.robust.ROBUST_HARDWARE``), and a candidate whose trial passes the success
+test is run through the robustness set (:func:`striatal.robust.stop_check`, up to the
+first failing case; the nominal case is the trial itself for a noise-free 60-s trial
+from the chapter's start); only a robust candidate ends the search. Each of those runs
+is counted in ``simulations`` and ``simulated_seconds``; ``trials`` counts candidates.
+CMA-ES still minimises minus the shaped reward of the candidate's own trial: the search
+sees what the learner sees.
+
 Budget: every baseline reports ``simulations`` (every trial it ran, one per
 candidate; a fixed controller's mean-policy verdict is one) and
 ``simulated_seconds`` (their simulated time, each trial ending at T_f or when it
@@ -65,11 +75,13 @@ from striatal.learners.pgpe import THETA_C_LEARNED_RANGE
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
+    CHAPTER_HARDWARE,
     N_GAINS,
     Controller,
     Plant,
     Simulation,
 )
+from striatal.robust import ROBUST_HARDWARE, nominal_is_the_case, stop_check
 from striatal.rollout import Protocol, recorded_trial, run_trial
 
 __all__ = [
@@ -178,11 +190,38 @@ def _trial(
     success_on: SuccessOn,
     rng: np.random.Generator,
     shaped: bool = False,
+    robust: bool = False,
+) -> tuple[bool, float, float, int]:
+    """(success, shaped score or nan, simulated seconds, simulations) of one 60-s trial
+    of p; with ``robust`` the force held and, when the trial passes, the robust stop
+    rule's runs (module docstring) added to the seconds and simulations."""
+    ok, score, seconds = _one_trial(plant, template, sim, p, success_on, rng, shaped, robust)
+    if not (robust and ok):
+        return ok, score, seconds, 1
+    verdict = stop_check(
+        template.with_gains(template.gains, float(p[6])),
+        plant,
+        sim.dt,
+        gains=np.array(p[:N_GAINS], dtype=float),
+        nominal_passed=success_on == "mean" and nominal_is_the_case(sim),
+    )
+    return verdict.robust, score, seconds + verdict.simulated_seconds, 1 + verdict.simulations
+
+
+def _one_trial(
+    plant: Plant,
+    template: Controller,
+    sim: Simulation,
+    p: np.ndarray,
+    success_on: SuccessOn,
+    rng: np.random.Generator,
+    shaped: bool,
+    robust: bool,
 ) -> tuple[bool, float, float]:
-    """(success, shaped score or nan, simulated seconds) of one 60-s trial of p."""
     controller = template.with_gains(template.gains, float(p[6]))
     W = np.array(p[:N_GAINS], dtype=float)
     noise = rng if success_on == "noisy" else None
+    hardware = ROBUST_HARDWARE if robust else CHAPTER_HARDWARE
     if shaped:
         outcome, data = recorded_trial(
             plant,
@@ -193,6 +232,7 @@ def _trial(
             rng=noise,
             trace=np.zeros(N_GAINS),
             gamma=0.0,
+            hardware=hardware,
         )
         score = shaped_reward(data, outcome, plant, sim, Protocol())
         return outcome.success, score, outcome.ended_at
@@ -205,18 +245,21 @@ def _trial(
         gamma=0.0,
         rng=noise,
         gains=W,
+        hardware=hardware,
     )
     return outcome.success, math.nan, outcome.ended_at
 
 
-def _result(ok: bool, trials: int, p: np.ndarray, seconds: float, **extra: Any) -> dict[str, Any]:
-    """A baseline's outcome; ``trials`` is also its number of simulations (one per trial)."""
+def _result(
+    ok: bool, trials: int, p: np.ndarray, seconds: float, runs: int, **extra: Any
+) -> dict[str, Any]:
+    """A baseline's outcome: ``trials`` candidates tried, ``runs`` simulations made."""
     return {
         "success": ok,
         "trials": trials,
         "W": tuple(float(v) for v in p[:N_GAINS]),
         "theta_c": float(p[N_GAINS]),
-        "simulations": trials,
+        "simulations": runs,
         "simulated_seconds": seconds,
         **extra,
     }
@@ -231,19 +274,22 @@ def fixed_controller(
     seed: int,
     max_trials: int,
     success_on: SuccessOn,
+    robust: bool = False,
 ) -> dict[str, Any]:
     """Trials of a fixed (W, theta_c) until one passes (lqr, hand)."""
     p = np.array([*W, theta_c])
     rng = np.random.default_rng(seed)
     budget = max_trials if success_on == "noisy" else 1
-    seconds = 0.0
+    seconds, runs = 0.0, 0
     for trial in range(1, budget + 1):
-        ok, _, t = _trial(plant, template, sim, p, success_on, rng)
-        seconds += t
+        ok, _, t, n = _trial(plant, template, sim, p, success_on, rng, robust=robust)
+        seconds, runs = seconds + t, runs + n
         if ok:
-            return _result(True, trial, p, seconds)
-    # "mean": the one noise-free trial decided (unsolved at max_trials, 1 simulation)
-    return {**_result(False, max_trials, p, seconds), "simulations": budget}
+            return _result(True, trial, p, seconds, runs)
+        if n > 1:
+            break  # the robust check of the fixed mean policy failed: it always will
+    # "mean": the one noise-free trial decided (unsolved at max_trials)
+    return _result(False, max_trials, p, seconds, runs)
 
 
 def random_search(
@@ -253,21 +299,22 @@ def random_search(
     seed: int,
     max_trials: int,
     success_on: SuccessOn,
+    robust: bool = False,
 ) -> dict[str, Any]:
     """Uniform draws of (W1..W6, theta_c) from RANDOM_BOX, one trial each."""
     draw = np.random.default_rng([seed, 3])
     rng = np.random.default_rng(seed)
     low, high = RANDOM_BOX
     p = draw.uniform(low, high)
-    seconds = 0.0
+    seconds, runs = 0.0, 0
     for trial in range(1, max_trials + 1):
         if trial > 1:
             p = draw.uniform(low, high)
-        ok, _, t = _trial(plant, template, sim, p, success_on, rng)
-        seconds += t
+        ok, _, t, n = _trial(plant, template, sim, p, success_on, rng, robust=robust)
+        seconds, runs = seconds + t, runs + n
         if ok:
-            return _result(True, trial, p, seconds)
-    return _result(False, max_trials, p, seconds)
+            return _result(True, trial, p, seconds, runs)
+    return _result(False, max_trials, p, seconds, runs)
 
 
 def cmaes(
@@ -280,6 +327,7 @@ def cmaes(
     max_trials: int,
     success_on: SuccessOn,
     sigma0: float = 1.0,
+    robust: bool = False,
 ) -> dict[str, Any]:
     """IPOP-CMA-ES over (W1..W6, theta_c) from (W0, theta_c0) on minus the shaped reward.
 
@@ -298,7 +346,7 @@ def cmaes(
         "verbose": -9,
     }
     rng = np.random.default_rng(seed)
-    trials, seconds, restarts = 0, 0.0, 0
+    trials, seconds, restarts, runs = 0, 0.0, 0, 0
     p = x0
     popsize = 0
     while trials < max_trials:
@@ -313,10 +361,14 @@ def cmaes(
             for x in candidates:
                 trials += 1
                 p = np.clip(np.array(x), lower, upper)
-                ok, score, t = _trial(plant, template, sim, p, success_on, rng, shaped=True)
-                seconds += t
+                ok, score, t, n = _trial(
+                    plant, template, sim, p, success_on, rng, shaped=True, robust=robust
+                )
+                seconds, runs = seconds + t, runs + n
                 if ok:
-                    return _result(True, trials, p, seconds, restarts=restarts, popsize=popsize)
+                    return _result(
+                        True, trials, p, seconds, runs, restarts=restarts, popsize=popsize
+                    )
                 losses.append(-score)
                 if trials >= max_trials:
                     break
@@ -326,4 +378,4 @@ def cmaes(
         if trials == started:  # stopped before its first candidate: nothing more to try
             break
         restarts += 1
-    return _result(False, max_trials, p, seconds, restarts=restarts - 1, popsize=popsize)
+    return _result(False, max_trials, p, seconds, runs, restarts=restarts - 1, popsize=popsize)

@@ -7,6 +7,12 @@ one row of ``runs.csv`` and depends on nothing else, so the local process pool a
 Ray cluster give the same rows for the same specs. ``striatal sweep`` and
 ``striatal ablation`` (whose variants are arms) both run through :func:`sweep`.
 
+Robust (``LearnerConfig.robust``, ``sweep --robust``): every arm stops only on a
+controller that passes the robustness set (:func:`striatal.robust.stop_check`), and
+the row's ``robust`` column re-checks the final gains with
+:func:`striatal.robust.check_robust` (all nine cases, counted in ``eval_simulations``;
+empty in a sweep without ``--robust``).
+
 Budget: every row counts every simulated trial its arm ran to learn or search,
 the success checks included (``simulations``, ``simulated_seconds``, beside the
 learning ``trials``). What the sweep runs afterwards to evaluate the result, the
@@ -58,7 +64,15 @@ from striatal.errors import DataFileError, ParameterError
 from striatal.evaluate import pass_probability
 from striatal.files import atomic_write_text, csv_text, read_text
 from striatal.learners import LearnerConfig, learn, random_initial_gains, rule_of
-from striatal.params import CHAPTER_INITIAL_W, N_GAINS, Controller, Plant, Simulation
+from striatal.params import (
+    CHAPTER_HARDWARE,
+    CHAPTER_INITIAL_W,
+    N_GAINS,
+    Controller,
+    Plant,
+    Simulation,
+)
+from striatal.robust import ROBUST_HARDWARE, check_robust
 from striatal.rollout import Protocol, simulate
 from striatal.rundir import RunDir
 
@@ -69,6 +83,7 @@ __all__ = [
     "METHODS",
     "NOTE_BUDGET",
     "NOTE_CONTROL",
+    "NOTE_ROBUST",
     "ROLES",
     "RUN_COLUMNS",
     "WATCHDOG_SECONDS",
@@ -125,6 +140,7 @@ RUN_COLUMNS: tuple[str, ...] = (
     *(f"W0_{i}" for i in range(1, N_GAINS + 1)),
     "theta_c0",
     "mean_policy_success",
+    "robust",
     "simulations",
     "simulated_seconds",
     "eval_simulations",
@@ -141,6 +157,14 @@ NOTE_BUDGET = (
     "included (a mean-policy rerun, the jitter corners); trials: learning trials only; "
     "eval_simulations (not in the budget): the re-simulation of the final gains and the "
     "pass-probability draws"
+)
+
+NOTE_ROBUST = (
+    "robust stop rule: every arm's trials hold the motor force of eq 12; a controller "
+    "that passes the success test must also pass the robustness set (striatal.robust, "
+    "9 mean-policy runs of 60 s, run up to the first failing case, each counted in "
+    "simulations) for the run to stop; the robust column re-checks the final gains on "
+    "all 9 cases (eval_simulations)"
 )
 
 
@@ -239,11 +263,25 @@ def search(spec: RunSpec, W0: tuple[float, ...]) -> dict[str, Any]:
         else:
             W, theta_c = baselines.CHAPTER_FINAL_W, baselines.CHAPTER_FINAL_THETA_C
         return baselines.fixed_controller(
-            spec.plant, template, spec.sim, W, theta_c, spec.seed, cfg.max_trials, cfg.success_on
+            spec.plant,
+            template,
+            spec.sim,
+            W,
+            theta_c,
+            spec.seed,
+            cfg.max_trials,
+            cfg.success_on,
+            robust=cfg.robust,
         )
     if spec.method == "random":
         return baselines.random_search(
-            spec.plant, template, spec.sim, spec.seed, cfg.max_trials, cfg.success_on
+            spec.plant,
+            template,
+            spec.sim,
+            spec.seed,
+            cfg.max_trials,
+            cfg.success_on,
+            robust=cfg.robust,
         )
     if spec.method == "cmaes":
         return baselines.cmaes(
@@ -255,6 +293,7 @@ def search(spec: RunSpec, W0: tuple[float, ...]) -> dict[str, Any]:
             spec.seed,
             cfg.max_trials,
             cfg.success_on,
+            robust=cfg.robust,
         )
     raise ParameterError(f"unknown method {spec.method!r}; choose from {', '.join(METHODS)}")
 
@@ -278,9 +317,19 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     final = template.with_gains(out["W"], out["theta_c"]) if out["W"][0] > 0 else None
     mean_ok = (
         final is not None
-        and simulate(spec.plant, final, spec.sim, protocol=Protocol()).outcome.success
+        and simulate(
+            spec.plant,
+            final,
+            spec.sim,
+            protocol=Protocol(),
+            hardware=ROBUST_HARDWARE if cfg.robust else CHAPTER_HARDWARE,
+        ).outcome.success
     )
     evals = 1 if final is not None else 0
+    robust = math.nan
+    if cfg.robust and final is not None:
+        report = check_robust(final, plant=spec.plant)
+        robust, evals = float(report.robust), evals + report.simulations
     rate0 = rate = math.nan
     if spec.eval_draws > 0:
         before = pass_probability(
@@ -309,6 +358,7 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     row.update({f"W0_{i + 1}": float(w) for i, w in enumerate(W0)})
     row["theta_c0"] = float(theta_c0)
     row["mean_policy_success"] = bool(mean_ok)
+    row["robust"] = robust
     row["simulations"] = int(out["simulations"])
     row["simulated_seconds"] = float(out["simulated_seconds"])
     row["eval_simulations"] = evals
@@ -539,6 +589,7 @@ def arm_statistics(
             "mean_policy_success_rate": (
                 sum(bool(r["mean_policy_success"]) for r in rows) / n if n else math.nan
             ),
+            "robust_rate": _finite_mean(r.get("robust", math.nan) for r in rows),
             "simulations_total": int(sum(int(r["simulations"]) for r in rows)),
             "simulated_seconds_total": float(sum(float(r["simulated_seconds"]) for r in rows)),
             "trials_total": int(sum(int(r["trials"]) for r in rows)),
@@ -644,6 +695,14 @@ def _ci(v: Any, fmt: str = "g") -> str:
     return f" [{_num(v[0], fmt)}, {_num(v[1], fmt)}]"
 
 
+def _robust_cell(arm: dict[str, Any]) -> str:
+    """ ", robust R" (re-checked share of robust final gains) in a robust sweep."""
+    rate = arm.get("robust_rate")
+    return (
+        f", robust {_num(rate, '.0%')}" if isinstance(rate, float) and math.isfinite(rate) else ""
+    )
+
+
 def markdown_table(summary: dict[str, Any]) -> str:
     """The comparison table of a summary, one line per (arm, init), then each learner
     against its control. Intervals are 95 %: Wilson for rates, bootstrap for the median
@@ -662,7 +721,7 @@ def markdown_table(summary: dict[str, Any]) -> str:
             f"{_num(a.get('simulations_iqm'), '.4g')}{_ci(a.get('simulations_iqm_ci'), '.4g')} | "
             f"{_num(a['trials_median'])} "
             f"[{_num(a.get('trials_q1'))}, {_num(a.get('trials_q3'))}] | "
-            f"{_num(a.get('mean_policy_success_rate'), '.0%')} | "
+            f"{_num(a.get('mean_policy_success_rate'), '.0%')}{_robust_cell(a)} | "
             f"{_num(a.get('pass_rate_W0_mean'), '.2f')} -> "
             f"{_num(a.get('pass_rate_mean'), '.2f')} | "
             f"{_num(a.get('simulations_total'))} | {_num(a.get('wall_seconds_total'), '.1f')} |"

@@ -14,6 +14,12 @@ docs/paper-notes.md section 9) and the controller keeping its nominal model:
 Nine simulations, no exploration noise and no eq-24 check (a plain run judged at
 T_f, as ``striatal simulate`` does). A force limit or a track, when given, applies to
 every case.
+
+The stop rule of a learner or a search with ``robust`` (:func:`stop_check`) asks the
+same question of a candidate that already passed its own success test on the
+nominal plant: it runs the cases in :data:`STOP_ORDER` and stops at the first that
+fails (the verdict is the same, all nine pass, at the cost of the runs made),
+counting every run.
 """
 
 from __future__ import annotations
@@ -22,18 +28,25 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation
-from striatal.rollout import NO_PROTOCOL, simulate
+import numpy as np
+
+from striatal.params import CHAPTER_THETA0, N_GAINS, Controller, Hardware, Plant, Simulation
+from striatal.rollout import NO_PROTOCOL, run_trial, simulate
 
 __all__ = [
     "ROBUST_CASES",
     "ROBUST_DURATION",
+    "ROBUST_HARDWARE",
+    "STOP_ORDER",
     "CaseResult",
     "RobustCase",
     "RobustReport",
+    "StopCheck",
     "check_robust",
+    "nominal_is_the_case",
     "robust_hardware",
     "run_case",
+    "stop_check",
 ]
 
 #: The chapter's final time T_f [s] of the robust test.
@@ -200,3 +213,82 @@ def check_robust(
         dt=dt,
         cases=results,
     )
+
+
+#: The motor of every case and of a learner's trials with ``robust``: the force held.
+ROBUST_HARDWARE = Hardware(hold="force")
+
+#: The order in which :func:`stop_check` runs the cases (indices into ROBUST_CASES):
+#: the two corners with the shorter pole first, which most learned controllers fail
+#: (docs/results.md), the nominal plant last. It changes the cost, not the verdict.
+STOP_ORDER: tuple[int, ...] = (3, 1, 4, 5, 6, 2, 7, 8, 0)
+
+
+@dataclass(frozen=True)
+class StopCheck:
+    """The robust stop rule's verdict on one candidate and what it cost.
+
+    ``simulations``: the runs made (the cases up to the first failure);
+    ``simulated_seconds``: their simulated time [s]; ``failed``: the first case that
+    failed (None when robust).
+    """
+
+    robust: bool
+    simulations: int
+    simulated_seconds: float
+    failed: str | None = None
+
+
+def nominal_is_the_case(sim: Simulation, action_every: int = 1) -> bool:
+    """True when a noise-free run of ``sim`` with the force held on the nominal plant
+    is the nominal case itself: the chapter's start at rest, T_f = 60 s, the success
+    test's default box, a new action every step.
+
+    The eq-24 check of the learner's protocol can only end a trial early; a trial that
+    passes the success test at T_f under it follows the same trajectory as the case
+    (no check), so it passes the case too (tests/test_robust_stop.py).
+    """
+    return sim == Simulation(dt=sim.dt) and action_every == 1
+
+
+def stop_check(
+    controller: Controller,
+    plant: Plant,
+    dt: float,
+    *,
+    gains: np.ndarray | None = None,
+    nominal_passed: bool = False,
+    hardware: Hardware = ROBUST_HARDWARE,
+) -> StopCheck:
+    """Is ``controller`` (with ``gains`` if given: a learner's guarded W) robust?
+
+    Runs the cases of :data:`ROBUST_CASES` in :data:`STOP_ORDER`, mean policy, 60 s,
+    ``hardware`` (force held), the controller keeping ``plant`` as its model, and stops
+    at the first failure. ``nominal_passed``: the caller's own success test already was
+    the nominal case (:func:`nominal_is_the_case`) and it passed; it is not run again.
+    The verdict equals :func:`check_robust`'s ``robust``.
+    """
+    W = np.asarray(controller.gains if gains is None else gains, dtype=float)
+    runs, seconds = 0, 0.0
+    for i in STOP_ORDER:
+        case = ROBUST_CASES[i]
+        if nominal_passed and case == ROBUST_CASES[0]:
+            continue
+        sim = Simulation(theta0=case.theta0, x0=case.x0, duration=ROBUST_DURATION, dt=dt)
+        outcome = run_trial(
+            plant.scaled(pole_mass=case.pole_mass, length=case.length),
+            controller,
+            sim,
+            protocol=NO_PROTOCOL,
+            trace=np.zeros(N_GAINS),
+            gamma=0.0,
+            rng=None,
+            gains=W,
+            model=plant,
+            hardware=hardware,
+        )
+        runs += 1
+        seconds += outcome.ended_at
+        if not outcome.success:
+            return StopCheck(False, runs, seconds, case.name)
+    return StopCheck(True, runs, seconds)

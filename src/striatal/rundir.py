@@ -116,7 +116,11 @@ def run_settings(
         "plant": asdict(plant),
         "trial": {"dt": sim.dt, "duration": sim.duration, "theta0": sim.theta0, "x0": sim.x0},
         "protocol": asdict(protocol or Protocol()),
-        "integrator": "rk4, u held over each step",
+        "integrator": (
+            "rk4, the force of eq 12 held over each step"
+            if config.robust
+            else "rk4, u held over each step"
+        ),
         "reward_timing": "update at the reward event only (r_t = 0 elsewhere)",
         "schema": SETTINGS_SCHEMA,
     }

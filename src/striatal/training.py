@@ -32,6 +32,7 @@ from striatal.learners import (
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
+    CHAPTER_HARDWARE,
     CHAPTER_INITIAL_THETA_C,
     CHAPTER_INITIAL_W,
     Controller,
@@ -40,6 +41,7 @@ from striatal.params import (
     check_gains,
     check_seed,
 )
+from striatal.robust import ROBUST_HARDWARE, check_robust
 from striatal.rollout import Trajectory
 from striatal.rollout import simulate as _simulate
 from striatal.rundir import RUN_FILES, RunDir, Setup, rule_columns, run_id, run_settings, setup_of
@@ -63,7 +65,10 @@ class Run:
 
     ``history``: one row per trial (all of them, also those before a resume);
     ``settings``: the run's settings as stored in result.json; :meth:`to_dict` is
-    result.json itself.
+    result.json itself. ``mean_policy_success``: the learned controller re-simulated
+    (with the force held in a robust run); ``robust_report``: in a robust run, the
+    learned controller's :func:`striatal.robust.check_robust` report (result.json's
+    "robust"), both outside the run's counted simulations.
     """
 
     success: bool
@@ -81,6 +86,7 @@ class Run:
     mean_policy_final_state: tuple[float, ...]
     run_id: str = ""
     out: Path | None = None
+    robust_report: dict[str, Any] | None = None
 
     @property
     def controller(self) -> Controller:
@@ -109,6 +115,9 @@ class Run:
         payload["mean_policy_final_state"] = list(self.mean_policy_final_state)
         payload["positive_rewards"] = self.state.n_positive
         payload["run_id"] = self.run_id
+        if self.robust_report is not None:
+            # the learned controller run through the whole set again (not in the budget)
+            payload["robust"] = self.robust_report
         return payload
 
 
@@ -196,6 +205,7 @@ def _resume_changes(
         "switch": setup.template.switch,
         "inhibition": setup.template.inhibition,
         **setup.config.to_dict(),
+        "robust": setup.config.robust,
     }
     differ = []
     for name, value in given.items():
@@ -399,7 +409,9 @@ def _run(
     if not history.columns:
         history = History(config.learner, columns, (), config.reward)
     learned = setup.template.with_gains(result.W, result.theta_c)
-    check = _simulate(setup.plant, learned, setup.sim).outcome
+    hardware = ROBUST_HARDWARE if config.robust else CHAPTER_HARDWARE
+    check = _simulate(setup.plant, learned, setup.sim, hardware=hardware).outcome
+    report = check_robust(learned, plant=setup.plant).to_dict() if config.robust else None
     out = Run(
         success=result.success,
         trials=result.trials,
@@ -416,6 +428,7 @@ def _run(
         mean_policy_final_state=tuple(check.final_state),
         run_id=run,
         out=rundir.path if rundir is not None else None,
+        robust_report=report,
     )
     if rundir is not None:
         rundir.write_result(out.to_dict())

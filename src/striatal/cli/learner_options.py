@@ -32,6 +32,7 @@ _FIELDS = {
     "normalise": "normalise",
     "decay": "decay",
     "plant_jitter": "plant_jitter",
+    "robust": "robust",
 }
 
 
@@ -153,6 +154,16 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="pgpe: each trial's pole mass and length scaled by U[1-J, 1+J], the controller "
         "believing the nominal plant (learning for robustness); " + _default_text("plant_jitter"),
+    )
+    lg.add_argument(
+        "--robust",
+        action="store_const",
+        const=True,
+        default=None,
+        help="the robust stop rule (issue 15): trials hold the motor force of eq 12, and a "
+        "controller that passes the success test must also pass the robustness set "
+        "(striatal simulate --robust: 9 mean-policy runs of 60 s) for the run to stop; "
+        "every run counted (docs/paper-notes.md section 12)",
     )
 
 

@@ -168,6 +168,9 @@ def prepare(
         "reproduce": "striatal train --seed S --init INIT with the same learner options "
         "(control arm: the options of settings.arms.control.config)",
     }
+    if config.robust:
+        # only when set, so the settings of sweeps without it stay as they were
+        settings["robust"] = experiments.NOTE_ROBUST
     return specs, settings, config.max_trials
 
 

@@ -80,6 +80,11 @@ class LearnerConfig:
         -rate * lambda * W (rate: alpha for pgpe, alpha (1 - gamma) for rpe).
     plant_jitter : J of pgpe: each trial's true pole mass and length are the nominal
         ones times factors uniform in [1 - J, 1 + J] (0: the nominal plant).
+    robust : the robust stop rule (issue 15, any rule): every trial and check holds the
+        motor force of eq 12 over each step, and a controller that passes the success
+        test must also pass the robustness set (:func:`striatal.robust.stop_check`,
+        every run counted) for the run to stop. Left out of :meth:`to_dict` when False,
+        so the settings and run ids of runs without it stay as they were.
     """
 
     alpha: float = 5.0
@@ -101,6 +106,7 @@ class LearnerConfig:
     sigma_rate: float = 0.0
     decay: float = 0.0
     plant_jitter: float = 0.0
+    robust: bool = False
 
     def __post_init__(self) -> None:
         a = require_finite("alpha", self.alpha)
@@ -145,9 +151,14 @@ class LearnerConfig:
         jit = require_finite("plant_jitter", self.plant_jitter)
         if not 0.0 <= jit <= 0.5:
             raise ParameterError(f"plant_jitter must be in [0, 0.5], got {self.plant_jitter}")
+        if not isinstance(self.robust, bool):
+            raise ParameterError(f"robust must be true or false, got {self.robust!r}")
 
     def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
+        d = asdict(self)
+        if not self.robust:
+            del d["robust"]
+        return d
 
 
 C = TypeVar("C")

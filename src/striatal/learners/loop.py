@@ -9,6 +9,13 @@ history row and build the next state. Every simulated trial is counted in
 the learning trial and each success check that needs a trial of its own. A rule
 with ``judges_candidate`` (pgpe) is judged on the controller its trial ran; when
 that trial already was the noise-free run on the nominal plant, it is the check.
+With ``config.robust`` (any rule) every trial and check holds the motor force
+(``striatal.robust.ROBUST_HARDWARE``), the jitter corners are not checked, and a
+controller that passes the success test must also pass the robustness set
+(:func:`striatal.robust.stop_check`, each of its runs counted; the nominal case is
+not rerun when the success test's noise-free nominal run already was it). With a
+jittered plant, a rule judged on its noise-free candidate is first filtered by its
+own trial on that plant (no nominal rerun); the set then decides.
 :func:`learn` repeats it until success or ``max_trials``.
 """
 
@@ -30,7 +37,8 @@ from striatal.learners.pgpe import PGPE
 from striatal.learners.rpe import RPE
 from striatal.learners.rule import Rule, Update
 from striatal.learners.state import LearnerState, TrainResult, TrialRecord
-from striatal.params import N_GAINS, Controller, Plant, Simulation
+from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Plant, Simulation
+from striatal.robust import ROBUST_HARDWARE, nominal_is_the_case, stop_check
 from striatal.rollout import Protocol, TrialOutcome, recorded_trial, run_trial
 
 __all__ = ["LEARNERS", "RULES", "check_config", "learn", "learning_step", "rule_of"]
@@ -81,6 +89,7 @@ def _mean_policy_outcome(
     W: np.ndarray,
     action_every: int,
     model: Plant | None,
+    hardware: Hardware = CHAPTER_HARDWARE,
 ) -> TrialOutcome:
     """The noise-free trial of the success test (``mean_policy_success`` with its outcome)."""
     return run_trial(
@@ -94,6 +103,7 @@ def _mean_policy_outcome(
         gains=W,
         action_every=action_every,
         model=model,
+        hardware=hardware,
     )
 
 
@@ -117,6 +127,7 @@ def learning_step(
     true_plant = plan.plant or plant
     model = plant if plan.plant is not None else None
     trial_controller = replace(template, theta_c=plan.theta_c)
+    hardware = ROBUST_HARDWARE if config.robust else CHAPTER_HARDWARE
     kwargs = dict(
         plant=true_plant,
         controller=trial_controller,
@@ -129,6 +140,7 @@ def learning_step(
         action_every=config.action_every,
         chapter_eligibility=plan.eligibility == "chapter",
         model=model,
+        hardware=hardware,
     )
     if config.reward == "shaped":
         outcome, data = recorded_trial(**kwargs)  # type: ignore[arg-type]
@@ -144,6 +156,7 @@ def learning_step(
     else:
         W = np.array(state.W, dtype=float)
         controller = replace(template, theta_c=state.theta_c)
+    nominal_run = False  # whether the success test ran the mean policy on the nominal plant
     if config.success_on == "noisy":
         success = outcome.success
     else:
@@ -151,20 +164,37 @@ def learning_step(
         if rule.judges_candidate and plan.rng is None and plan.plant is None:
             # the trial itself was the noise-free run of the judged controller
             success = outcome.success
+            nominal_run = True
+        elif config.robust and rule.judges_candidate and plan.rng is None:
+            # robust: the noise-free trial on a jittered plant is the first filter; the
+            # robustness set (nominal case included) decides
+            success = outcome.success
         else:
+            nominal_run = True
             checks.append((plant, None))
             success = True
-        if config.plant_jitter > 0.0:
+        if config.plant_jitter > 0.0 and not config.robust:
             checks.extend((corner, plant) for corner in jitter_corners(plant, config.plant_jitter))
         for true_plant_i, model_i in checks:
             if not success:
                 break
             check = _mean_policy_outcome(
-                true_plant_i, controller, sim, protocol, W, config.action_every, model_i
+                true_plant_i, controller, sim, protocol, W, config.action_every, model_i, hardware
             )
             simulations += 1
             seconds += check.ended_at
             success = check.success
+    if config.robust and success:
+        verdict = stop_check(
+            controller,
+            plant,
+            sim.dt,
+            gains=W,
+            nominal_passed=nominal_run and nominal_is_the_case(sim, config.action_every),
+        )
+        simulations += verdict.simulations
+        seconds += verdict.simulated_seconds
+        success = verdict.robust
     update = _finite(rule.update(state, config, plan, outcome, reward, success), state)
     record = TrialRecord(
         trial=state.trials_done + 1,
@@ -206,7 +236,8 @@ def learn(
     """Learn from ``template``'s gains and theta_c (or continue from ``state``).
 
     Stops at the first trial that passes the success test (its W and theta_c are
-    the result, as in the chapter) or after ``config.max_trials`` trials.
+    the result, as in the chapter; with ``config.robust`` it must pass the robustness
+    set too) or after ``config.max_trials`` trials.
     ``on_trial`` is called after every trial (history, checkpoints, progress).
     A KeyboardInterrupt stops the run; the result then has ``interrupted=True``.
     """
