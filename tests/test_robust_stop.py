@@ -215,10 +215,8 @@ def test_train_robust_from_w1_below_zero_gives_a_controller_simulate_robust_pass
     """Issue 15: from any starting gains, W1 <= 0 included; the learned controller passes
     ``striatal simulate --robust`` again."""
     start = ["-0.5", "0.3", "-0.2", "0.8", "-0.6", "0.1"]
-    code = main(
-        ["train", "--learner", "pgpe", "--robust", "--init-gains", *start, "--seed", "2"]
-        + ["--max-trials", "300", "--json", "--no-progress"]
-    )
+    options = "--learner pgpe --robust --seed 2 --max-trials 300 --json --no-progress"
+    code = main(["train", *options.split(), "--init-gains", *start])
     assert code == 0
     result = json.loads(capsys.readouterr().out)
     assert result["success"] and result["robust"]["robust"]
@@ -235,9 +233,7 @@ def test_the_searches_count_every_run_of_the_robust_stop_rule(
 ) -> None:
     template = Controller(gains=(0.6, -0.4, -0.9, 0.9, 0.1, -1.2), theta_c=0.6)
     if method == "random":
-        out = baselines.random_search(
-            Plant(), template, Simulation(), 7, 60, "mean", robust=True
-        )
+        out = baselines.random_search(Plant(), template, Simulation(), 7, 60, "mean", robust=True)
     else:
         out = baselines.cmaes(
             Plant(), template, Simulation(), template.gains, 0.6, 7, 60, "mean", robust=True
@@ -253,7 +249,14 @@ def test_the_searches_count_every_run_of_the_robust_stop_rule(
 def test_a_fixed_controller_that_is_not_robust_is_unsolved_after_one_check() -> None:
     template = Controller()
     out = baselines.fixed_controller(
-        Plant(), template, Simulation(), CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C, 0, 50, "mean",
+        Plant(),
+        template,
+        Simulation(),
+        CHAPTER_FINAL_W,
+        CHAPTER_FINAL_THETA_C,
+        0,
+        50,
+        "mean",
         robust=True,
     )
     assert not out["success"] and out["trials"] == 50 and out["simulations"] == 2
@@ -265,11 +268,9 @@ def test_a_fixed_controller_that_is_not_robust_is_unsolved_after_one_check() -> 
 
 def test_sweep_robust_writes_the_fields(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "sweep"
-    code = main(
-        ["sweep", "--init", "random", "--seeds", "2", "--learner", "pgpe", "--robust"]
-        + ["--max-trials", "6", "--baselines", "random,cmaes", "--eval-draws", "0"]
-        + ["--out", str(out), "--json", "--no-progress"]
-    )
+    options = "--init random --seeds 2 --learner pgpe --robust --max-trials 6"
+    options += " --baselines random,cmaes --eval-draws 0 --json --no-progress"
+    code = main(["sweep", *options.split(), "--out", str(out)])
     assert code == 0
     summary = json.loads(capsys.readouterr().out)
     rows = list(csv.DictReader((out / "runs.csv").open()))
@@ -288,9 +289,9 @@ def test_sweep_robust_writes_the_fields(tmp_path: Path, capsys: pytest.CaptureFi
         assert math.isfinite(arm["robust_rate"])
     # and a sweep without it has an empty robust column and no robust setting
     plain = tmp_path / "plain"
+    options = "--init random --seeds 1 --learner pgpe --max-trials 2 --eval-draws 0"
     main(
-        ["sweep", "--init", "random", "--seeds", "1", "--learner", "pgpe", "--max-trials", "2"]
-        + ["--eval-draws", "0", "--no-control", "--out", str(plain), "--json", "--no-progress"]
+        ["sweep", *options.split(), "--no-control", "--json", "--no-progress", "--out", str(plain)]
     )
     capsys.readouterr()
     assert [r["robust"] for r in csv.DictReader((plain / "runs.csv").open())] == [""]

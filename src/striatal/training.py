@@ -206,6 +206,7 @@ def _resume_changes(
         "inhibition": setup.template.inhibition,
         **setup.config.to_dict(),
         "robust": setup.config.robust,
+        "symmetric": setup.config.symmetric,
     }
     differ = []
     for name, value in given.items():

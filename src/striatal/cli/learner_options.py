@@ -33,6 +33,7 @@ _FIELDS = {
     "decay": "decay",
     "plant_jitter": "plant_jitter",
     "robust": "robust",
+    "symmetric": "symmetric",
 }
 
 
@@ -154,6 +155,14 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="pgpe: each trial's pole mass and length scaled by U[1-J, 1+J], the controller "
         "believing the nominal plant (learning for robustness); " + _default_text("plant_jitter"),
+    )
+    lg.add_argument(
+        "--symmetric",
+        action="store_const",
+        const=True,
+        default=None,
+        help="pgpe: symmetric sampling, trials in pairs p + eps, p - eps on the same plant, "
+        "one update per pair from the reward difference; " + _default_text("symmetric"),
     )
     lg.add_argument(
         "--robust",

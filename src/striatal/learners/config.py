@@ -80,11 +80,16 @@ class LearnerConfig:
         -rate * lambda * W (rate: alpha for pgpe, alpha (1 - gamma) for rpe).
     plant_jitter : J of pgpe: each trial's true pole mass and length are the nominal
         ones times factors uniform in [1 - J, 1 + J] (0: the nominal plant).
+    symmetric : pgpe's symmetric sampling (Sehnke et al. 2010): trials come in pairs
+        p + eps, p - eps on the same plant, and one update follows each pair with the
+        reward difference (r+ - r-) / 2 in place of r - b.
     robust : the robust stop rule (issue 15, any rule): every trial and check holds the
         motor force of eq 12 over each step, and a controller that passes the success
         test must also pass the robustness set (:func:`striatal.robust.stop_check`,
-        every run counted) for the run to stop. Left out of :meth:`to_dict` when False,
-        so the settings and run ids of runs without it stay as they were.
+        every run counted) for the run to stop.
+
+    ``symmetric`` and ``robust`` (added with issue 15) are left out of :meth:`to_dict`
+    when False, so the settings and run ids of runs without them stay as they were.
     """
 
     alpha: float = 5.0
@@ -106,6 +111,7 @@ class LearnerConfig:
     sigma_rate: float = 0.0
     decay: float = 0.0
     plant_jitter: float = 0.0
+    symmetric: bool = False
     robust: bool = False
 
     def __post_init__(self) -> None:
@@ -151,15 +157,20 @@ class LearnerConfig:
         jit = require_finite("plant_jitter", self.plant_jitter)
         if not 0.0 <= jit <= 0.5:
             raise ParameterError(f"plant_jitter must be in [0, 0.5], got {self.plant_jitter}")
-        if not isinstance(self.robust, bool):
-            raise ParameterError(f"robust must be true or false, got {self.robust!r}")
+        for name in _LATER_FLAGS:
+            if not isinstance(getattr(self, name), bool):
+                raise ParameterError(f"{name} must be true or false, got {getattr(self, name)!r}")
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
-        if not self.robust:
-            del d["robust"]
+        for name in _LATER_FLAGS:
+            if not d[name]:
+                del d[name]
         return d
 
+
+#: Flags added after the settings schema 2 (issue 15): stored only when set.
+_LATER_FLAGS = ("symmetric", "robust")
 
 C = TypeVar("C")
 

@@ -15,6 +15,12 @@ success test (success_on "mean") is judged on the candidate p' the trial ran:
 that trial is already the noise-free run of p' on the nominal plant, so the test
 costs no extra simulation (with ``plant_jitter``, p' is rerun on the nominal plant
 and the four corners, each counted); when p' passes it is the learned controller.
+With ``symmetric`` (symmetric sampling, Sehnke et al. 2010) the trials come in pairs:
+the first runs p + eps (eps = z s), the second p - eps on the same plant (the same
+jitter draw), and only after the second does p move, by
+alpha * (d / rms(d)) * eps with d = (r+ - r-) / 2 (rms: the running root mean
+square of d, rate ``rpe_rate``): the reward difference replaces the baseline.
+Either trial of a pair may pass and end the run.
 Its no-learning control (alpha = 0, sigma_rate = 0) draws the same perturbations
 around W(0) with the same spreads and is judged the same way: exploration
 without learning.
@@ -32,6 +38,7 @@ from striatal.errors import ParameterError
 from striatal.learners.common import (
     baseline_memory,
     prediction_error,
+    prediction_error_factor,
     theta_c_rule,
     three_factor_update,
 )
@@ -76,6 +83,7 @@ class PgpeConfig:
     sigma_rate: float
     decay: float
     plant_jitter: float
+    symmetric: bool
 
 
 def initial_explore(explore: float) -> np.ndarray:
@@ -126,7 +134,7 @@ class PgpeRule(Rule):
     )
     control = MappingProxyType({"alpha": 0.0, "sigma_rate": 0.0})
     history_columns = ("explore",)
-    memory_names = ("explore", "reward_mean", "rpe_square")
+    memory_names = ("explore", "reward_mean", "rpe_square", "pair_z", "pair_reward", "pair_scale")
     learns_theta_c = True
     judges_candidate = True
 
@@ -136,6 +144,10 @@ class PgpeRule(Rule):
             raise ParameterError(
                 "learner 'pgpe' acts with the mean policy of perturbed gains: "
                 "its success test is judged on the mean policy (success_on 'mean')"
+            )
+        if config.symmetric and config.sigma_rate > 0.0:
+            raise ParameterError(
+                "learner 'pgpe' adapts its exploration (sigma_rate) only without --symmetric"
             )
         if config.alpha * config.decay >= 1.0:
             raise ParameterError(
@@ -149,16 +161,19 @@ class PgpeRule(Rule):
         learn_theta_c = c.theta_c_rule == "learned"
         p = np.array([*state.W[:5], state.theta_c])
         s = np.array(state.get("explore")) if state.get("explore") else initial_explore(c.explore)
-        z = rng.standard_normal(6)
+        mirror = c.symmetric and bool(state.get("pair_z"))
+        # the second trial of a pair runs p - eps: no new draw
+        z = -np.array(state.get("pair_z")) if mirror else rng.standard_normal(6)
         if not learn_theta_c:
             z[5] = 0.0
         eps = z * s
         p_trial = _clamp_params(p + eps, c.w1_floor) if learn_theta_c else p + eps
         p_trial[0] = max(p_trial[0], c.w1_floor)
         true_plant = None
+        scale = np.ones(2)
         if c.plant_jitter > 0.0:
             j = c.plant_jitter
-            scale = rng.uniform(1.0 - j, 1.0 + j, size=2)
+            scale = np.array(state.get("pair_scale")) if mirror else rng.uniform(1 - j, 1 + j, 2)
             true_plant = plant.scaled(pole_mass=float(scale[0]), length=float(scale[1]))
         return TrialPlan(
             W=np.array([*p_trial[:5], state.W[5]]),
@@ -167,7 +182,7 @@ class PgpeRule(Rule):
             gamma=0.0,
             rng=None,
             plant=true_plant,
-            scratch={"p": p, "eps": p_trial - p, "s": s, "z": z},
+            scratch={"p": p, "eps": p_trial - p, "s": s, "z": z, "scale": scale},
         )
 
     def update(
@@ -180,6 +195,8 @@ class PgpeRule(Rule):
         success: bool,
     ) -> Update:
         c = pick(PgpeConfig, config)
+        if c.symmetric:
+            return self._symmetric_update(state, c, plan, reward, success)
         p, eps, s, z = (plan.scratch[k] for k in ("p", "eps", "s", "z"))
         factor, b, square = prediction_error(state, reward, c.rpe_rate, c.normalise)
         # on success: the candidate p' the trial ran and passed, exactly as it ran
@@ -200,6 +217,52 @@ class PgpeRule(Rule):
                 ("explore", tuple(float(v) for v in new_s)),
                 *baseline_memory(state, b, square),
             ),
+        )
+
+    def _symmetric_update(
+        self, state: LearnerState, c: PgpeConfig, plan: TrialPlan, reward: float, success: bool
+    ) -> Update:
+        """Symmetric sampling (module docstring): remember the first trial of a pair,
+        move p after the second."""
+        p, s, z = (plan.scratch[k] for k in ("p", "s", "z"))
+        kept = tuple((k, v) for k, v in state.memory if k in ("reward_mean", "rpe_square"))
+        explore = (("explore", tuple(float(v) for v in s)),)
+        unpaired = (("pair_z", ()), ("pair_reward", ()), ("pair_scale", ()))
+        if success:
+            return Update(
+                W=(*(float(v) for v in plan.W[:5]), float(state.W[5])),
+                theta_c=float(plan.theta_c),
+                memory=(*explore, *kept, *unpaired),
+            )
+        if not state.get("pair_z"):  # the first trial of a pair (p + eps): p stays
+            pending = (
+                ("pair_z", tuple(float(v) for v in z)),
+                ("pair_reward", (float(reward),)),
+                ("pair_scale", tuple(float(v) for v in plan.scratch["scale"])),
+            )
+            return Update(W=state.W, theta_c=state.theta_c, memory=(*explore, *kept, *pending))
+        d = 0.5 * (state.get("pair_reward")[0] - reward)  # (r+ - r-) / 2
+        square = state.get("rpe_square")
+        factor, new_square = prediction_error_factor(
+            d, square[0] if square else 0.0, c.rpe_rate, c.normalise
+        )
+        eps_plus = -z * s  # z of the second trial is -z of the first
+        new_p = three_factor_update(p, eps_plus, factor, c.alpha, c.max_step)
+        new_p[:5] -= c.alpha * c.decay * p[:5]
+        if c.theta_c_rule == "learned":
+            new_p = _clamp_params(new_p, c.w1_floor)
+        new_p[0] = max(new_p[0], c.w1_floor)
+        mean = state.get("reward_mean") or (reward,)
+        memory = (
+            *explore,
+            ("reward_mean", mean),
+            ("rpe_square", (new_square,) if math.isfinite(new_square) else square or (0.0,)),
+            *unpaired,
+        )
+        return Update(
+            W=(*(float(v) for v in new_p[:5]), float(state.W[5])),
+            theta_c=float(new_p[5]),
+            memory=memory,
         )
 
     def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
