@@ -296,3 +296,19 @@ def test_sweep_robust_writes_the_fields(tmp_path: Path, capsys: pytest.CaptureFi
     capsys.readouterr()
     assert [r["robust"] for r in csv.DictReader((plain / "runs.csv").open())] == [""]
     assert "robust" not in json.loads((plain / "sweep.json").read_text())
+
+
+def test_robust_applies_the_rules_robust_preset_under_the_options_given() -> None:
+    c = default_config("pgpe", robust=True)
+    assert (c.plant_jitter, c.alpha) == (0.2, 0.5)
+    given = default_config("pgpe", robust=True, alpha=0.3, plant_jitter=0.0)
+    assert (given.plant_jitter, given.alpha) == (0.0, 0.3)
+    assert default_config("pgpe").plant_jitter == 0.0  # not without --robust
+    assert default_config("chapter", robust=True) == default_config("chapter").__class__(
+        **{**default_config("chapter").to_dict(), "robust": True}
+    )
+    # the control switches learning off and keeps the jittered plants
+    from striatal.learners import control_config
+
+    ctrl = control_config(c)
+    assert (ctrl.alpha, ctrl.sigma_rate, ctrl.plant_jitter, ctrl.robust) == (0.0, 0.0, 0.2, True)

@@ -172,7 +172,8 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
         help="the robust stop rule (issue 15): trials hold the motor force of eq 12, and a "
         "controller that passes the success test must also pass the robustness set "
         "(striatal simulate --robust: 9 mean-policy runs of 60 s) for the run to stop; "
-        "every run counted (docs/paper-notes.md section 12)",
+        "every run counted (docs/paper-notes.md section 12). It also applies the learner's "
+        "robust preset before the options given (pgpe: --plant-jitter 0.2 --alpha 0.5)",
     )
 
 

@@ -71,11 +71,14 @@ def default_config(learner: str = "chapter", **changes: Any) -> LearnerConfig:
     """The learner's tuned preset with ``changes`` applied, checked by its rule.
 
     ``default_config("pgpe")`` is what ``striatal train --learner pgpe`` runs;
-    ``default_config("chapter")`` is the chapter's learner exactly.
+    ``default_config("chapter")`` is the chapter's learner exactly. With
+    ``robust=True`` the rule's ``robust_preset`` is applied over its preset first
+    (pgpe: plant_jitter 0.2, alpha 0.5).
     """
     rule = rule_of(learner)
+    robust = dict(rule.robust_preset) if changes.get("robust") is True else {}
     try:
-        config = replace(LearnerConfig(learner=learner, **rule.preset), **changes)
+        config = replace(LearnerConfig(learner=learner, **rule.preset), **{**robust, **changes})
     except TypeError as exc:
         raise ParameterError(f"unknown learner option: {exc}") from None
     return check_config(config)

@@ -132,6 +132,9 @@ class PgpeRule(Rule):
             "theta_c_rule": "learned",
         }
     )
+    #: with --robust: learn on plants jittered by +-20 % (the corners' range), a larger
+    #: rate (measured in docs/results.md, "Robust from any start")
+    robust_preset = MappingProxyType({"plant_jitter": 0.2, "alpha": 0.5})
     control = MappingProxyType({"alpha": 0.0, "sigma_rate": 0.0})
     history_columns = ("explore",)
     memory_names = ("explore", "reward_mean", "rpe_square", "pair_z", "pair_reward", "pair_scale")

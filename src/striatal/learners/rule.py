@@ -72,6 +72,9 @@ class Rule:
     config_type: ClassVar[type]
     #: The tuned preset: LearnerConfig fields changed from their defaults (docs/ablation.md).
     preset: ClassVar[Mapping[str, Any]] = MappingProxyType({})
+    #: The changes the robust stop rule adds to :attr:`preset` (``robust=True``), before
+    #: the options given (docs/results.md, "Robust from any start").
+    robust_preset: ClassVar[Mapping[str, Any]] = MappingProxyType({})
     #: The no-learning control: the fields changed to switch learning off (the sweep's
     #: control arm), everything else (exploration, eq 21) kept.
     control: ClassVar[Mapping[str, Any]] = MappingProxyType({"alpha": 0.0})
