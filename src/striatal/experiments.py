@@ -520,8 +520,8 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
     if lines[0].strip() != header:
         if lines[0].startswith("arm,"):
             raise DataFileError(
-                f"runs file {path} has the columns of another striatal version (before "
-                "simulations were counted); use another --out"
+                f"runs file {path} has the columns of another striatal version (an older "
+                "one, before simulations or the robust column were recorded); use another --out"
             )
         raise DataFileError(f"runs file {path} does not have the header of a striatal sweep")
     rows: list[dict[str, Any]] = []
