@@ -80,6 +80,10 @@ class LearnerConfig:
         -rate * lambda * W (rate: alpha for pgpe, alpha (1 - gamma) for rpe).
     plant_jitter : J of pgpe: each trial's true pole mass and length are the nominal
         ones times factors uniform in [1 - J, 1 + J] (0: the nominal plant).
+    critic_rate : rate beta of the critic's weights, v <- v + beta delta z (ac).
+    td_discount : discount gamma_v per control step of the TD error
+        delta = r + gamma_v V(s') - V(s) (ac); 1 - dt / tau for a value horizon tau.
+    critic_decay : lambda of the critic's trace z <- gamma_v lambda z + phi(s) (ac).
     """
 
     alpha: float = 5.0
@@ -101,6 +105,9 @@ class LearnerConfig:
     sigma_rate: float = 0.0
     decay: float = 0.0
     plant_jitter: float = 0.0
+    critic_rate: float = 0.01
+    td_discount: float = 0.99
+    critic_decay: float = 0.9
 
     def __post_init__(self) -> None:
         a = require_finite("alpha", self.alpha)
@@ -145,6 +152,15 @@ class LearnerConfig:
         jit = require_finite("plant_jitter", self.plant_jitter)
         if not 0.0 <= jit <= 0.5:
             raise ParameterError(f"plant_jitter must be in [0, 0.5], got {self.plant_jitter}")
+        cr = require_finite("critic_rate", self.critic_rate)
+        if not 0.0 <= cr <= 1.0:
+            raise ParameterError(f"critic_rate must be in [0, 1], got {self.critic_rate}")
+        td = require_finite("td_discount", self.td_discount)
+        if not 0.0 <= td < 1.0:
+            raise ParameterError(f"td_discount must be in [0, 1), got {self.td_discount}")
+        lam = require_finite("critic_decay", self.critic_decay)
+        if not 0.0 <= lam <= 1.0:
+            raise ParameterError(f"critic_decay must be in [0, 1], got {self.critic_decay}")
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
