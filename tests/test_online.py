@@ -177,6 +177,41 @@ def test_one_step_delta_and_updates_equal_their_formulas() -> None:
     np.testing.assert_allclose(v, v0 + beta * delta * phi0, rtol=1e-12)
     np.testing.assert_allclose(got.W, np.array(RANDOM_W) + alpha * delta * D, rtol=1e-12)
     assert abs(delta) > 1e-3 and np.all(np.abs(D[:3]) + np.abs(D[3:]) > 0)
+    # normalised: the first step's mean square is delta^2, the factor delta / |delta|
+    square = np.zeros(1)
+    normed, _, _ = _online(
+        RANDOM_W,
+        0.6,
+        sim,
+        7,
+        critic=v0.copy(),
+        alpha=alpha,
+        discount=gamma_v,
+        state0=s0,
+        normalise=True,
+        square=square,
+    )
+    assert square[0] == pytest.approx(delta**2, rel=1e-12)
+    np.testing.assert_allclose(normed.W, np.array(RANDOM_W) + alpha * np.sign(delta) * D)
+    # a running mean square carried in: (1 - rate) sq + rate delta^2
+    square = np.array([4.0 * delta**2])
+    normed, _, _ = _online(
+        RANDOM_W,
+        0.6,
+        sim,
+        7,
+        critic=v0.copy(),
+        alpha=alpha,
+        discount=gamma_v,
+        state0=s0,
+        normalise=True,
+        square=square,
+        square_rate=0.25,
+    )
+    assert square[0] == pytest.approx(3.25 * delta**2, rel=1e-12)
+    np.testing.assert_allclose(
+        normed.W, np.array(RANDOM_W) + alpha * delta / math.sqrt(3.25 * delta**2) * D
+    )
 
 
 def test_max_step_bounds_each_step_and_w1_keeps_its_floor() -> None:
@@ -369,3 +404,24 @@ def test_cli_train_ac_writes_its_history(tmp_path: object) -> None:
 
     h = read_history(f"{out}/history.csv")
     assert len(h) == 3 and "critic_norm" in h.columns
+
+
+def test_learning_curves_show_the_ac_columns(tmp_path: object) -> None:
+    """striatal curves: a panel for each of ac's columns, holding the history's values."""
+    pytest.importorskip("matplotlib")
+    import striatal
+    from striatal import plots
+
+    run = striatal.train(learner="ac", init="random", seed=0, max_trials=3, out=f"{tmp_path}/a")
+    h = plots.read_history(f"{tmp_path}/a/history.csv")
+    assert h.learner == "ac" and h.reward_kind == "sparse"
+    fig = plots.learning_curves(h, window=2)
+    panels = fig.axes[3:7]
+    assert [ax.get_title() for ax in panels] == [
+        plots.RULE_PANELS[c][1] for c in ("sigma", "return", "mean_delta", "critic_norm")
+    ]
+    np.testing.assert_allclose(
+        panels[3].get_lines()[0].get_ydata(), run.history.column("critic_norm"), rtol=1e-12
+    )
+    assert np.all(run.history.column("critic_norm") > 0)
+    assert set(h.reward) <= {10.0, 0.0, -5.0}

@@ -16,7 +16,7 @@ step, in the manner of Doya (2000, continuous-time actor-critic) and Frémaux et
   :func:`failure_value`;
 - the actor's eligibility trace D of eq 3, updated at every draw by the kernel's own
   :func:`striatal.kernel.trace_step`, and W <- W + clip(alpha delta_k D_k, +-max_step)
-  at every step (W1 floored);
+  at every step (W1 floored), delta optionally divided by its running rms;
 - the critic's trace z <- gamma_v lambda z + phi(s_k) and v <- v + beta delta_k z.
 
 The plant, the controllers and the eligibilities are the kernel's njit functions
@@ -102,7 +102,9 @@ class CriticArgs(NamedTuple):
     bound on each component of one step's change of W; ``w1_floor``: W1's floor;
     ``check_x``: the cart distance [m] that scales the cart feature (eq 24's 3 m);
     ``weights`` (N_FEATURES,) v and ``trace`` (N_FEATURES,) z, updated in place;
-    ``stats`` (N_STATS,): written (layout STAT_*).
+    ``stats`` (N_STATS,): written (layout STAT_*); ``normalise``: the actor's factor is
+    delta over the root of its running mean square ``square`` (1,) (updated in place,
+    0: start at delta^2), which tracks (1 - square_rate) square + square_rate delta^2.
     """
 
     alpha: float
@@ -115,6 +117,9 @@ class CriticArgs(NamedTuple):
     weights: np.ndarray
     trace: np.ndarray
     stats: np.ndarray
+    normalise: bool
+    square_rate: float
+    square: np.ndarray
 
 
 @njit(cache=True)
@@ -231,6 +236,9 @@ def run_online_trial(
     v = critic.weights
     z = critic.trace
     stats = critic.stats
+    square = critic.square
+    sq_rate = critic.square_rate
+    normalise = critic.normalise
     sigma = sigma_of(W[5])
     root = math.sqrt(W[0] * model[3])
     inv_root = _inv_root(W[0], model[3])
@@ -331,10 +339,17 @@ def run_online_trial(
                 n_td += 1
                 for i in range(N_FEATURES):
                     v[i] += beta * delta * z[i]
+                # the actor's factor: delta, or delta over its running rms
+                sq = square[0]
+                sq = delta * delta if sq <= 0.0 else (1.0 - sq_rate) * sq + sq_rate * delta * delta
+                square[0] = sq
+                factor = delta
+                if normalise:
+                    factor = delta / math.sqrt(sq) if sq > 0.0 else 0.0
                 if alpha != 0.0:
                     changed = False
                     for i in range(6):
-                        step = alpha * delta * d[i]
+                        step = alpha * factor * d[i]
                         step = min(max(step, -max_step), max_step)
                         if math.isfinite(step) and step != 0.0:
                             W[i] += step
@@ -409,6 +424,9 @@ def online_trial(
     model: Plant | None = None,
     hardware: Hardware = CHAPTER_HARDWARE,
     state0: np.ndarray | None = None,
+    normalise: bool = False,
+    square_rate: float = 0.001,
+    square: np.ndarray | None = None,
 ) -> OnlineTrial:
     """One online actor-critic trial (:func:`run_online_trial`) from ``gains``.
 
@@ -416,6 +434,9 @@ def online_trial(
     (None: the mean policy, then D and W stay); ``trace`` (6,), ``critic`` and
     ``critic_trace`` (N_FEATURES,) are updated in place; ``gains`` is not. ``state0``
     [x, x_dot, theta, theta_dot] overrides the simulation's start at rest.
+    ``normalise``: the actor's factor is delta over its running rms, whose mean square
+    ``square`` (1,) (updated in place; default a fresh 0) tracks delta^2 at
+    ``square_rate`` per step.
     """
     if not 0.0 <= discount < 1.0:
         raise ParameterError(f"the TD discount must be in [0, 1), got {discount}")
@@ -453,6 +474,9 @@ def online_trial(
         weights=critic,
         trace=critic_trace,
         stats=stats,
+        normalise=bool(normalise),
+        square_rate=float(square_rate),
+        square=np.zeros(1) if square is None else square,
     )
     run_online_trial(*args[:7], rates, args[7].out)
     return OnlineTrial(TrialOutcome.from_row(args[7].out, sim), W, stats)

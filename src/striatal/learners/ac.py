@@ -9,7 +9,10 @@ under a dense per-step reward r = -dt cost(s); its temporal-difference error
 delta(t) = r(t) + gamma_v V(s(t + dt)) - V(s(t)) is computed at every control step
 and gates both the actor, W <- W + alpha delta(t) D(t) with the chapter's
 eligibility trace D of eq 3 (the Gaussian policy of eq 5), and the critic,
-v <- v + beta delta(t) z(t). W changes within the trial; the compiled loop is
+v <- v + beta delta(t) z(t). With ``normalise`` the actor's factor is delta over its
+running rms (mean square tracked at ``rpe_rate`` per step, carried across trials, memory
+"rpe_square"), so that alpha does not depend on the reward's scale. W changes within the
+trial; the compiled loop is
 :func:`striatal.online.run_online_trial`, on the kernel's functions.
 
 Between trials: the critic v carries over; theta_c follows eq 21 (``theta_c_rule``)
@@ -58,6 +61,8 @@ class AcConfig:
     critic_rate: float
     td_discount: float
     critic_decay: float
+    normalise: bool
+    rpe_rate: float
 
 
 def initial_critic(state: LearnerState) -> np.ndarray:
@@ -87,7 +92,7 @@ class AcRule(Rule):
     )
     control = MappingProxyType({"alpha": 0.0})
     history_columns = ("sigma", "return", "mean_delta", "critic_norm")
-    memory_names = ("critic", "trace")
+    memory_names = ("critic", "trace", "rpe_square")
     runs_trial = True
 
     def plan(
@@ -106,6 +111,7 @@ class AcRule(Rule):
                 "critic_trace": np.zeros(N_FEATURES),
                 "W_end": base.W.copy(),
                 "stats": np.zeros(N_STATS),
+                "square": np.array(state.get("rpe_square") or (0.0,), dtype=float),
             },
         )
 
@@ -133,6 +139,9 @@ class AcRule(Rule):
             action_every=trial["action_every"],
             chapter_eligibility=plan.eligibility == "chapter",
             model=trial["model"],
+            normalise=c.normalise,
+            square_rate=c.rpe_rate,
+            square=plan.scratch["square"],
         )
         np.copyto(plan.scratch["W_end"], result.W)
         np.copyto(plan.scratch["stats"], result.stats)
@@ -157,12 +166,16 @@ class AcRule(Rule):
         critic = plan.scratch["critic"]
         if not np.all(np.isfinite(critic)):
             critic = initial_critic(state)
+        square = plan.scratch["square"]
+        if not np.all(np.isfinite(square)):
+            square = np.array(state.get("rpe_square") or (0.0,))
         return Update(
             W=tuple(float(w) for w in W),
             theta_c=float(theta_c),
             memory=(
                 ("critic", tuple(float(v) for v in critic)),
                 ("trace", finite_trace(plan.trace)),
+                ("rpe_square", (float(square[0]),)),
             ),
         )
 

@@ -72,8 +72,9 @@ class LearnerConfig:
     w1_floor : W1 is kept >= this after every update.
     reward : "sparse" (eqs 24-25) or "shaped" (:func:`striatal.learners.common.shaped_reward`).
     rpe_rate : rate beta of the tracked baseline b <- b + beta (r - b) and of the running
-        mean square of the prediction error (rpe, pgpe).
-    normalise : divide the prediction error r - b by its running root mean square.
+        mean square of the prediction error (rpe, pgpe: per trial; ac: per step, of delta).
+    normalise : divide the prediction error r - b (ac: the TD error delta, for the actor)
+        by its running root mean square.
     explore : parameter-exploration std of W1..W5 (pgpe); theta_c's is 0.3 times it [rad].
     sigma_rate : rate of the log-std adaptation of the exploration (pgpe; 0: fixed).
     decay : synaptic decay lambda of W1..W5 (rpe, pgpe): the update adds
