@@ -81,10 +81,12 @@ class AcRule(Rule):
     config_type = AcConfig
     preset = MappingProxyType(
         {
-            "alpha": 0.002,
+            "alpha": 0.001,
             "gamma": 0.99,
             "max_step": 0.01,
             "success_on": "mean",
+            "normalise": True,
+            "rpe_rate": 0.001,
             "critic_rate": 0.01,
             "td_discount": 0.99,
             "critic_decay": 0.9,
