@@ -328,6 +328,10 @@ def test_ac_learns_within_the_trial_and_its_control_does_not() -> None:
     norms = [dict(rec.extra)["critic_norm"] for rec in c_rows]
     assert norms[0] > 0 and len(set(norms)) == len(norms)
     assert c_rows[0].reward == rows[0].reward and c_rows[0].ended_at == rows[0].ended_at
+    from striatal.experiments import control_note
+
+    assert control_note("ac").endswith("the critic still learns (it is not part of the controller)")
+    assert "critic" not in control_note("chapter")
 
 
 def test_ac_resume_from_state_equals_uninterrupted_run() -> None:

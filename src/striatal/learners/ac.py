@@ -93,6 +93,7 @@ class AcRule(Rule):
         }
     )
     control = MappingProxyType({"alpha": 0.0})
+    control_also = "the critic still learns (it is not part of the controller)"
     history_columns = ("sigma", "return", "mean_delta", "critic_norm")
     memory_names = ("critic", "trace", "rpe_square")
     runs_trial = True

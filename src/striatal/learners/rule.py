@@ -75,6 +75,8 @@ class Rule:
     #: The no-learning control: the fields changed to switch learning off (the sweep's
     #: control arm), everything else (exploration, eq 21) kept.
     control: ClassVar[Mapping[str, Any]] = MappingProxyType({"alpha": 0.0})
+    #: What the control still learns, if anything (said in the sweep's control note).
+    control_also: ClassVar[str] = ""
     #: The rule's own history.csv columns (between theta_c and the trial's flags).
     history_columns: ClassVar[tuple[str, ...]] = ()
     #: The entries the rule keeps in ``LearnerState.memory``.
