@@ -429,3 +429,32 @@ def test_learning_curves_show_the_ac_columns(tmp_path: object) -> None:
     )
     assert np.all(run.history.column("critic_norm") > 0)
     assert set(h.reward) <= {10.0, 0.0, -5.0}
+
+
+def test_ac_resumes_through_its_checkpoint_file_to_the_uninterrupted_run(
+    tmp_path: object,
+) -> None:
+    """striatal.train(out=...) stopped after 5 trials, checkpointed every 2, then resumed:
+    the critic, the rms of delta and the generator come back from checkpoint.json."""
+    import striatal
+
+    kw = {"learner": "ac", "init": "random", "seed": 6, "max_trials": 9, "checkpoint_every": 2}
+    full = striatal.train(out=f"{tmp_path}/full", **kw)  # type: ignore[arg-type]
+    n = {"trials": 0}
+
+    def stop() -> bool:
+        n["trials"] += 1
+        return n["trials"] == 5
+
+    cut = striatal.train(out=f"{tmp_path}/cut", should_stop=stop, **kw)  # type: ignore[arg-type]
+    assert cut.interrupted and cut.trials == 5
+    resumed = striatal.train(out=f"{tmp_path}/cut", resume=True)
+    assert resumed.history == full.history and resumed.W == full.W
+    from pathlib import Path
+
+    assert '"critic"' in Path(f"{tmp_path}/cut/checkpoint.json").read_text(encoding="utf-8")
+    with (
+        open(f"{tmp_path}/cut/history.csv", "rb") as a,
+        open(f"{tmp_path}/full/history.csv", "rb") as b,
+    ):
+        assert a.read() == b.read()
