@@ -154,9 +154,10 @@ def control_note(learner: str) -> str:
             "the same spreads and no update, judged like the learner on the candidate each "
             "trial ran"
         )
+    also = f"; {rule.control_also}" if rule.control_also else ""
     return (
         f"control arm ({learner}): {changes}, so the gains W never change; theta_c still "
-        "follows eq 21 (the threshold rule does not involve alpha), as in the learner arm"
+        "follows eq 21 (the threshold rule does not involve alpha), as in the learner arm" + also
     )
 
 

@@ -32,6 +32,9 @@ _FIELDS = {
     "normalise": "normalise",
     "decay": "decay",
     "plant_jitter": "plant_jitter",
+    "critic_rate": "critic_rate",
+    "td_discount": "td_discount",
+    "critic_decay": "critic_decay",
 }
 
 
@@ -153,6 +156,25 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="pgpe: each trial's pole mass and length scaled by U[1-J, 1+J], the controller "
         "believing the nominal plant (learning for robustness); " + _default_text("plant_jitter"),
+    )
+    lg.add_argument(
+        "--critic-rate",
+        type=float,
+        default=None,
+        help="ac: rate beta of the critic, v += beta delta z; " + _default_text("critic_rate"),
+    )
+    lg.add_argument(
+        "--td-discount",
+        type=float,
+        default=None,
+        help="ac: discount gamma_v per step of the TD error delta = r + gamma_v V(s') - V(s); "
+        + _default_text("td_discount"),
+    )
+    lg.add_argument(
+        "--critic-decay",
+        type=float,
+        default=None,
+        help="ac: lambda of the critic's trace; " + _default_text("critic_decay"),
     )
 
 

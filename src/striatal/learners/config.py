@@ -72,14 +72,19 @@ class LearnerConfig:
     w1_floor : W1 is kept >= this after every update.
     reward : "sparse" (eqs 24-25) or "shaped" (:func:`striatal.learners.common.shaped_reward`).
     rpe_rate : rate beta of the tracked baseline b <- b + beta (r - b) and of the running
-        mean square of the prediction error (rpe, pgpe).
-    normalise : divide the prediction error r - b by its running root mean square.
+        mean square of the prediction error (rpe, pgpe: per trial; ac: per step, of delta).
+    normalise : divide the prediction error r - b (ac: the TD error delta, for the actor)
+        by its running root mean square.
     explore : parameter-exploration std of W1..W5 (pgpe); theta_c's is 0.3 times it [rad].
     sigma_rate : rate of the log-std adaptation of the exploration (pgpe; 0: fixed).
     decay : synaptic decay lambda of W1..W5 (rpe, pgpe): the update adds
         -rate * lambda * W (rate: alpha for pgpe, alpha (1 - gamma) for rpe).
     plant_jitter : J of pgpe: each trial's true pole mass and length are the nominal
         ones times factors uniform in [1 - J, 1 + J] (0: the nominal plant).
+    critic_rate : rate beta of the critic's weights, v <- v + beta delta z (ac).
+    td_discount : discount gamma_v per control step of the TD error
+        delta = r + gamma_v V(s') - V(s) (ac); 1 - dt / tau for a value horizon tau.
+    critic_decay : lambda of the critic's trace z <- gamma_v lambda z + phi(s) (ac).
     """
 
     alpha: float = 5.0
@@ -101,6 +106,9 @@ class LearnerConfig:
     sigma_rate: float = 0.0
     decay: float = 0.0
     plant_jitter: float = 0.0
+    critic_rate: float = 0.01
+    td_discount: float = 0.99
+    critic_decay: float = 0.9
 
     def __post_init__(self) -> None:
         a = require_finite("alpha", self.alpha)
@@ -145,6 +153,15 @@ class LearnerConfig:
         jit = require_finite("plant_jitter", self.plant_jitter)
         if not 0.0 <= jit <= 0.5:
             raise ParameterError(f"plant_jitter must be in [0, 0.5], got {self.plant_jitter}")
+        cr = require_finite("critic_rate", self.critic_rate)
+        if not 0.0 <= cr <= 1.0:
+            raise ParameterError(f"critic_rate must be in [0, 1], got {self.critic_rate}")
+        td = require_finite("td_discount", self.td_discount)
+        if not 0.0 <= td < 1.0:
+            raise ParameterError(f"td_discount must be in [0, 1), got {self.td_discount}")
+        lam = require_finite("critic_decay", self.critic_decay)
+        if not 0.0 <= lam <= 1.0:
+            raise ParameterError(f"critic_decay must be in [0, 1], got {self.critic_decay}")
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

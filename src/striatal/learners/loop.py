@@ -22,6 +22,7 @@ from dataclasses import replace
 import numpy as np
 
 from striatal.errors import ParameterError
+from striatal.learners.ac import AC
 from striatal.learners.chapter import CHAPTER
 from striatal.learners.common import initial_state, jitter_corners
 from striatal.learners.common import shaped_reward as shaped_reward
@@ -36,7 +37,7 @@ from striatal.rollout import Protocol, TrialOutcome, recorded_trial, run_trial
 __all__ = ["LEARNERS", "RULES", "check_config", "learn", "learning_step", "rule_of"]
 
 #: The registry: learner name -> rule. Add a rule here (docs/architecture.md).
-RULES: dict[str, Rule] = {r.name: r for r in (CHAPTER, RPE, PGPE)}
+RULES: dict[str, Rule] = {r.name: r for r in (CHAPTER, RPE, PGPE, AC)}
 #: The learner names, in the registry's order.
 LEARNERS: tuple[str, ...] = tuple(RULES)
 
@@ -130,7 +131,10 @@ def learning_step(
         chapter_eligibility=plan.eligibility == "chapter",
         model=model,
     )
-    if config.reward == "shaped":
+    if rule.runs_trial:
+        outcome = rule.run(config, plan, kwargs)
+        reward = outcome.reward
+    elif config.reward == "shaped":
         outcome, data = recorded_trial(**kwargs)  # type: ignore[arg-type]
         reward = shaped_reward(data, outcome, true_plant, sim, protocol)
     else:
