@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from striatal.cli import options
+from striatal.cli.lists import CommaList
 from striatal.params import CHAPTER_FINAL_THETA_C, check_theta_c
 
 COMMAND = "switch-figure"
@@ -29,11 +30,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--inhibition",
-        type=float,
-        nargs="+",
-        default=[2.0, 5.0, 20.0, 50.0],
-        metavar="GAMMA",
-        help="strengths of lateral inhibition gamma [1/rad], one curve each",
+        action=CommaList,
+        item=float,
+        legacy_spaces=True,
+        default=(2.0, 5.0, 20.0, 50.0),
+        metavar="GAMMA[,...]",
+        help="strengths of lateral inhibition gamma [1/rad], one curve each; comma-separated",
     )
     parser.add_argument(
         "--out", type=options.out_path, default=Path("soft_switch.png"), help="PNG file"
