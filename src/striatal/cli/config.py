@@ -145,9 +145,11 @@ def tokens(parser: argparse.ArgumentParser, values: Mapping[str, Any], source: s
                 f"{source}: [{key}] is a table; write its options at the top level (key = value)"
             )
         action = by_flag.get(f"--{name}")
+        if action is not None and action.nargs == 0:
+            dest = action.dest  # a flag: --normalise = false is its partner --no-normalise
         group = (
             [action]
-            if action is not None
+            if action is not None and action.nargs != 0
             else [a for a in parser._actions if a.dest == dest and a.option_strings]
         )
         if (
@@ -171,7 +173,7 @@ def _words_of(group: Sequence[argparse.Action], value: Any, where: str) -> list[
         for a in group:
             if a.const is value:
                 return [a.option_strings[-1]]
-        if value == first.default or first.default is None:
+        if value is first.default:
             return []
         raise ParameterError(f"{where} = {str(value).lower()} cannot be set")
     if isinstance(value, bool):
