@@ -382,3 +382,20 @@ def test_toml_writer_reads_back() -> None:
     )
     got = tomllib.loads(config.toml_text("sweep", args))
     assert got == {"a": odd, "b": [1.5, -2.0, math.inf], "c": True, "e": "x/y", "f": 3}
+
+
+def test_a_folder_from_before_recorded_options_still_resumes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "s"
+    _tiny_sweep(out)
+    spath = out / "sweep.json"
+    old = json.loads(spath.read_text())
+    del old["options"]
+    spath.write_text(json.dumps(old))
+    capsys.readouterr()
+    assert _tiny_sweep(out)["options"]["seeds"] == 2
+    assert "ran 0 runs, 4 already in --out" in capsys.readouterr().out
+    # other options are still refused
+    assert main(["sweep", *TINY_SWEEP, "--seed", "9", "--no-progress", "--out", str(out)]) == 2
+    assert "other settings" in capsys.readouterr().err

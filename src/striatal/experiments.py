@@ -844,7 +844,10 @@ def _sweep(
         spath = out / "sweep.json"
         if spath.exists():
             old = read_json(spath, what="sweep settings")
-            if old != json_roundtrip(settings):
+            new = json_roundtrip(settings)
+            if isinstance(old, dict) and "options" not in old:
+                new.pop("options", None)  # a folder from before the options were recorded
+            if old != new:
                 raise ParameterError(
                     f"{out} holds a sweep with other settings; use another --out "
                     "or the same options to resume it"
