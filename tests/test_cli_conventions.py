@@ -399,3 +399,15 @@ def test_a_folder_from_before_recorded_options_still_resumes(
     # other options are still refused
     assert main(["sweep", *TINY_SWEEP, "--seed", "9", "--no-progress", "--out", str(out)]) == 2
     assert "other settings" in capsys.readouterr().err
+
+
+def test_every_command_has_json() -> None:
+    missing = [n for n, p in COMMANDS.items() if "--json" not in p._option_string_actions]
+    assert missing == []
+
+
+def test_no_docstring_or_help_points_at_a_notes_file() -> None:
+    """Users have docs/paper-notes.md, not the NOTES file of the sources."""
+    src = Path(__file__).resolve().parents[1] / "src" / "striatal"
+    said = [str(p) for p in src.rglob("*.py") if "NOTES" in p.read_text(encoding="utf-8")]
+    assert said == []

@@ -48,7 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action=CommaList,
         default=VARIANT_NAMES,
         metavar="NAME[,...]",
-        help="variants to run, from: " + ", ".join(VARIANT_NAMES),
+        help="variants to run (default: all), from: " + ", ".join(VARIANT_NAMES),
     )
     parser.add_argument(
         "--eval-draws",
