@@ -40,7 +40,8 @@ class OneLineParser(argparse.ArgumentParser):
 
     Every command's parser is one of these, so a negative value reads as a value
     everywhere: argparse's own test knows only ``-1`` and ``-1.5`` and takes
-    ``-2e-1``, ``-inf`` or ``-1,2`` for an unknown option.
+    ``-2e-1``, ``-inf`` or ``-1,2`` for an unknown option. Their help is formatted by
+    :class:`~striatal.cli.helpformat.DefaultsHelpFormatter` (each default stated once).
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
