@@ -17,6 +17,7 @@ import pytest
 from striatal.cli import build_parser, config, main, progress
 from striatal.cli.ablation import variant_line
 from striatal.cli.helpformat import DefaultsHelpFormatter
+from striatal.learners import default_config
 
 TINY_SWEEP = ["--seeds", "2", "--max-trials", "3", "--duration", "2", "--eval-draws", "0"]
 
@@ -384,7 +385,7 @@ def test_toml_writer_reads_back() -> None:
     assert got == {"a": odd, "b": [1.5, -2.0, math.inf], "c": True, "e": "x/y", "f": 3}
 
 
-def test_a_folder_from_before_recorded_options_still_resumes(
+def test_resume_compares_what_is_computed_not_how_it_was_asked(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "s"
@@ -395,6 +396,10 @@ def test_a_folder_from_before_recorded_options_still_resumes(
     spath.write_text(json.dumps(old))
     capsys.readouterr()
     assert _tiny_sweep(out)["options"]["seeds"] == 2
+    assert "ran 0 runs, 4 already in --out" in capsys.readouterr().out
+    # an option given at its default computes the same sweep: it resumes too
+    alpha = str(default_config("chapter").alpha)
+    assert _tiny_sweep(out, "--alpha", alpha)["options"]["alpha"] == float(alpha)
     assert "ran 0 runs, 4 already in --out" in capsys.readouterr().out
     # other options are still refused
     assert main(["sweep", *TINY_SWEEP, "--seed", "9", "--no-progress", "--out", str(out)]) == 2
