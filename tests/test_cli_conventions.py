@@ -45,7 +45,7 @@ def _helps(p: argparse.ArgumentParser) -> list[tuple[argparse.Action, str]]:
 
 
 def test_every_command_is_checked() -> None:
-    assert len(COMMANDS) == 15 and {"sweep", "ablation", "bench", "train"} <= set(COMMANDS)
+    assert len(COMMANDS) >= 15 and {"sweep", "ablation", "bench", "train"} <= set(COMMANDS)
 
 
 @pytest.mark.parametrize("name", sorted(COMMANDS))
