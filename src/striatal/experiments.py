@@ -809,8 +809,9 @@ def sweep(
     then write ``out``/summary.json (atomically) from all rows.
 
     ``settings`` is stored in ``out``/sweep.json; a rerun in the same folder must use
-    the same settings (ParameterError otherwise). ``out`` is locked for the whole
-    sweep: a second sweep on it gets DataFileError.
+    the same settings (ParameterError otherwise), ``settings["options"]`` aside: the
+    options as they were given, recorded for ``--print-config --from-summary``.
+    ``out`` is locked for the whole sweep: a second sweep on it gets DataFileError.
     """
     if out is None:
         return _sweep(
@@ -845,7 +846,13 @@ def _sweep(
         spath = out / "sweep.json"
         if spath.exists():
             old = read_json(spath, what="sweep settings")
-            if old != json_roundtrip(settings):
+            # settings.options records how the sweep was asked for (an option left to its
+            # default or given at that value), the rest what it computes: only that counts
+            new = json_roundtrip(settings)
+            new.pop("options", None)
+            if isinstance(old, dict):
+                old.pop("options", None)
+            if old != new:
                 raise ParameterError(
                     f"{out} holds a sweep with other settings; use another --out "
                     "or the same options to resume it"

@@ -130,7 +130,13 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="divide the prediction error by its running rms; " + _default_text("normalise"),
     )
-    norm.add_argument("--no-normalise", dest="normalise", action="store_const", const=False)
+    norm.add_argument(
+        "--no-normalise",
+        dest="normalise",
+        action="store_const",
+        const=False,
+        help="use the raw prediction error (the opposite of --normalise)",
+    )
     lg.add_argument(
         "--explore",
         type=float,
