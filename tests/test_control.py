@@ -67,7 +67,7 @@ def test_chapter_final_gains_swing_up_and_pass_success_test(
     assert o.success and not o.fault
     assert len(traj.switch_times) == 1
     assert 10.0 < traj.switch_times[0] < 30.0  # "in about 25 seconds"
-    assert 4.0 < o.max_abs_x < 8.0  # NOTES section 5: the cart travels about 6 m
+    assert 4.0 < o.max_abs_x < 8.0  # docs/paper-notes.md section 5: the cart travels about 6 m
 
 
 def test_printed_sign_fails(plant: Plant, sim60: Simulation) -> None:

@@ -209,7 +209,7 @@ def test_balancing_near_upright_follows_the_rate_controller() -> None:
 
 
 def test_printed_sign_network_drops_the_pole() -> None:
-    """The printed balancing sign (NOTES section 1) does not hold the pole in the network."""
+    """The printed balancing sign (docs/paper-notes.md section 1) does not hold the pole."""
     sim = Simulation(theta0=0.3, duration=4.0)
     r = run_network(
         Controller(balance_sign="chapter"), PLANT, sim, NetworkConfig(neurons=600), seed=0

@@ -374,7 +374,7 @@ def test_gif_with_the_real_renderer(tmp_path: Path) -> None:
 
 
 def test_runaway_run_is_drawn_clipped_but_complete() -> None:
-    """The printed balancing sign runs away (NOTES 1): the data stay whole, the view clips."""
+    """The printed balancing sign runs away (paper-notes.md 1): data stay whole, view clips."""
     traj = simulate(Plant(), Controller(balance_sign="chapter"), Simulation())
     assert traj.outcome.fault
     fig = plots.figure5(traj)

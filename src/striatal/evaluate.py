@@ -12,6 +12,7 @@ test is the same.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -104,6 +105,7 @@ def pass_probability(
     model: Plant | None = None,
     sensor: SensorNoise | None = None,
     hardware: Hardware = CHAPTER_HARDWARE,
+    on_draw: Callable[[int], None] | None = None,
 ) -> PassProbability:
     """Chance that one noisy trial with ``controller``'s gains passes the success test.
 
@@ -115,7 +117,8 @@ def pass_probability(
     section 8). ``sensor``: noise on what the controller sees (default none);
     ``hardware``: the motor's hold and limit and the track (default: the chapter's
     idealisation; docs/paper-notes.md section 9). Same seed, same result. For the
-    robustness set see :func:`striatal.robust.check_robust`.
+    robustness set see :func:`striatal.robust.check_robust`. ``on_draw(k)`` is called
+    after the k-th noisy trial (a progress bar); it does not touch the draws.
     """
     n = check_draws(draws)
     sensor = sensor or SensorNoise()
@@ -142,11 +145,13 @@ def pass_probability(
     mean_ok, _, mean_seconds = trial(mean_policy=True)
     passes = positive = 0
     seconds = mean_seconds
-    for _ in range(n):
+    for k in range(n):
         ok, reward, ended = trial(mean_policy=False)
         passes += ok
         positive += reward > 0
         seconds += ended
+        if on_draw is not None:
+            on_draw(k + 1)
     low, high = wilson_interval(passes, n).bounds or (0.0, 1.0)  # n >= 1: never None
     return PassProbability(
         gains=controller.gains,

@@ -178,9 +178,10 @@ def control_note(learner: str) -> str:
             "the same spreads and no update, judged like the learner on the candidate each "
             "trial ran"
         )
+    also = f"; {rule.control_also}" if rule.control_also else ""
     return (
         f"control arm ({learner}): {changes}, so the gains W never change; theta_c still "
-        "follows eq 21 (the threshold rule does not involve alpha), as in the learner arm"
+        "follows eq 21 (the threshold rule does not involve alpha), as in the learner arm" + also
     )
 
 
@@ -867,8 +868,9 @@ def sweep(
     then write ``out``/summary.json (atomically) from all rows.
 
     ``settings`` is stored in ``out``/sweep.json; a rerun in the same folder must use
-    the same settings (ParameterError otherwise). ``out`` is locked for the whole
-    sweep: a second sweep on it gets DataFileError.
+    the same settings (ParameterError otherwise), ``settings["options"]`` aside: the
+    options as they were given, recorded for ``--print-config --from-summary``.
+    ``out`` is locked for the whole sweep: a second sweep on it gets DataFileError.
     """
     if out is None:
         return _sweep(
@@ -903,7 +905,13 @@ def _sweep(
         spath = out / "sweep.json"
         if spath.exists():
             old = read_json(spath, what="sweep settings")
-            if old != json_roundtrip(settings):
+            # settings.options records how the sweep was asked for (an option left to its
+            # default or given at that value), the rest what it computes: only that counts
+            new = json_roundtrip(settings)
+            new.pop("options", None)
+            if isinstance(old, dict):
+                old.pop("options", None)
+            if old != new:
                 raise ParameterError(
                     f"{out} holds a sweep with other settings; use another --out "
                     "or the same options to resume it"

@@ -61,6 +61,8 @@ __all__ = [
     "force",
     "judge",
     "judge_batch",
+    "motor_force",
+    "plant_step",
     "policy_mean",
     "rk4_force_step",
     "rk4_step",
@@ -71,8 +73,10 @@ __all__ = [
     "sincos_poly",
     "step_batch",
     "switch_weights",
+    "trace_step",
     "wrap_angle",
     "wrap_angles",
+    "write_summary",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -533,6 +537,71 @@ def _clip_force(f: float, max_force: float) -> float:
 
 
 @njit(cache=True)
+def motor_force(
+    s: float,
+    c: float,
+    otheta: float,
+    theta_dot: float,
+    a: float,
+    noisy_sensor: bool,
+    plant: PlantArgs,
+) -> float:
+    """The motor's force f [N] over a step: eq 12 with the model for the action a, clipped.
+
+    ``s``, ``c``: sin and cos of the true theta; ``otheta``: the angle the controller
+    sees. With the force held and a noisy sensor the digital controller computes eq 12
+    from the angle it sees. Shared by :func:`run_trial` and the online learners' loops.
+    """
+    if plant.hold_force and noisy_sensor:
+        f = _force_sc(math.sin(otheta), math.cos(otheta), theta_dot, a, plant.model)
+    else:
+        f = _force_sc(s, c, theta_dot, a, plant.model)
+    if plant.max_force < math.inf:
+        f = _clip_force(f, plant.max_force)
+    return f
+
+
+@njit(cache=True)
+def plant_step(
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    s: float,
+    c: float,
+    a: float,
+    f: float,
+    plant: PlantArgs,
+) -> tuple[float, float, float, float]:
+    """One control step dt of the plant (eqs 8-9 or 13-14) under the action a held.
+
+    ``s``, ``c``: sin and cos of theta; ``f``: the step's motor force
+    (:func:`motor_force`). With ``plant.hold_force`` f is held (:func:`rk4_force_step`);
+    with a finite ``plant.max_force`` u is held behind the limited motor
+    (:func:`_rk4_limited`); otherwise u is held (:func:`rk4_step`'s arithmetic). The one
+    plant step of :func:`run_trial` and of the online learners' compiled loops.
+    """
+    if plant.hold_force:
+        return rk4_force_step(x, x_dot, theta, theta_dot, f, plant.dt, plant.plant)
+    if plant.max_force < math.inf:
+        return _rk4_limited(
+            x,
+            x_dot,
+            theta,
+            theta_dot,
+            a,
+            plant.dt,
+            plant.plant,
+            plant.model,
+            plant.mismatch,
+            plant.max_force,
+        )
+    return _rk4_sc(
+        x, x_dot, theta, theta_dot, s, c, a, plant.dt, plant.plant, plant.model, plant.mismatch
+    )
+
+
+@njit(cache=True)
 def energy_error(theta: float, theta_dot: float, plant: np.ndarray) -> float:
     """E~ = E_p - E_d, eqs 15-16 [J]."""
     m = plant[1]
@@ -740,6 +809,72 @@ def judge_batch(
 
 
 @njit(cache=True)
+def trace_step(
+    eps: float,
+    sigma: float,
+    gamma: float,
+    g1: float,
+    g2: float,
+    g3: float,
+    g4: float,
+    g5: float,
+    d0: float,
+    d1: float,
+    d2: float,
+    d3: float,
+    d4: float,
+    d5: float,
+) -> tuple[float, float, float, float, float, float]:
+    """The trace D = e + gamma D of eq 3 after one draw a = mu + eps (eq 5).
+
+    e: the Gaussian policy's eligibilities with the chapter's rescaling
+    (docs/paper-notes.md section 2): eps d mu / d W_i for W1..W5 (``g1``..``g5``,
+    :func:`policy_mean`'s gradient) and (eps^2 - sigma^2)(1.1 - sigma) for W6.
+    """
+    return (
+        eps * g1 + gamma * d0,
+        eps * g2 + gamma * d1,
+        eps * g3 + gamma * d2,
+        eps * g4 + gamma * d3,
+        eps * g5 + gamma * d4,
+        (eps * eps - sigma * sigma) * (1.1 - sigma) + gamma * d5,
+    )
+
+
+@njit(cache=True)
+def write_summary(
+    out: np.ndarray,
+    status: int,
+    reward: float,
+    end_step: int,
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    min_swing: float,
+    min_all: float,
+    n_switches: int,
+    max_abs_x: float,
+    max_abs_f: float,
+) -> None:
+    """Write a trial's summary row ``out`` (N_OUT,), layout OUT_*, as :func:`run_trial` does."""
+    out[OUT_REWARD] = reward
+    out[OUT_END_STEP] = end_step
+    out[OUT_X] = x
+    out[OUT_X_DOT] = x_dot
+    out[OUT_THETA] = wrap_angle(theta)
+    out[OUT_THETA_DOT] = theta_dot
+    out[OUT_MIN_ABS_THETA_SWINGUP] = min_swing
+    out[OUT_MIN_ABS_THETA] = min_all
+    out[OUT_FAULT] = 1.0 if status == STATUS_FAULT else 0.0
+    out[OUT_EARLY] = 1.0 if status == STATUS_EARLY else 0.0
+    out[OUT_N_SWITCHES] = n_switches
+    out[OUT_MAX_ABS_X] = max_abs_x
+    out[OUT_MAX_ABS_FORCE] = max_abs_f
+    out[OUT_TRACK] = 1.0 if status == STATUS_TRACK else 0.0
+
+
+@njit(cache=True)
 def run_trial(
     state0: np.ndarray,
     gains: Gains,
@@ -778,9 +913,7 @@ def run_trial(
     """
     W = gains.W
     theta_c = gains.theta_c
-    p = plant.plant
     model = plant.model
-    mismatch = plant.mismatch
     dt = plant.dt
     action_every = control.action_every
     trace = learning.trace
@@ -811,7 +944,6 @@ def run_trial(
     d3 = trace[3]
     d4 = trace[4]
     d5 = trace[5]
-    hold_force = plant.hold_force
     max_force = plant.max_force
     limited = max_force < math.inf
     min_swing = math.inf
@@ -873,23 +1005,14 @@ def run_trial(
                 if stochastic:
                     eps = sigma * noise.action[draw]
                     a = mu + eps
-                    d0 = eps * g1 + gamma * d0
-                    d1 = eps * g2 + gamma * d1
-                    d2 = eps * g3 + gamma * d2
-                    d3 = eps * g4 + gamma * d3
-                    d4 = eps * g5 + gamma * d4
-                    d5 = (eps * eps - sigma * sigma) * (1.1 - sigma) + gamma * d5
+                    d0, d1, d2, d3, d4, d5 = trace_step(
+                        eps, sigma, gamma, g1, g2, g3, g4, g5, d0, d1, d2, d3, d4, d5
+                    )
                 else:
                     a = mu
                 draw += 1
             hold -= 1
-            if hold_force and noisy_sensor:
-                # the digital controller computes eq 12 from the angle it sees
-                f = _force_sc(math.sin(otheta), math.cos(otheta), theta_dot, a, model)
-            else:
-                f = _force_sc(s, c, theta_dot, a, model)
-            if limited:
-                f = _clip_force(f, max_force)
+            f = motor_force(s, c, otheta, theta_dot, a, noisy_sensor, plant)
             if abs(f) > max_abs_f:
                 max_abs_f = abs(f)
             if record:
@@ -901,16 +1024,7 @@ def run_trial(
                 traj[k, 5] = a
                 traj[k, 6] = f
                 traj[k, 7] = mode
-            if hold_force:
-                x, x_dot, theta, theta_dot = rk4_force_step(x, x_dot, theta, theta_dot, f, dt, p)
-            elif limited:
-                x, x_dot, theta, theta_dot = _rk4_limited(
-                    x, x_dot, theta, theta_dot, a, dt, p, model, mismatch, max_force
-                )
-            else:
-                x, x_dot, theta, theta_dot = _rk4_sc(
-                    x, x_dot, theta, theta_dot, s, c, a, dt, p, model, mismatch
-                )
+            x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, plant)
             status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
             if status == STATUS_FAULT:
                 end_step = k + 1
@@ -937,20 +1051,21 @@ def run_trial(
         f_end = force(theta, theta_dot, a, model)
         traj[end_step, 6] = _clip_force(f_end, max_force) if limited else f_end
         traj[end_step, 7] = MODE_BALANCE if abs(wrap_angle(theta)) < theta_c else MODE_SWINGUP
-    out[OUT_REWARD] = reward
-    out[OUT_END_STEP] = end_step
-    out[OUT_X] = x
-    out[OUT_X_DOT] = x_dot
-    out[OUT_THETA] = wrap_angle(theta)
-    out[OUT_THETA_DOT] = theta_dot
-    out[OUT_MIN_ABS_THETA_SWINGUP] = min_swing
-    out[OUT_MIN_ABS_THETA] = min_all
-    out[OUT_FAULT] = 1.0 if status == STATUS_FAULT else 0.0
-    out[OUT_EARLY] = 1.0 if status == STATUS_EARLY else 0.0
-    out[OUT_N_SWITCHES] = n_switches
-    out[OUT_MAX_ABS_X] = max_abs_x
-    out[OUT_MAX_ABS_FORCE] = max_abs_f
-    out[OUT_TRACK] = 1.0 if status == STATUS_TRACK else 0.0
+    write_summary(
+        out,
+        status,
+        reward,
+        end_step,
+        x,
+        x_dot,
+        theta,
+        theta_dot,
+        min_swing,
+        min_all,
+        n_switches,
+        max_abs_x,
+        max_abs_f,
+    )
 
 
 @njit(cache=True, parallel=True)

@@ -419,6 +419,9 @@ def running_mean(values: np.ndarray, window: int) -> np.ndarray:
 RULE_PANELS = {
     "sigma": ("σ [m/s²]", "policy std σ = 0.1 + sigmoid(W6) of eq 5 (per step)"),
     "explore": ("s (W1..W5)", "parameter-exploration std s of pgpe (per trial)"),
+    "return": ("Σ r_k", "return of the dense per-step reward r = -dt cost (ac)"),
+    "mean_delta": ("mean δ", "mean TD error δ = r + γ_v V(s') - V(s) over the trial (ac)"),
+    "critic_norm": ("|v|", "norm of the critic's weights after the trial (ac)"),
 }
 
 
@@ -426,7 +429,8 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
     """Reward per trial with running rates, the six gains, theta_c and the learner's own columns.
 
     Axes (in ``fig.axes`` order): reward, gains, theta_c, one per learner column
-    (sigma for chapter and rpe, explore for pgpe: :data:`RULE_PANELS`), then the
+    (sigma for chapter and rpe, explore for pgpe, sigma, return, mean_delta and
+    critic_norm for ac: :data:`RULE_PANELS`), then the
     twin axis of the running rates. The sparse reward (eqs 24-25) is drawn as +10,
     0 and -5 with the running fraction of +10; the shaped reward as its values and
     running mean. W1..W5 are what the controller acted with (pgpe: the mean of its

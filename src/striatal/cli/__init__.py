@@ -18,6 +18,8 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any, NoReturn
 
+from striatal.cli import config
+from striatal.cli.helpformat import DefaultsHelpFormatter
 from striatal.errors import StriatalError
 from striatal.files import check_no_dangling_link
 
@@ -38,10 +40,12 @@ class OneLineParser(argparse.ArgumentParser):
 
     Every command's parser is one of these, so a negative value reads as a value
     everywhere: argparse's own test knows only ``-1`` and ``-1.5`` and takes
-    ``-2e-1``, ``-inf`` or ``-1,2`` for an unknown option.
+    ``-2e-1``, ``-inf`` or ``-1,2`` for an unknown option. Their help is formatted by
+    :class:`~striatal.cli.helpformat.DefaultsHelpFormatter` (each default stated once).
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", DefaultsHelpFormatter)
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = NEGATIVE_VALUE
 
@@ -74,7 +78,6 @@ def build_parser() -> argparse.ArgumentParser:
             mod.COMMAND,
             help=mod.HELP,
             description=getattr(mod, "DESCRIPTION", mod.HELP),
-            formatter_class=argparse.ArgumentDefaultsHelpFormatter,
         )
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
@@ -107,6 +110,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
     try:
+        if config.wants_file(args):
+            args = config.apply(parser, args, sys.argv[1:] if argv is None else argv)
+            if args.print_config:
+                sys.stdout.write(config.toml_text(args.command, args))
+                return 0
         out = getattr(args, "out", None)
         if isinstance(out, str | os.PathLike) and str(out):
             # every --out (a folder or a file): a link to nothing above it can never be

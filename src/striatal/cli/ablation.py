@@ -8,13 +8,16 @@ output folder's lock); the table and ablation.json are written from its rows.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+from typing import Any
 
 from striatal import experiments
 from striatal.ablation import VARIANT_NAMES, build, markdown_table, table_rows, variant
-from striatal.cli import options
+from striatal.cli import config, options
+from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
-from striatal.files import atomic_write_text, check_out_dir, write_json
+from striatal.files import atomic_write_text, check_out_dir, dumps_json, write_json
 
 COMMAND = "ablation"
 ORDER = 45
@@ -29,15 +32,23 @@ DESCRIPTION = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seeds", type=int, default=100, help="number of seeds N")
+    parser.add_argument("--seeds", type=int, default=config.SEEDS, help="number of seeds N")
     parser.add_argument(
         "--first-seed", type=int, default=0, help="seeds S..S+N-1 (a fresh set: S = 100)"
     )
-    parser.add_argument("--max-trials", type=int, default=300)
+    parser.add_argument(
+        "--max-trials",
+        type=int,
+        default=300,
+        help="learning-trial budget of every variant's run (one budget for all, so the "
+        "variants compare on equal terms)",
+    )
     parser.add_argument(
         "--variants",
-        default=",".join(VARIANT_NAMES),
-        help="comma-separated names from: " + ", ".join(VARIANT_NAMES),
+        action=CommaList,
+        default=VARIANT_NAMES,
+        metavar="NAME[,...]",
+        help="variants to run (default: all), from: " + ", ".join(VARIANT_NAMES),
     )
     parser.add_argument(
         "--eval-draws",
@@ -46,8 +57,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="noisy trials of each pass-probability estimate (W(0) and final gains), "
         "counted apart as eval_simulations; 0: none",
     )
-    parser.add_argument("--workers", type=int, default=2, help="worker processes")
-    parser.add_argument("--backend", choices=("local", "ray"), default="local")
+    parser.add_argument(
+        "--workers", type=int, default=config.WORKERS, help="local worker processes"
+    )
+    parser.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="local worker processes, or a Ray cluster (--address)",
+    )
     parser.add_argument("--address", default=None, help="Ray cluster HOST:PORT (--backend ray)")
     parser.add_argument(
         "--connect-timeout",
@@ -61,7 +79,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="write runs.csv, summary.json, ablation.json and ablation.md here",
     )
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--json", action="store_true", help="print ablation.json on stdout (not the table)"
+    )
+    parser.add_argument(
+        "--no-progress", action="store_true", help="no progress bar, no line per variant"
+    )
+    config.add_config_arguments(parser)
+
+
+def _count(v: Any) -> str:
+    return "-" if not isinstance(v, int | float) or not math.isfinite(v) else f"{v:g}"
+
+
+def variant_line(name: str, s: dict[str, Any]) -> str:
+    """One variant's result as a line: successes of runs, median and 90th pct of trials."""
+    if not s["successes"]:
+        return f"{name}: 0 of {s['runs']} runs succeeded"
+    return (
+        f"{name}: {s['successes']} of {s['runs']} runs succeeded; trials to success: "
+        f"median {_count(s['median_trials'])}, 90th percentile {_count(s['p90_trials'])}"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -77,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
     if not args.connect_timeout > 0:
         raise ParameterError(f"--connect-timeout must be > 0 seconds, got {args.connect_timeout}")
-    names = [n.strip() for n in args.variants.split(",") if n.strip()]
+    names = list(args.variants)
     if not names:
         raise ParameterError(f"--variants names no variant; choose from {', '.join(VARIANT_NAMES)}")
     if len(set(names)) != len(names):
@@ -85,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
     chosen = [variant(n) for n in names]
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     specs, settings = build(chosen, seeds, args.max_trials, args.eval_draws)
+    settings["options"] = config.recorded_options(args)
+    talk = not (args.no_progress or args.json)
     result = experiments.sweep(
         specs,
         settings,
@@ -94,15 +134,15 @@ def run(args: argparse.Namespace) -> int:
         workers=args.workers,
         address=args.address,
         connect_timeout=args.connect_timeout,
-        progress=not args.no_progress and sys.stderr.isatty(),
+        progress=talk and sys.stderr.isatty(),
     )
     rows, data = table_rows(chosen, result)
-    for v, s in rows:
-        brief = {k: s[k] for k in ("runs", "successes", "median_trials", "p90_trials")}
-        print(f"{v.name}: {brief}", file=sys.stderr, flush=True)
+    if talk:
+        for v, s in rows:
+            print(variant_line(v.name, s), file=sys.stderr, flush=True)
     table = markdown_table(rows)
     if args.out is not None:
         write_json(args.out / "ablation.json", data)
         atomic_write_text(args.out / "ablation.md", table)
-    sys.stdout.write(table)
+    sys.stdout.write(dumps_json(data) if args.json else table)
     return 0

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 from striatal.cli import options
 from striatal.cli.options import add_gain_source_arguments, controller_and_plant
 from striatal.errors import ParameterError
+from striatal.files import dumps_json
 from striatal.limits import count_of_steps
 
 COMMAND = "animate"
@@ -36,6 +38,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--width", type=int, default=720, help="frame width [px]")
     parser.add_argument("--height", type=int, default=320, help="frame height [px]")
+    parser.add_argument(
+        "--json", action="store_true", help="print a JSON record of what was written on stdout"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -71,6 +76,18 @@ def run(args: argparse.Namespace) -> int:
         traj, fps=args.fps, speed=args.speed, width=args.width, height=args.height
     )
     plots.save_animation(frames, out, fps=args.fps)
+    if args.json:
+        record = {
+            "wrote": str(out),
+            "frames": len(frames),
+            "fps": args.fps,
+            "speed": args.speed,
+            "simulated_seconds": float(traj.t[-1]),
+            "width": args.width,
+            "height": args.height,
+        }
+        sys.stdout.write(dumps_json(record))
+        return 0
     print(
         f"wrote {out}: {len(frames)} frames at {args.fps:g} fps, {args.speed:g}x real time "
         f"({traj.t[-1]:g} s simulated)"

@@ -10,7 +10,7 @@ from typing import Any
 from striatal import experiments
 from striatal.cli import options
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import read_json, write_json
+from striatal.files import dumps_json, read_json, write_json
 
 COMMAND = "compare"
 ORDER = 41
@@ -57,6 +57,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("summaries", nargs="+", type=Path, help="sweep folders or summary.json")
     parser.add_argument(
         "--out", type=options.out_path, default=None, help="write the table as JSON here"
+    )
+    parser.add_argument(
+        "--json", action="store_true", help="print the table as JSON (as --out writes it)"
     )
 
 
@@ -158,17 +161,13 @@ def run(args: argparse.Namespace) -> int:
     arms.sort(key=lambda a: (a["init"], a["arm"]))
     pairs = label_pairs(summaries)
     table = experiments.markdown_table({"arms": arms, "learner_vs_control": pairs})
+    record = {
+        "arms": arms,
+        "learner_vs_control": pairs,
+        "notes": list(dict.fromkeys(n for s in summaries for n in s.get("notes", []) or [])),
+        "settings": [s.get("settings", {}) for s in summaries],
+    }
     if args.out is not None:
-        write_json(
-            args.out,
-            {
-                "arms": arms,
-                "learner_vs_control": pairs,
-                "notes": list(
-                    dict.fromkeys(n for s in summaries for n in s.get("notes", []) or [])
-                ),
-                "settings": [s.get("settings", {}) for s in summaries],
-            },
-        )
-    sys.stdout.write(table)
+        write_json(args.out, record)
+    sys.stdout.write(dumps_json(record) if args.json else table)
     return 0

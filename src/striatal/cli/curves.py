@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from striatal.cli import options
 from striatal.errors import ParameterError
+from striatal.files import dumps_json
 from striatal.rundir import read_history
 
 COMMAND = "curves"
@@ -29,6 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--window", type=int, default=50, help="trials in the running fractions")
     parser.add_argument("--dpi", type=int, default=120, help="resolution of a PNG")
+    parser.add_argument(
+        "--json", action="store_true", help="print a JSON record of what was written on stdout"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,5 +47,9 @@ def run(args: argparse.Namespace) -> int:
     history = read_history(args.history)
     fig = plots.learning_curves(history, window=args.window)
     plots.save_figure(fig, out, dpi=args.dpi)
+    if args.json:
+        record = {"wrote": str(out), "history": str(args.history), "trials": len(history)}
+        sys.stdout.write(dumps_json({**record, "window": args.window}))
+        return 0
     print(f"wrote {out}: {len(history)} trials")
     return 0

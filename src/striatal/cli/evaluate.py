@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from striatal.cli import options
+from striatal.cli import options, progress
 from striatal.errors import ParameterError
 from striatal.files import dumps_json
 from striatal.params import Controller, Plant, Simulation
@@ -49,6 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=_count, default=0, help="seed of the noise generator")
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    progress.add_progress_argument(parser)
     options.add_hardware_arguments(parser)
 
 
@@ -68,9 +69,25 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(
             f"--duration must be at least the {Protocol().check_time:g}-s check of eq 24"
         )
-    res = pass_probability(
-        plant, controller, sim, Protocol(), args.draws, args.seed, hardware=hardware
-    )
+    shown = progress.bar(args, total=args.draws, unit="draw")
+
+    def on_draw(k: int) -> None:
+        shown.n = k
+        shown.update(0)
+
+    try:
+        res = pass_probability(
+            plant,
+            controller,
+            sim,
+            Protocol(),
+            args.draws,
+            args.seed,
+            hardware=hardware,
+            on_draw=on_draw,
+        )
+    finally:
+        shown.close()
     if args.json:
         out = res.to_dict()
         out["duration"] = sim.duration

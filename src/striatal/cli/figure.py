@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 from striatal.cli import options
 from striatal.errors import ParameterError
+from striatal.files import dumps_json
 from striatal.limits import count_of_steps
 
 COMMAND = "figure"
@@ -34,6 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--every", type=float, default=0.2, help="time between motion snapshots [s]"
     )
     parser.add_argument("--dpi", type=int, default=120, help="resolution of a PNG")
+    parser.add_argument(
+        "--json", action="store_true", help="print a JSON record of what was written on stdout"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -54,10 +59,24 @@ def run(args: argparse.Namespace) -> int:
     fig = plots.figure5(traj, every=args.every)
     plots.save_figure(fig, out, dpi=args.dpi)
     o = traj.outcome
+    snapshots = len(plots.snapshot_indices(traj, args.every))
+    caption = plots.figure5_caption(traj, every=args.every)
+    if args.json:
+        record = {
+            "wrote": str(out),
+            "snapshots": snapshots,
+            "switch_times": [float(t) for t in traj.switch_times],
+            "success": bool(o.success),
+            "W": list(controller.gains),
+            "theta_c": controller.theta_c,
+            "duration": sim.duration,
+            "caption": caption,
+        }
+        sys.stdout.write(dumps_json(record))
+        return 0
     print(
-        f"wrote {out}: {len(plots.snapshot_indices(traj, args.every))} snapshots, "
-        f"{len(traj.switch_times)} switch(es), success test "
-        f"{'passed' if o.success else 'failed'}"
+        f"wrote {out}: {snapshots} snapshots, {len(traj.switch_times)} switch(es), "
+        f"success test {'passed' if o.success else 'failed'}"
     )
-    print(plots.figure5_caption(traj, every=args.every))
+    print(caption)
     return 0

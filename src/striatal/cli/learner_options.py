@@ -34,6 +34,9 @@ _FIELDS = {
     "plant_jitter": "plant_jitter",
     "robust": "robust",
     "symmetric": "symmetric",
+    "critic_rate": "critic_rate",
+    "td_discount": "td_discount",
+    "critic_decay": "critic_decay",
 }
 
 
@@ -129,7 +132,13 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="divide the prediction error by its running rms; " + _default_text("normalise"),
     )
-    norm.add_argument("--no-normalise", dest="normalise", action="store_const", const=False)
+    norm.add_argument(
+        "--no-normalise",
+        dest="normalise",
+        action="store_const",
+        const=False,
+        help="use the raw prediction error (the opposite of --normalise)",
+    )
     lg.add_argument(
         "--explore",
         type=float,
@@ -174,6 +183,25 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
         "(striatal simulate --robust: 9 mean-policy runs of 60 s) for the run to stop; "
         "every run counted (docs/paper-notes.md section 12). It also applies the learner's "
         "robust preset before the options given (pgpe: --plant-jitter 0.2 --alpha 0.5)",
+    )
+    lg.add_argument(
+        "--critic-rate",
+        type=float,
+        default=None,
+        help="ac: rate beta of the critic, v += beta delta z; " + _default_text("critic_rate"),
+    )
+    lg.add_argument(
+        "--td-discount",
+        type=float,
+        default=None,
+        help="ac: discount gamma_v per step of the TD error delta = r + gamma_v V(s') - V(s); "
+        + _default_text("td_discount"),
+    )
+    lg.add_argument(
+        "--critic-decay",
+        type=float,
+        default=None,
+        help="ac: lambda of the critic's trace; " + _default_text("critic_decay"),
     )
 
 

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from striatal.cli import progress
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, Simulation, check_seed
 
@@ -63,6 +64,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     run_g.add_argument("--duration", type=float, default=60.0, help="T_f [s]")
     options.add_plant_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    progress.add_progress_argument(parser)
     parser.add_argument(
         "--out",
         type=Path,
@@ -104,7 +106,24 @@ def run(args: argparse.Namespace) -> int:
 
         check_image_path(args.circuit_figure, (".png", ".svg", ".pdf"))
     require_nengo()
-    result = run_network(controller, plant, sim, config, seed, record_rates=args.out is not None)
+    shown = progress.bar(args, total=sim.duration, unit="s")
+
+    def on_progress(t: float) -> None:
+        shown.n = round(t, 6)
+        shown.update(0)
+
+    try:
+        result = run_network(
+            controller,
+            plant,
+            sim,
+            config,
+            seed,
+            record_rates=args.out is not None,
+            on_progress=on_progress,
+        )
+    finally:
+        shown.close()
     summary = result.summary()
     summary["settings"] = {
         "controller": controller.to_dict(),

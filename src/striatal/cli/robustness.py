@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 
 from striatal import baselines
-from striatal.cli import options
+from striatal.cli import lists, options
+from striatal.cli.lists import CommaList
 from striatal.errors import DataFileError, ParameterError
 from striatal.files import atomic_write_text, dumps_json, read_json
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant
@@ -28,11 +29,13 @@ DESCRIPTION = (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("files", type=Path, nargs="+", help="result.json or ablation.json")
     parser.add_argument(
-        "--variant",
-        action="append",
-        default=[],
-        help="a variant of an ablation.json, one column each (repeatable; default: all)",
+        "--variants",
+        action=CommaList,
+        default=(),
+        metavar="NAME[,...]",
+        help="variants of an ablation.json, one column each (default: all)",
     )
+    lists.add_repeated_alias(parser, "--variant", "--variants", dest="variants")
     parser.add_argument("--repeats", type=int, default=10, help="sensor-noise runs per controller")
     parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
     parser.add_argument("--json", action="store_true", help="print the rows as JSON")
@@ -47,14 +50,14 @@ def run(args: argparse.Namespace) -> int:
     merged: dict[str, list[Controller]] = {}
     for f in args.files:
         try:
-            found = controller_groups(read_json(f, what="result"), variants=args.variant)
+            found = controller_groups(read_json(f, what="result"), variants=args.variants)
         except (KeyError, TypeError) as exc:
             raise DataFileError(f"{f} is not a result.json or ablation.json: {exc!r}") from None
         except ParameterError as exc:
             raise DataFileError(f"{f}: {exc}") from None
         for name, ctrls in found:
             merged.setdefault(name, []).extend(ctrls)
-    missing = [v for v in args.variant if v not in merged]
+    missing = [v for v in args.variants if v not in merged]
     if missing:
         raise ParameterError(f"no successful run of variant(s) {', '.join(missing)} in the files")
     if not merged:

@@ -7,7 +7,9 @@ import sys
 from typing import Any
 
 from striatal import baselines, experiments
-from striatal.cli import learner_options, options
+from striatal.cli import config, learner_options, options
+from striatal.cli.config import SEEDS, WORKERS
+from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
 from striatal.files import check_out_dir, dumps_json
 from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W, Simulation
@@ -29,32 +31,24 @@ DESCRIPTION = (
 )
 
 
-def _floats(text: str, name: str) -> tuple[float, ...]:
-    try:
-        values = tuple(float(v) for v in text.split(",") if v.strip())
-    except ValueError:
-        raise ParameterError(f"{name} must be comma-separated numbers, got {text!r}") from None
-    if not values:
-        raise ParameterError(f"{name} is empty")
-    return values
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("sweep")
-    g.add_argument("--seeds", type=int, default=10, help="number of seeds N per arm and init")
+    g.add_argument("--seeds", type=int, default=SEEDS, help="number of seeds N per arm and init")
     g.add_argument("--seed", type=int, default=0, help="root seed of SeedSequence")
     g.add_argument(
         "--init",
-        nargs="+",
-        choices=("chapter", "random"),
-        default=["chapter"],
-        help="W(0): the chapter's, and/or uniform in [-1, 1]^6 per seed (as train --init random)",
+        action=CommaList,
+        names=("chapter", "random"),
+        legacy_spaces=True,
+        default=("chapter",),
+        help="W(0): the chapter's, and/or uniform in [-1, 1]^6 per seed (as train --init "
+        "random); comma-separated",
     )
     g.add_argument(
         "--theta-c0", type=float, default=CHAPTER_INITIAL_THETA_C, help="theta_c(0) [rad]"
     )
-    g.add_argument("--alpha-grid", default=None, help="comma-separated alphas (default: --alpha)")
-    g.add_argument("--gamma-grid", default=None, help="comma-separated gammas (default: --gamma)")
+    g.add_argument("--alpha-grid", action=CommaList, item=float, help="alphas (default: --alpha)")
+    g.add_argument("--gamma-grid", action=CommaList, item=float, help="gammas (default: --gamma)")
     g.add_argument(
         "--no-control", action="store_true", help="skip the learner's no-learning control arm"
     )
@@ -67,9 +61,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     g.add_argument(
         "--baselines",
-        default="",
-        help="comma-separated baselines to run on the same seeds: "
-        + ", ".join(baselines.BASELINES),
+        action=CommaList,
+        default=(),
+        metavar="NAME[,...]",
+        help="baselines to run on the same seeds, from: " + ", ".join(baselines.BASELINES),
     )
     learner_options.add_learner_arguments(parser)
     options.add_controller_arguments(parser, gains_required=False)
@@ -78,7 +73,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     rg.add_argument("--duration", type=float, default=60.0, help="trial length T_f [s]")
     options.add_plant_arguments(parser)
     eg = parser.add_argument_group("engine and output")
-    eg.add_argument("--backend", choices=("local", "ray"), default="local")
+    eg.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="local worker processes, or a Ray cluster (--address)",
+    )
     eg.add_argument("--address", default=None, help="Ray cluster address HOST:PORT (--backend ray)")
     eg.add_argument(
         "--connect-timeout",
@@ -86,12 +86,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=experiments.CONNECT_TIMEOUT,
         help="give up on a Ray address that accepts no connection after this many seconds",
     )
-    eg.add_argument("--workers", type=int, default=1, help="local worker processes")
+    eg.add_argument("--workers", type=int, default=WORKERS, help="local worker processes")
     eg.add_argument(
         "--out", type=options.out_path, default=None, help="write runs.csv, summary.json here"
     )
     eg.add_argument("--json", action="store_true", help="print summary.json on stdout")
     eg.add_argument("--no-progress", action="store_true", help="no progress bar")
+    config.add_config_arguments(parser)
 
 
 def prepare(
@@ -112,9 +113,9 @@ def prepare(
     plant = options.plant_from(args)
     sim = Simulation(duration=args.duration, dt=args.dt)
     template = options.controller_from(args, CHAPTER_INITIAL_W, args.theta_c0)
-    alphas = _floats(args.alpha_grid, "--alpha-grid") if args.alpha_grid else ()
-    gammas = _floats(args.gamma_grid, "--gamma-grid") if args.gamma_grid else ()
-    methods = [m.strip() for m in args.baselines.split(",") if m.strip()]
+    alphas = tuple(args.alpha_grid or ())
+    gammas = tuple(args.gamma_grid or ())
+    methods = list(args.baselines)
     inits = tuple(dict.fromkeys(args.init))
     seeds = experiments.spawn_seeds(args.seed, args.seeds)
     specs, arm_settings = experiments.build_specs(
@@ -177,6 +178,7 @@ def prepare(
 def run(args: argparse.Namespace) -> int:
     out = check_out_dir(args.out) if args.out is not None else None
     specs, settings, max_trials = prepare(args)
+    settings["options"] = config.recorded_options(args)
     result = experiments.sweep(
         specs,
         settings,

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from striatal.cli import options
+from striatal.cli.lists import CommaList
+from striatal.files import dumps_json
 from striatal.params import CHAPTER_FINAL_THETA_C, check_theta_c
 
 COMMAND = "switch-figure"
@@ -29,16 +32,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--inhibition",
-        type=float,
-        nargs="+",
-        default=[2.0, 5.0, 20.0, 50.0],
-        metavar="GAMMA",
-        help="strengths of lateral inhibition gamma [1/rad], one curve each",
+        action=CommaList,
+        item=float,
+        legacy_spaces=True,
+        default=(2.0, 5.0, 20.0, 50.0),
+        metavar="GAMMA[,...]",
+        help="strengths of lateral inhibition gamma [1/rad], one curve each; comma-separated",
     )
     parser.add_argument(
         "--out", type=options.out_path, default=Path("soft_switch.png"), help="PNG file"
     )
     parser.add_argument("--dpi", type=int, default=120, help="resolution of a PNG")
+    parser.add_argument(
+        "--json", action="store_true", help="print a JSON record of what was written on stdout"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -51,5 +58,9 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--dpi must be in [10, 1000], got {args.dpi}")
     fig = plots.switch_figure(theta_c, args.inhibition)
     plots.save_figure(fig, out, dpi=args.dpi)
+    if args.json:
+        record = {"wrote": str(out), "theta_c": theta_c, "inhibition": list(args.inhibition)}
+        sys.stdout.write(dumps_json(record))
+        return 0
     print(f"wrote {out}: theta_c = {theta_c:g} rad, gamma = {', '.join(map(str, args.inhibition))}")
     return 0

@@ -30,7 +30,8 @@ DESCRIPTION = (
     "sparse reward, until the chapter's success test holds or --max-trials. "
     "--init random draws W(0) uniformly in [-1, 1]^6 from the seed; there and in "
     "--init-gains a W1 below 0.001 is floored at 0.001 (docs/paper-notes.md section 11). "
-    "--learner rpe / pgpe select the variants beyond the chapter (docs/ablation.md); "
+    "--learner rpe / pgpe / ac select the variants beyond the chapter (docs/ablation.md, "
+    "docs/results.md); "
     "unset learning options take the chosen learner's defaults."
 )
 

@@ -72,8 +72,9 @@ class LearnerConfig:
     w1_floor : W1 is kept >= this after every update.
     reward : "sparse" (eqs 24-25) or "shaped" (:func:`striatal.learners.common.shaped_reward`).
     rpe_rate : rate beta of the tracked baseline b <- b + beta (r - b) and of the running
-        mean square of the prediction error (rpe, pgpe).
-    normalise : divide the prediction error r - b by its running root mean square.
+        mean square of the prediction error (rpe, pgpe: per trial; ac: per step, of delta).
+    normalise : divide the prediction error r - b (ac: the TD error delta, for the actor)
+        by its running root mean square.
     explore : parameter-exploration std of W1..W5 (pgpe); theta_c's is 0.3 times it [rad].
     sigma_rate : rate of the log-std adaptation of the exploration (pgpe; 0: fixed).
     decay : synaptic decay lambda of W1..W5 (rpe, pgpe): the update adds
@@ -84,9 +85,13 @@ class LearnerConfig:
         p + eps, p - eps on the same plant, and one update follows each pair with the
         reward difference (r+ - r-) / 2 in place of r - b.
     robust : the robust stop rule (issue 15, any rule): every trial and check holds the
-        motor force of eq 12 over each step, and a controller that passes the success
-        test must also pass the robustness set (:func:`striatal.robust.stop_check`,
-        every run counted) for the run to stop.
+        motor force of eq 12 over each step (ac's own online trial still holds u), and
+        a controller that passes the success test must also pass the robustness set
+        (:func:`striatal.robust.stop_check`, every run counted) for the run to stop.
+    critic_rate : rate beta of the critic's weights, v <- v + beta delta z (ac).
+    td_discount : discount gamma_v per control step of the TD error
+        delta = r + gamma_v V(s') - V(s) (ac); 1 - dt / tau for a value horizon tau.
+    critic_decay : lambda of the critic's trace z <- gamma_v lambda z + phi(s) (ac).
 
     ``symmetric`` and ``robust`` (added with issue 15) are left out of :meth:`to_dict`
     when False, so the settings and run ids of runs without them stay as they were.
@@ -113,6 +118,9 @@ class LearnerConfig:
     plant_jitter: float = 0.0
     symmetric: bool = False
     robust: bool = False
+    critic_rate: float = 0.01
+    td_discount: float = 0.99
+    critic_decay: float = 0.9
 
     def __post_init__(self) -> None:
         a = require_finite("alpha", self.alpha)
@@ -160,6 +168,15 @@ class LearnerConfig:
         for name in _LATER_FLAGS:
             if not isinstance(getattr(self, name), bool):
                 raise ParameterError(f"{name} must be true or false, got {getattr(self, name)!r}")
+        cr = require_finite("critic_rate", self.critic_rate)
+        if not 0.0 <= cr <= 1.0:
+            raise ParameterError(f"critic_rate must be in [0, 1], got {self.critic_rate}")
+        td = require_finite("td_discount", self.td_discount)
+        if not 0.0 <= td < 1.0:
+            raise ParameterError(f"td_discount must be in [0, 1), got {self.td_discount}")
+        lam = require_finite("critic_decay", self.critic_decay)
+        if not 0.0 <= lam <= 1.0:
+            raise ParameterError(f"critic_decay must be in [0, 1], got {self.critic_decay}")
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)

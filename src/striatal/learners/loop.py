@@ -15,7 +15,9 @@ controller that passes the success test must also pass the robustness set
 (:func:`striatal.robust.stop_check`, each of its runs counted; the nominal case is
 not rerun when the success test's noise-free nominal run already was it). With a
 jittered plant, a rule judged on its noise-free candidate is first filtered by its
-own trial on that plant (no nominal rerun); the set then decides.
+own trial on that plant (no nominal rerun); the set then decides. A rule that runs its
+trial itself (``runs_trial``: ac's online loop, ``striatal.online``) runs it with u
+held even then; its success checks and the set hold the force.
 :func:`learn` repeats it until success or ``max_trials``.
 """
 
@@ -29,6 +31,7 @@ from dataclasses import replace
 import numpy as np
 
 from striatal.errors import ParameterError
+from striatal.learners.ac import AC
 from striatal.learners.chapter import CHAPTER
 from striatal.learners.common import initial_state, jitter_corners
 from striatal.learners.common import shaped_reward as shaped_reward
@@ -44,7 +47,7 @@ from striatal.rollout import Protocol, TrialOutcome, recorded_trial, run_trial
 __all__ = ["LEARNERS", "RULES", "check_config", "learn", "learning_step", "rule_of"]
 
 #: The registry: learner name -> rule. Add a rule here (docs/architecture.md).
-RULES: dict[str, Rule] = {r.name: r for r in (CHAPTER, RPE, PGPE)}
+RULES: dict[str, Rule] = {r.name: r for r in (CHAPTER, RPE, PGPE, AC)}
 #: The learner names, in the registry's order.
 LEARNERS: tuple[str, ...] = tuple(RULES)
 
@@ -142,7 +145,10 @@ def learning_step(
         model=model,
         hardware=hardware,
     )
-    if config.reward == "shaped":
+    if rule.runs_trial:
+        outcome = rule.run(config, plan, kwargs)
+        reward = outcome.reward
+    elif config.reward == "shaped":
         outcome, data = recorded_trial(**kwargs)  # type: ignore[arg-type]
         reward = shaped_reward(data, outcome, true_plant, sim, protocol)
     else:

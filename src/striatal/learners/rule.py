@@ -78,6 +78,8 @@ class Rule:
     #: The no-learning control: the fields changed to switch learning off (the sweep's
     #: control arm), everything else (exploration, eq 21) kept.
     control: ClassVar[Mapping[str, Any]] = MappingProxyType({"alpha": 0.0})
+    #: What the control still learns, if anything (said in the sweep's control note).
+    control_also: ClassVar[str] = ""
     #: The rule's own history.csv columns (between theta_c and the trial's flags).
     history_columns: ClassVar[tuple[str, ...]] = ()
     #: The entries the rule keeps in ``LearnerState.memory``.
@@ -88,6 +90,9 @@ class Rule:
     #: (the plan's W and theta_c: pgpe's candidate p') rather than the state's mean W.
     #: Then, on success, :meth:`update` must return the plan's W and theta_c.
     judges_candidate: ClassVar[bool] = False
+    #: Whether the rule runs its trial itself (:meth:`run`): a rule that changes W within
+    #: the trial (ac). Otherwise the loop runs the plan with :mod:`striatal.rollout`.
+    runs_trial: ClassVar[bool] = False
 
     @property
     def options(self) -> tuple[str, ...]:
@@ -120,6 +125,13 @@ class Rule:
     def plan(
         self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
     ) -> TrialPlan:
+        raise NotImplementedError
+
+    def run(self, config: LearnerConfig, plan: TrialPlan, trial: Mapping[str, Any]) -> TrialOutcome:
+        """Run ``plan``'s trial (rules with :attr:`runs_trial` only); ``trial``: the loop's
+        keyword arguments of :func:`striatal.rollout.run_trial` (plant, controller, sim,
+        protocol, gains, rng, trace, gamma, action_every, chapter_eligibility, model). The
+        trial's sparse reward (eqs 24-25) is the outcome's."""
         raise NotImplementedError
 
     def update(

@@ -1,0 +1,482 @@
+"""The compiled online trial of the actor-critic learner, on the kernel's functions.
+
+One trial of the chapter's protocol (eqs 24-25) in which the gains change at every
+step, in the manner of Doya (2000, continuous-time actor-critic) and Frémaux et al.
+(2013, TD-modulated three-factor rule), discretised at the control step dt:
+
+- a critic V(s) = v . phi(s), linear in :data:`N_FEATURES` bounded features of the
+  state (:func:`features`: a bias, the distance from upright, the squared energy
+  error E~ of eqs 15-16, the cart's distance and the two speeds);
+- a dense reward r_k = -dt cost(s_{k+1}) (:func:`step_cost`: distance from
+  upright, squared energy error, cart distance, weights :data:`COST_WEIGHTS`);
+- the temporal-difference error delta_k = r_k + gamma_v V(s_{k+1}) - V(s_k) at
+  every step: the dopamine-like factor. The protocol's ends in time (eq 24's check
+  at 30 s, T_f) are time limits: V(s') is bootstrapped (the critic sees no clock); a
+  trial that leaves the track or faults ends in a terminal state worth
+  :func:`failure_value`;
+- the actor's eligibility trace D of eq 3, updated at every draw by the kernel's own
+  :func:`striatal.kernel.trace_step`, and W <- W + clip(alpha delta_k D_k, +-max_step)
+  at every step (W1 floored), delta optionally divided by its running rms;
+- the critic's trace z <- gamma_v lambda z + phi(s_k) and v <- v + beta delta_k z.
+
+The plant, the controllers and the eligibilities are the kernel's njit functions
+(:func:`striatal.kernel.plant_step`, ``_policy_wrapped``, ``trace_step``, ``judge``,
+``write_summary``): no physics is written here. With alpha = beta = 0 the trial is
+:func:`striatal.kernel.run_trial`'s bit for bit (tests/test_online.py).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from striatal.errors import ParameterError
+from striatal.kernel import (
+    MODE_BALANCE,
+    MODE_SWINGUP,
+    STATUS_FAULT,
+    STATUS_RUNNING,
+    STATUS_TRACK,
+    ControlArgs,
+    Gains,
+    NoiseArgs,
+    PlantArgs,
+    ProtocolArgs,
+    TraceArgs,
+    _inv_root,
+    _policy_wrapped,
+    judge,
+    motor_force,
+    plant_step,
+    sigma_of,
+    trace_step,
+    wrap_angle,
+    write_summary,
+)
+from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
+from striatal.rollout import Protocol, TrialOutcome, trial_args
+
+__all__ = [
+    "COST_WEIGHTS",
+    "FEATURE_NAMES",
+    "N_FEATURES",
+    "N_STATS",
+    "STAT_N",
+    "STAT_RETURN",
+    "STAT_SUM_DELTA",
+    "STAT_SUM_DELTA2",
+    "STAT_VALUE0",
+    "CriticArgs",
+    "OnlineTrial",
+    "failure_value",
+    "features",
+    "online_trial",
+    "run_online_trial",
+    "step_cost",
+]
+
+#: The critic's features phi(s), each in [0, 1) (see :func:`features`).
+FEATURE_NAMES = ("bias", "upright", "energy", "cart", "cart_speed", "pole_speed")
+N_FEATURES = len(FEATURE_NAMES)
+#: Weights of the cost terms (distance from upright, squared energy error, cart distance)
+#: of the dense reward r = -dt cost (:func:`step_cost`).
+COST_WEIGHTS = (1.0, 1.0, 1.0)
+
+# Layout of the statistics row written by :func:`run_online_trial`.
+STAT_SUM_DELTA = 0
+STAT_SUM_DELTA2 = 1
+STAT_N = 2
+STAT_RETURN = 3
+STAT_VALUE0 = 4
+N_STATS = 5
+
+
+class CriticArgs(NamedTuple):
+    """The online rule's rates and the critic, for :func:`run_online_trial`.
+
+    ``alpha``: the actor's rate; ``beta``: the critic's; ``discount``: gamma_v of
+    delta per step; ``critic_decay``: lambda of the critic's trace; ``max_step``:
+    bound on each component of one step's change of W; ``w1_floor``: W1's floor;
+    ``check_x``: the cart distance [m] that scales the cart feature (eq 24's 3 m);
+    ``weights`` (N_FEATURES,) v and ``trace`` (N_FEATURES,) z, updated in place;
+    ``stats`` (N_STATS,): written (layout STAT_*); ``normalise``: the actor's factor is
+    delta over the root of its running mean square ``square`` (1,) (updated in place,
+    0: start at delta^2), which tracks (1 - square_rate) square + square_rate delta^2.
+    """
+
+    alpha: float
+    beta: float
+    discount: float
+    critic_decay: float
+    max_step: float
+    w1_floor: float
+    check_x: float
+    weights: np.ndarray
+    trace: np.ndarray
+    stats: np.ndarray
+    normalise: bool
+    square_rate: float
+    square: np.ndarray
+
+
+@njit(cache=True)
+def _energy_ratio(cos_th: float, theta_dot: float, model: np.ndarray) -> float:
+    """E~ / (2 E_d) with E~ of eqs 15-16 and E_d = m g l: -1 hanging at rest, 0 upright."""
+    length = model[2]
+    g = model[3]
+    return (0.5 * length * length * theta_dot * theta_dot + g * length * (cos_th - 1.0)) / (
+        2.0 * g * length
+    )
+
+
+@njit(cache=True)
+def _saturate(q: float) -> float:
+    """q / (1 + q) for q >= 0: 0 at 0, 1/2 at 1, below 1."""
+    return q / (1.0 + q)
+
+
+@njit(cache=True)
+def features(
+    x: float,
+    x_dot: float,
+    th: float,
+    theta_dot: float,
+    model: np.ndarray,
+    check_x: float,
+    phi: np.ndarray,
+) -> None:
+    """The critic's features phi(s) (N_FEATURES,) of a state, written into ``phi``.
+
+    ``th`` wrapped [rad]; ``model`` [M, m, l, g] the controller's plant. In order
+    (FEATURE_NAMES): 1; (1 - cos th) / 2 (0 upright, 1 hanging); sat(e^2) with
+    e = E~ / (2 m g l) (eqs 15-16); sat((x / check_x)^2); sat(x_dot^2) [x_dot in m/s];
+    sat(theta_dot^2 l / g); sat(q) = q / (1 + q). All in [0, 1), so one step of the
+    critic is bounded.
+    """
+    c = math.cos(th)
+    e = _energy_ratio(c, theta_dot, model)
+    xr = x / check_x
+    phi[0] = 1.0
+    phi[1] = 0.5 * (1.0 - c)
+    phi[2] = _saturate(e * e)
+    phi[3] = _saturate(xr * xr)
+    phi[4] = _saturate(x_dot * x_dot)
+    phi[5] = _saturate(theta_dot * theta_dot * model[2] / model[3])
+
+
+@njit(cache=True)
+def step_cost(phi: np.ndarray) -> float:
+    """The dense reward's cost per second, from the features of the state reached:
+    w_1 (1 - cos th) / 2 + w_2 sat(e^2) + w_3 sat((x / check_x)^2) (COST_WEIGHTS)."""
+    return 1.0 * phi[1] + 1.0 * phi[2] + 1.0 * phi[3]
+
+
+@njit(cache=True)
+def failure_value(dt: float, discount: float) -> float:
+    """The value of the terminal state of a trial that left the track or faulted:
+    the largest cost (3 per second) for ever, -3 dt / (1 - gamma_v)."""
+    return -3.0 * dt / (1.0 - discount)
+
+
+@njit(cache=True)
+def _dot(v: np.ndarray, phi: np.ndarray) -> float:
+    s = 0.0
+    for i in range(phi.shape[0]):
+        s += v[i] * phi[i]
+    return s
+
+
+@njit(cache=True)
+def run_online_trial(
+    state0: np.ndarray,
+    gains: Gains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
+    noise: NoiseArgs,
+    learning: TraceArgs,
+    critic: CriticArgs,
+    out: np.ndarray,
+) -> None:
+    """One trial with the online actor-critic update at every step (module docstring).
+
+    The arguments are :func:`striatal.kernel.run_trial`'s (build them with
+    :func:`striatal.rollout.trial_args`; no sensor noise, nothing recorded) plus
+    ``critic``. ``gains.W`` (6,) is updated in place: it holds the gains at the
+    trial's end. ``learning.trace`` (eq 3) and ``critic.weights`` / ``critic.trace``
+    are updated in place; ``out`` (N_OUT,) gets the summary row (layout OUT_*) and
+    ``critic.stats`` the sum of delta, of delta^2, the number of TD steps, the return
+    sum r_k and V(s_0).
+    """
+    W = gains.W
+    theta_c = gains.theta_c
+    model = plant.model
+    dt = plant.dt
+    action_every = control.action_every
+    trace = learning.trace
+    gamma = learning.gamma
+    n_steps = protocol.n_steps
+    x = state0[0]
+    x_dot = state0[1]
+    theta = state0[2]
+    theta_dot = state0[3]
+    stochastic = noise.action.shape[0] > 0
+    sign = control.sign
+    soft = control.soft
+    inhibition = control.inhibition
+    chapter_eligibility = control.chapter_eligibility
+    alpha = critic.alpha
+    beta = critic.beta
+    discount = critic.discount
+    lam = critic.critic_decay
+    max_step = critic.max_step
+    v = critic.weights
+    z = critic.trace
+    stats = critic.stats
+    square = critic.square
+    sq_rate = critic.square_rate
+    normalise = critic.normalise
+    sigma = sigma_of(W[5])
+    root = math.sqrt(W[0] * model[3])
+    inv_root = _inv_root(W[0], model[3])
+    d = np.empty(6)
+    for i in range(6):
+        d[i] = trace[i]
+    phi = np.empty(N_FEATURES)
+    phi_next = np.empty(N_FEATURES)
+    v_fail = failure_value(dt, discount)
+    min_swing = math.inf
+    min_all = math.inf
+    n_switches = 0
+    prev_mode = -1
+    max_abs_x = abs(x)
+    max_abs_f = 0.0
+    a = 0.0
+    draw = 0
+    hold = 0
+    status = STATUS_RUNNING
+    reward = 0.0
+    end_step = n_steps
+    sum_delta = 0.0
+    sum_delta2 = 0.0
+    n_td = 0
+    ret = 0.0
+    features(x, x_dot, wrap_angle(theta), theta_dot, model, critic.check_x, phi)
+    stats[STAT_VALUE0] = _dot(v, phi)
+    if protocol.check_step == 0:
+        status, reward = judge(x, x_dot, theta, theta_dot, 0, protocol)
+        if status != STATUS_RUNNING:
+            end_step = 0
+    if status == STATUS_RUNNING:
+        for k in range(n_steps):
+            s = math.sin(theta)
+            c = math.cos(theta)
+            th = wrap_angle(theta)
+            abs_th = abs(th)
+            mode = MODE_BALANCE if abs_th < theta_c else MODE_SWINGUP
+            if mode == MODE_SWINGUP and abs_th < min_swing:
+                min_swing = abs_th
+            if abs_th < min_all:
+                min_all = abs_th
+            if prev_mode >= 0 and mode != prev_mode:
+                n_switches += 1
+            prev_mode = mode
+            # the critic's view of s_k (with the weights as they are now)
+            features(x, x_dot, th, theta_dot, model, critic.check_x, phi)
+            value = _dot(v, phi)
+            for i in range(N_FEATURES):
+                z[i] = discount * lam * z[i] + phi[i]
+            if hold == 0:
+                hold = action_every
+                mu, g1, g2, g3, g4, g5 = _policy_wrapped(
+                    x,
+                    x_dot,
+                    th,
+                    theta_dot,
+                    W,
+                    theta_c,
+                    sign,
+                    soft,
+                    inhibition,
+                    model,
+                    chapter_eligibility,
+                    root,
+                    inv_root,
+                    c,
+                    th == theta,
+                )
+                if stochastic:
+                    eps = sigma * noise.action[draw]
+                    a = mu + eps
+                    d[0], d[1], d[2], d[3], d[4], d[5] = trace_step(
+                        eps, sigma, gamma, g1, g2, g3, g4, g5, d[0], d[1], d[2], d[3], d[4], d[5]
+                    )
+                else:
+                    a = mu
+                draw += 1
+            hold -= 1
+            f = motor_force(s, c, theta, theta_dot, a, False, plant)
+            if abs(f) > max_abs_f:
+                max_abs_f = abs(f)
+            x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, plant)
+            status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
+            # the TD error: the ends of the protocol in time (eq 24's check at 30 s, T_f)
+            # bootstrap, as the critic sees no time; the track and a fault are terminal
+            if status != STATUS_TRACK and status != STATUS_FAULT:
+                features(x, x_dot, wrap_angle(theta), theta_dot, model, critic.check_x, phi_next)
+                r = -dt * step_cost(phi_next)
+                delta = r + discount * _dot(v, phi_next) - value
+            else:
+                r = -3.0 * dt
+                delta = r + discount * v_fail - value
+            if math.isfinite(delta):
+                ret += r
+                sum_delta += delta
+                sum_delta2 += delta * delta
+                n_td += 1
+                for i in range(N_FEATURES):
+                    v[i] += beta * delta * z[i]
+                # the actor's factor: delta, or delta over its running rms
+                sq = square[0]
+                sq = delta * delta if sq <= 0.0 else (1.0 - sq_rate) * sq + sq_rate * delta * delta
+                square[0] = sq
+                factor = delta
+                if normalise:
+                    factor = delta / math.sqrt(sq) if sq > 0.0 else 0.0
+                if alpha != 0.0:
+                    changed = False
+                    for i in range(6):
+                        step = alpha * factor * d[i]
+                        step = min(max(step, -max_step), max_step)
+                        if math.isfinite(step) and step != 0.0:
+                            W[i] += step
+                            changed = True
+                    if changed:
+                        if W[0] < critic.w1_floor:
+                            W[0] = critic.w1_floor
+                        sigma = sigma_of(W[5])
+                        root = math.sqrt(W[0] * model[3])
+                        inv_root = _inv_root(W[0], model[3])
+            if status == STATUS_FAULT:
+                end_step = k + 1
+                break
+            if abs(x) > max_abs_x:
+                max_abs_x = abs(x)
+            if status != STATUS_RUNNING:
+                end_step = k + 1
+                break
+    if stochastic:
+        for i in range(6):
+            trace[i] = d[i]
+    stats[STAT_SUM_DELTA] = sum_delta
+    stats[STAT_SUM_DELTA2] = sum_delta2
+    stats[STAT_N] = n_td
+    stats[STAT_RETURN] = ret
+    write_summary(
+        out,
+        status,
+        reward,
+        end_step,
+        x,
+        x_dot,
+        theta,
+        theta_dot,
+        min_swing,
+        min_all,
+        n_switches,
+        max_abs_x,
+        max_abs_f,
+    )
+
+
+class OnlineTrial(NamedTuple):
+    """What :func:`online_trial` returns: the outcome, the gains at the trial's end
+    (6,) and the statistics row (N_STATS,, layout STAT_*)."""
+
+    outcome: TrialOutcome
+    W: np.ndarray
+    stats: np.ndarray
+
+
+def online_trial(
+    plant: Plant,
+    controller: Controller,
+    sim: Simulation,
+    *,
+    protocol: Protocol,
+    rng: np.random.Generator | None,
+    gains: np.ndarray,
+    trace: np.ndarray,
+    gamma: float,
+    critic: np.ndarray,
+    critic_trace: np.ndarray,
+    alpha: float,
+    beta: float,
+    discount: float,
+    critic_decay: float,
+    max_step: float = 1.0,
+    w1_floor: float = 1e-3,
+    action_every: int = 1,
+    chapter_eligibility: bool = False,
+    model: Plant | None = None,
+    hardware: Hardware = CHAPTER_HARDWARE,
+    state0: np.ndarray | None = None,
+    normalise: bool = False,
+    square_rate: float = 0.001,
+    square: np.ndarray | None = None,
+) -> OnlineTrial:
+    """One online actor-critic trial (:func:`run_online_trial`) from ``gains``.
+
+    ``rng`` draws the action noise exactly as :func:`striatal.rollout.run_trial` does
+    (None: the mean policy, then D and W stay); ``trace`` (6,), ``critic`` and
+    ``critic_trace`` (N_FEATURES,) are updated in place; ``gains`` is not. ``state0``
+    [x, x_dot, theta, theta_dot] overrides the simulation's start at rest.
+    ``normalise``: the actor's factor is delta over its running rms, whose mean square
+    ``square`` (1,) (updated in place; default a fresh 0) tracks delta^2 at
+    ``square_rate`` per step.
+    """
+    if not 0.0 <= discount < 1.0:
+        raise ParameterError(f"the TD discount must be in [0, 1), got {discount}")
+    if not 0.0 <= critic_decay <= 1.0:
+        raise ParameterError(f"the critic's trace decay must be in [0, 1], got {critic_decay}")
+    if critic.shape != (N_FEATURES,) or critic_trace.shape != (N_FEATURES,):
+        raise ParameterError(f"the critic and its trace must have shape ({N_FEATURES},)")
+    n_draws = -(-sim.n_steps // action_every)
+    noise = rng.standard_normal(n_draws) if rng is not None else None
+    W = np.array(gains, dtype=float)
+    args = trial_args(
+        plant,
+        controller,
+        sim,
+        protocol=protocol,
+        noise=noise,
+        gains=W,
+        model=model,
+        action_every=action_every,
+        chapter_eligibility=chapter_eligibility,
+        gamma=gamma,
+        trace=trace,
+        hardware=hardware,
+        state0=state0,
+    )
+    stats = np.zeros(N_STATS)
+    rates = CriticArgs(
+        alpha=float(alpha),
+        beta=float(beta),
+        discount=float(discount),
+        critic_decay=float(critic_decay),
+        max_step=float(max_step),
+        w1_floor=float(w1_floor),
+        check_x=protocol.check_x,
+        weights=critic,
+        trace=critic_trace,
+        stats=stats,
+        normalise=bool(normalise),
+        square_rate=float(square_rate),
+        square=np.zeros(1) if square is None else square,
+    )
+    run_online_trial(*args[:7], rates, args[7].out)
+    return OnlineTrial(TrialOutcome.from_row(args[7].out, sim), W, stats)
