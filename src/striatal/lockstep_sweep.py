@@ -42,6 +42,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
+import numba
 import numpy as np
 
 from striatal import kernel
@@ -54,10 +55,12 @@ from striatal.learners.pgpe import EXPLORE_RANGE, THETA_C_LEARNED_RANGE, initial
 from striatal.params import N_GAINS, Simulation, check_seed, check_theta_c
 from striatal.rollout import Protocol, batch_args
 
-__all__ = ["BATCH_LEARNERS", "check_specs", "execute_batch", "unsupported"]
+__all__ = ["BATCH_LEARNERS", "CHUNK", "check_specs", "execute_batch", "unsupported"]
 
 #: The learning rules the batch engine runs (their updates vectorised below).
 BATCH_LEARNERS: tuple[str, ...] = ("chapter", "rpe", "pgpe")
+#: Trials a kernel thread takes at a time (numba.set_parallel_chunksize).
+CHUNK = 2
 
 
 def unsupported(specs: Sequence[RunSpec]) -> str | None:
@@ -261,7 +264,13 @@ class _Batch:
             gamma=gamma,
             traces=traces,
         )
-        kernel.run_trials_batch(*args)
+        # dynamic chunks: a thread that the OS takes away (a shared machine) or that gets
+        # the long trials does not hold up the others at the end of the call
+        old = numba.set_parallel_chunksize(CHUNK)
+        try:
+            kernel.run_trials_batch(*args)
+        finally:
+            numba.set_parallel_chunksize(old)
         return args[-1]
 
     def _normals(self, idx: np.ndarray, n: int) -> np.ndarray:
