@@ -91,7 +91,7 @@ def test_batch_rows_equal_the_process_rows(case: str) -> None:
     for a, b in zip(serial, batch, strict=True):
         assert _no_wall(b) == _no_wall(a), (a["arm"], a["init"], a["seed"])
     # the runs differ among themselves, so equal rows are not equal by accident
-    assert len({r["simulated_seconds"] for r in batch}) > 4
+    assert len({(r["W1"], r["theta_c"], r["simulated_seconds"]) for r in batch}) > 4
     assert any(r["W1"] != r["W0_1"] for r in batch if r["arm"] == "learner")
     if case in ("chapter", "rpe"):
         assert any(r["success"] for r in batch)  # the success branch of the update ran
