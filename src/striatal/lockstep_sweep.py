@@ -55,10 +55,20 @@ from striatal.learners.pgpe import EXPLORE_RANGE, THETA_C_LEARNED_RANGE, initial
 from striatal.params import N_GAINS, Simulation, check_seed, check_theta_c
 from striatal.rollout import Protocol, batch_args
 
-__all__ = ["BATCH_LEARNERS", "CHUNK", "check_specs", "execute_batch", "unsupported"]
+__all__ = [
+    "BATCH_LEARNERS",
+    "CHUNK",
+    "TRIAL_KERNELS",
+    "check_specs",
+    "execute_batch",
+    "unsupported",
+]
 
 #: The learning rules the batch engine runs (their updates vectorised below).
 BATCH_LEARNERS: tuple[str, ...] = ("chapter", "rpe", "pgpe")
+#: The kernels the learning trials may run on: run_trials_batch (equal to the scalar
+#: kernel bit for bit) or run_trials_lockstep (equal within round-off).
+TRIAL_KERNELS: tuple[str, ...] = ("exact", "lockstep")
 #: Trials a kernel thread takes at a time (numba.set_parallel_chunksize).
 CHUNK = 2
 
@@ -106,12 +116,23 @@ def _group_key(spec: RunSpec) -> tuple[Any, ...]:
     return (shared, spec.template, spec.plant, spec.sim, spec.eval_draws)
 
 
-def execute_batch(specs: Sequence[RunSpec]) -> Iterator[dict[str, Any]]:
+def execute_batch(
+    specs: Sequence[RunSpec], *, trial_kernel: str = "exact"
+) -> Iterator[dict[str, Any]]:
     """Rows of ``specs`` (RUN_COLUMNS), each yielded when its run is finished and evaluated.
 
     The rows equal :func:`striatal.experiments.run_one`'s for the same specs except
     ``wall_seconds``. ParameterError if :func:`unsupported` says so.
+
+    ``trial_kernel`` "lockstep" runs the learning trials (not the evaluation) on
+    :func:`striatal.kernel.run_trials_lockstep` instead, for measuring what the SIMD
+    kernel would give (docs/performance.md): its trials equal the scalar kernel's only
+    within round-off, so its rows are not the process engine's.
     """
+    if trial_kernel not in TRIAL_KERNELS:
+        raise ParameterError(
+            f"trial_kernel must be one of {', '.join(TRIAL_KERNELS)}, got {trial_kernel!r}"
+        )
     check_specs(specs)
     groups: list[tuple[tuple[Any, ...], list[RunSpec]]] = []
     for s in specs:
@@ -123,7 +144,7 @@ def execute_batch(specs: Sequence[RunSpec]) -> Iterator[dict[str, Any]]:
         else:
             groups.append((key, [s]))
     for _, members in groups:
-        yield from _Batch(members).run()
+        yield from _Batch(members, trial_kernel == "lockstep").run()
 
 
 def _success(outs: np.ndarray, sim: Simulation) -> np.ndarray:
@@ -207,8 +228,9 @@ class _Baseline:
 class _Batch:
     """The runs of one group, advanced trial by trial together (state over the run axis)."""
 
-    def __init__(self, specs: list[RunSpec]) -> None:
+    def __init__(self, specs: list[RunSpec], lockstep: bool = False) -> None:
         first = specs[0]
+        self.lockstep = lockstep
         self.specs = specs
         self.config = first.config
         self.rule = rule_of(first.config)
@@ -250,6 +272,7 @@ class _Batch:
         gamma: float = 0.0,
         action_every: int = 1,
         chapter_eligibility: bool = False,
+        learning: bool = False,
     ) -> np.ndarray:
         args = batch_args(
             self.plant,
@@ -268,7 +291,10 @@ class _Batch:
         # the long trials does not hold up the others at the end of the call
         old = numba.set_parallel_chunksize(CHUNK)
         try:
-            kernel.run_trials_batch(*args)
+            if learning and self.lockstep:
+                kernel.run_trials_lockstep(*args)
+            else:
+                kernel.run_trials_batch(*args)
         finally:
             numba.set_parallel_chunksize(old)
         return args[-1]
@@ -301,6 +327,7 @@ class _Batch:
                 gamma=c.gamma,
                 action_every=c.action_every,
                 chapter_eligibility=c.eligibility == "chapter",
+                learning=True,
             )
             scratch = {"trace": traces}
         reward = outs[:, kernel.OUT_REWARD].copy()
@@ -311,7 +338,9 @@ class _Batch:
             success = _success(outs, self.sim)
         else:
             W_mean, tc_mean = self.W[idx].copy(), self.theta_c[idx].copy()
-            check = self._kernel(W_mean, tc_mean, noise=None, action_every=c.action_every)
+            check = self._kernel(
+                W_mean, tc_mean, noise=None, action_every=c.action_every, learning=True
+            )
             sims += 1
             seconds = seconds + check[:, kernel.OUT_END_STEP] * dt
             success = _success(check, self.sim)
@@ -403,7 +432,9 @@ class _Batch:
         p_trial[:, 0] = np.maximum(p_trial[:, 0], c.w1_floor)
         W_trial = np.concatenate([p_trial[:, :5], self.W[idx, 5:]], axis=1)
         tc_trial = p_trial[:, 5].copy()
-        outs = self._kernel(W_trial, tc_trial, noise=None, action_every=c.action_every)
+        outs = self._kernel(
+            W_trial, tc_trial, noise=None, action_every=c.action_every, learning=True
+        )
         return outs, W_trial, tc_trial, {"p": p, "eps": p_trial - p, "s": s, "z": z}
 
     def _pgpe_update(
