@@ -79,6 +79,7 @@ from striatal.rundir import RunDir
 __all__ = [
     "CONNECT_TIMEOUT",
     "CONTROL_ARM",
+    "ENGINES",
     "EVAL_DRAWS",
     "METHODS",
     "NOTE_BUDGET",
@@ -89,6 +90,7 @@ __all__ = [
     "WATCHDOG_SECONDS",
     "Arm",
     "Backend",
+    "Engine",
     "Init",
     "RunSpec",
     "SweepResult",
@@ -116,6 +118,9 @@ __all__ = [
 
 Init = Literal["chapter", "random"]
 Backend = Literal["local", "ray"]
+Engine = Literal["processes", "batch"]
+#: How a sweep runs its specs: one learning loop per run, or the runs of an arm in lockstep.
+ENGINES: tuple[str, ...] = ("processes", "batch")
 METHODS: tuple[str, ...] = ("learn", *baselines.BASELINES)
 CONTROL_ARM = "control"
 ROLES = ("learner", "control", "baseline")
@@ -863,22 +868,51 @@ def sweep(
     address: str | None = None,
     connect_timeout: float = CONNECT_TIMEOUT,
     progress: bool = False,
+    engine: Engine = "processes",
 ) -> SweepResult:
     """Run the specs not already in ``out``/runs.csv, appending each row as it finishes,
     then write ``out``/summary.json (atomically) from all rows.
+
+    ``engine`` "processes": :func:`execute` (one learning loop per run, on ``backend``);
+    "batch": :func:`striatal.lockstep_sweep.execute_batch` (the runs of an arm advance
+    in lockstep in this process; the same rows but wall_seconds).
 
     ``settings`` is stored in ``out``/sweep.json; a rerun in the same folder must use
     the same settings (ParameterError otherwise), ``settings["options"]`` aside: the
     options as they were given, recorded for ``--print-config --from-summary``.
     ``out`` is locked for the whole sweep: a second sweep on it gets DataFileError.
     """
+    if engine not in ENGINES:
+        raise ParameterError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+    if engine == "batch":
+        from striatal.lockstep_sweep import check_specs
+
+        check_specs(specs)
     if out is None:
         return _sweep(
-            specs, settings, None, max_trials, backend, workers, address, connect_timeout, progress
+            specs,
+            settings,
+            None,
+            max_trials,
+            backend,
+            workers,
+            address,
+            connect_timeout,
+            progress,
+            engine,
         )
     with RunDir(out).lock():
         return _sweep(
-            specs, settings, out, max_trials, backend, workers, address, connect_timeout, progress
+            specs,
+            settings,
+            out,
+            max_trials,
+            backend,
+            workers,
+            address,
+            connect_timeout,
+            progress,
+            engine,
         )
 
 
@@ -892,6 +926,7 @@ def _sweep(
     address: str | None,
     connect_timeout: float,
     progress: bool,
+    engine: Engine = "processes",
 ) -> SweepResult:
     from tqdm import tqdm
 
@@ -927,13 +962,18 @@ def _sweep(
     todo = [s for s in specs if s.key not in done]
     bar = tqdm(total=len(specs), initial=len(specs) - len(todo), unit="run", disable=not progress)
     try:
-        rows_in = execute(
-            todo,
-            backend=backend,
-            workers=workers,
-            address=address,
-            connect_timeout=connect_timeout,
-        )
+        if engine == "batch":
+            from striatal.lockstep_sweep import execute_batch
+
+            rows_in = execute_batch(todo)
+        else:
+            rows_in = execute(
+                todo,
+                backend=backend,
+                workers=workers,
+                address=address,
+                connect_timeout=connect_timeout,
+            )
         for row in rows_in:
             rows.append(row)
             if stream is not None:

@@ -88,6 +88,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     eg.add_argument("--workers", type=int, default=WORKERS, help="local worker processes")
     eg.add_argument(
+        "--engine",
+        choices=experiments.ENGINES,
+        default="processes",
+        help="processes: one learning loop per run (--workers, --backend); batch: the runs of "
+        "the learner arms advance in lockstep, trial k of every seed in one batched kernel "
+        "call on Numba's threads (the same runs.csv rows; learner arms of chapter, rpe, pgpe "
+        "with the sparse reward only)",
+    )
+    eg.add_argument(
         "--out", type=options.out_path, default=None, help="write runs.csv, summary.json here"
     )
     eg.add_argument("--json", action="store_true", help="print summary.json on stdout")
@@ -109,6 +118,11 @@ def prepare(
         raise ParameterError(f"--connect-timeout must be > 0 seconds, got {args.connect_timeout}")
     if args.eval_draws < 0:
         raise ParameterError(f"--eval-draws must be >= 0, got {args.eval_draws}")
+    if args.engine == "batch" and (args.backend != "local" or args.workers != 1):
+        raise ParameterError(
+            "--engine batch runs in this process on Numba's threads (NUMBA_NUM_THREADS); "
+            "--workers and --backend ray are for --engine processes"
+        )
     config = learner_options.learner_config_from(args)
     plant = options.plant_from(args)
     sim = Simulation(duration=args.duration, dt=args.dt)
@@ -189,6 +203,7 @@ def run(args: argparse.Namespace) -> int:
         address=args.address,
         connect_timeout=args.connect_timeout,
         progress=not (args.no_progress or args.json) and sys.stderr.isatty(),
+        engine=args.engine,
     )
     if args.json:
         sys.stdout.write(dumps_json(result.summary))
