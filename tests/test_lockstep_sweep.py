@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -140,6 +141,9 @@ def test_what_the_batch_engine_does_not_run_is_refused() -> None:
     assert "shaped" in (unsupported(_specs(shaped)) or "")
     jitter = default_config("pgpe", max_trials=3, reward="sparse", plant_jitter=0.1)
     assert "plant_jitter" in (unsupported(_specs(jitter)) or "")
+    for flag in ("robust", "symmetric"):
+        flagged = replace(chapter, **{flag: True})
+        assert f"--{flag}" in (unsupported(_specs(flagged)) or "")
     with pytest.raises(ParameterError, match="baselines hand"):
         experiments.sweep(
             _specs(chapter, methods=("hand",)), {}, out=None, max_trials=3, engine="batch"

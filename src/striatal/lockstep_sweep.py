@@ -98,6 +98,12 @@ def unsupported(specs: Sequence[RunSpec]) -> str | None:
                 "--engine batch runs the nominal plant, not plant_jitter "
                 f"{c.plant_jitter:g}; use --engine processes"
             )
+        for flag in ("robust", "symmetric"):
+            if getattr(c, flag):
+                return (
+                    f"--engine batch does not run --{flag} (its checks and pairs are "
+                    "per-run); use --engine processes"
+                )
     return None
 
 
@@ -537,6 +543,7 @@ class _Batch:
         row["eval_simulations"] = evals
         row["pass_rate_W0"] = rate0
         row["pass_rate"] = rate
+        row["robust"] = math.nan  # the robust re-check belongs to --robust, refused here
         row["wall_seconds"] = float(self.wall[r]) + time.perf_counter() - t0
         return row
 

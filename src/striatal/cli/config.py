@@ -33,7 +33,16 @@ WORKERS = 1
 CONFIG_DESTS = ("config", "from_summary", "print_config")
 #: Options that say where and how a run goes, not what it computes: not recorded in
 #: summary.json (a rerun elsewhere, with other workers, computes the same thing).
-RUN_ONLY = ("out", "workers", "backend", "address", "connect_timeout", "json", "no_progress")
+RUN_ONLY = (
+    "out",
+    "workers",
+    "backend",
+    "address",
+    "connect_timeout",
+    "engine",
+    "json",
+    "no_progress",
+)
 
 
 def add_config_arguments(parser: argparse.ArgumentParser) -> None:
