@@ -104,7 +104,12 @@ def _started(kind: str, out: Path) -> bool:
 
 
 def interrupt_once(
-    rng: random.Random, kind: str, argv: list[str], out: Path, run_seconds: float
+    rng: random.Random,
+    kind: str,
+    argv: list[str],
+    out: Path,
+    run_seconds: float,
+    signals: tuple[str, ...] = SIGNALS,
 ) -> dict[str, Any]:
     """Start ``argv`` in a process, signal it at a random moment; what happened."""
     proc = subprocess.Popen(
@@ -114,7 +119,7 @@ def interrupt_once(
         text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
-    how = rng.choice(SIGNALS)
+    how = rng.choice(signals)
     if rng.random() < 0.2:
         moment = "start-up"
         delay = rng.uniform(0.0, 2.0)
@@ -153,16 +158,19 @@ def resume_argv(kind: str, argv: list[str], out: Path) -> list[str]:
     return [*argv, "--out", str(out)]  # a sweep resumes by the same command
 
 
-def soak_run(i: int, root_seed: int, work: Path) -> dict[str, Any]:
+def soak_run(
+    i: int, root_seed: int, work: Path, signals: tuple[str, ...] = SIGNALS
+) -> dict[str, Any]:
     rng = random.Random(f"{root_seed}-{i}")
     kind, argv = options_of(rng)
     twin, out = work / f"{i:03d}-twin", work / f"{i:03d}-run"
     t0 = time.perf_counter()
     twin_rc = in_process([*argv, "--out", str(twin)])
     run_seconds = time.perf_counter() - t0
-    stops = [interrupt_once(rng, kind, [*argv, "--out", str(out)], out, run_seconds)]
+    stops = [interrupt_once(rng, kind, [*argv, "--out", str(out)], out, run_seconds, signals)]
     while stops[-1]["rc"] != 0 and rng.random() < 1 / 3 and len(stops) < 3:
-        stops.append(interrupt_once(rng, kind, resume_argv(kind, argv, out), out, run_seconds))
+        again = resume_argv(kind, argv, out)
+        stops.append(interrupt_once(rng, kind, again, out, run_seconds, signals))
     final_rc = 0
     if stops[-1]["rc"] != 0:
         final_rc = in_process(resume_argv(kind, argv, out))
@@ -188,20 +196,29 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=int, default=50, help="number of soak runs")
     parser.add_argument("--seed", type=int, default=0, help="seed of the random choices")
     parser.add_argument("--out", type=Path, default=None, help="work folder (default: a temp)")
+    parser.add_argument(
+        "--signals",
+        default=",".join(SIGNALS),
+        help=f"comma-separated signals to choose from: {', '.join(SIGNALS)}",
+    )
     args = parser.parse_args(argv)
     if args.runs < 1:
         parser.error(f"--runs must be >= 1, got {args.runs}")
+    signals = tuple(x.strip() for x in args.signals.split(",") if x.strip())
+    if not signals or any(x not in SIGNALS for x in signals):
+        parser.error(f"--signals must name some of {', '.join(SIGNALS)}, got {args.signals!r}")
     work = args.out if args.out is not None else Path(tempfile.mkdtemp(prefix="striatal-soak-"))
     work.mkdir(parents=True, exist_ok=True)
     os.environ.setdefault("PYTHONPATH", str(Path(__file__).resolve().parents[1] / "src"))
     t0 = time.perf_counter()
     rows = []
     for i in range(args.runs):
-        row = soak_run(i, args.seed, work)
+        row = soak_run(i, args.seed, work, signals)
         rows.append(row)
         print(json.dumps(row), flush=True)
     stops = [s for r in rows for s in r["stops"]]
     summary = {
+        "command": " ".join(["benchmarks/soak.py", *(sys.argv[1:] if argv is None else argv)]),
         "runs": len(rows),
         "kinds": dict(Counter(r["kind"] for r in rows)),
         "signals": dict(Counter(s["signal"] for s in stops)),

@@ -36,6 +36,7 @@ completion order; its bootstrap intervals are seeded by the arm and init.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import logging
@@ -404,18 +405,44 @@ def execute(
         for spec in specs:
             yield run_one(spec)
         return
-    with ProcessPoolExecutor(
+    pool = ProcessPoolExecutor(
         max_workers=workers, initializer=_worker_init, initargs=(os.getpid(),)
-    ) as pool:
+    )
+    try:
         pending = {pool.submit(run_one, s) for s in specs}
-        try:
-            while pending:
-                done, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for fut in done:
-                    yield fut.result()
-        finally:
-            for fut in pending:
-                fut.cancel()
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in done:
+                yield fut.result()
+    except BaseException:
+        _stop_pool(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """End ``pool`` now: queued runs cancelled, running ones (never recorded) killed.
+
+    A plain ``shutdown`` waits for the running runs, and a second Ctrl-C inside it
+    leaves workers waiting for work that never comes, which the interpreter then
+    joins at exit for ever. SIGINT is blocked meanwhile (a pending one is raised
+    afterwards).
+    """
+    main = threading.current_thread() is threading.main_thread()
+    if main:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        workers = list((getattr(pool, "_processes", None) or {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for worker in workers:
+            with contextlib.suppress(OSError, ValueError):
+                worker.kill()
+        for worker in workers:
+            with contextlib.suppress(OSError, ValueError, AssertionError):
+                worker.join(timeout=5)
+    finally:
+        if main:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def wait_for_address(address: str, timeout: float) -> None:

@@ -12,7 +12,9 @@ import importlib
 import os
 import pkgutil
 import re
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
@@ -93,18 +95,42 @@ def tolerate_any_encoding() -> None:
             reconfigure(errors="backslashreplace")
 
 
+def ignore_late_interrupts() -> None:
+    """Ignore SIGINT from now on: the command is stopped or done, the process ending.
+
+    A second Ctrl-C while the interpreter exits (joining a worker pool's threads,
+    running atexit handlers) would otherwise end the process by SIGINT instead of
+    exit 130, after the run was already stopped and its files written.
+    """
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``striatal`` and ``python -m striatal``; returns the exit code.
 
     Ctrl-C at any point, while the libraries load too (they load here, when the
     parser imports the commands, not when ``striatal.cli`` is imported), exits 130
-    without a traceback.
+    without a traceback. Run as the program (``argv`` None: it parses ``sys.argv``),
+    a Ctrl-C once the first is being handled, or once the command has returned,
+    is ignored: the exit code stays the command's.
     """
+    rc = _main(argv)
+    if argv is None:
+        # the command is over, its files written and its exit code chosen; what is
+        # left is the interpreter's exit, which a Ctrl-C would turn into death by SIGINT
+        ignore_late_interrupts()
+    return rc
+
+
+def _main(argv: Sequence[str] | None) -> int:
     tolerate_any_encoding()
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
     except KeyboardInterrupt:
+        if argv is None:
+            ignore_late_interrupts()
         return EXIT_INTERRUPTED
     try:
         out = getattr(args, "out", None)
@@ -117,6 +143,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write(f"striatal {args.command}: error: {exc}\n")
         return EXIT_USAGE
     except KeyboardInterrupt:
+        if argv is None:
+            ignore_late_interrupts()
         sys.stderr.write(f"striatal {args.command}: interrupted\n")
         return EXIT_INTERRUPTED
     except BrokenPipeError:
