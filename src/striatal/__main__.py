@@ -1,11 +1,13 @@
 """``python -m striatal``."""
 
 try:
+    from striatal import interrupts
+
+    interrupts.install()  # from here on a second Ctrl-C cannot cut the handling of the first
     from striatal.cli import main
 except KeyboardInterrupt:  # Ctrl-C in the first milliseconds: quiet, as later
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # and a second one too
+    if "interrupts" in globals():
+        interrupts.forget_unhandled()
     raise SystemExit(130) from None
 
 raise SystemExit(main())

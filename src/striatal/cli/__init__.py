@@ -20,6 +20,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any, NoReturn
 
+from striatal import interrupts
 from striatal.errors import StriatalError
 from striatal.files import check_no_dangling_link
 
@@ -98,9 +99,9 @@ def tolerate_any_encoding() -> None:
 def ignore_late_interrupts() -> None:
     """Ignore SIGINT from now on: the command is stopped or done, the process ending.
 
-    A second Ctrl-C while the interpreter exits (joining a worker pool's threads,
-    running atexit handlers) would otherwise end the process by SIGINT instead of
-    exit 130, after the run was already stopped and its files written.
+    A Ctrl-C while the interpreter exits (joining a worker pool's threads, running
+    atexit handlers) would otherwise end the process by SIGINT, after the run was
+    already stopped or finished and its files written.
     """
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -115,11 +116,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     a Ctrl-C once the first is being handled, or once the command has returned,
     is ignored: the exit code stays the command's.
     """
+    if argv is None:
+        interrupts.install()  # the ``striatal`` script; ``python -m striatal`` did already
     rc = _main(argv)
     if argv is None:
         # the command is over, its files written and its exit code chosen; what is
         # left is the interpreter's exit, which a Ctrl-C would turn into death by SIGINT
         ignore_late_interrupts()
+        if interrupts.received():
+            interrupts.forget_unhandled()
     return rc
 
 
@@ -129,9 +134,11 @@ def _main(argv: Sequence[str] | None) -> int:
         parser = build_parser()
         args = parser.parse_args(argv)
     except KeyboardInterrupt:
-        if argv is None:
-            ignore_late_interrupts()
         return EXIT_INTERRUPTED
+    except Exception:
+        if interrupts.received():  # an import cut short by Ctrl-C, reported as another error
+            return EXIT_INTERRUPTED
+        raise
     try:
         out = getattr(args, "out", None)
         if isinstance(out, str | os.PathLike) and str(out):
@@ -143,8 +150,6 @@ def _main(argv: Sequence[str] | None) -> int:
         sys.stderr.write(f"striatal {args.command}: error: {exc}\n")
         return EXIT_USAGE
     except KeyboardInterrupt:
-        if argv is None:
-            ignore_late_interrupts()
         sys.stderr.write(f"striatal {args.command}: interrupted\n")
         return EXIT_INTERRUPTED
     except BrokenPipeError:
@@ -158,3 +163,8 @@ def _main(argv: Sequence[str] | None) -> int:
         where = f"{exc.filename}: " if exc.filename else ""
         sys.stderr.write(f"striatal {args.command}: error: {where}{exc.strerror or exc}\n")
         return EXIT_USAGE
+    except Exception:
+        if interrupts.received():  # a Ctrl-C that a library turned into another error
+            sys.stderr.write(f"striatal {args.command}: interrupted\n")
+            return EXIT_INTERRUPTED
+        raise
