@@ -597,6 +597,23 @@ def two_trains(tmp: Path) -> tuple[bool, str]:
     )
 
 
+def locked_out(argv: tuple[str, ...]) -> Callable[[Path], tuple[bool, str]]:
+    """``striatal ARGV --out DIR`` while this process holds DIR's lock: refused, no file."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        from striatal.rundir import RunDir
+
+        out = tmp / "OUT"
+        with RunDir(out).lock():
+            r = cli_process(*argv, "--out", str(out))
+        line = one_line(r.err).replace(str(out), "OUT")
+        empty = not any(out.iterdir())
+        ok = r.rc == 2 and len(r.err.strip().splitlines()) == 1 and empty
+        return ok, f"exit {r.rc}: `{line}`; nothing written: {'yes' if empty else 'no'}"
+
+    return run
+
+
 def resume_extends(tmp: Path) -> tuple[bool, str]:
     """`--resume --max-trials 40` on a finished 30-trial run = the uninterrupted 40-trial run."""
     ref, out = tmp / "ref", tmp / "OUT"
@@ -1498,6 +1515,11 @@ SCENARIOS: tuple[Scenario, ...] = (
       "run's", "exit 2, one line, files untouched", resume_mixed("history.csv")),
     S("two-trains", "runs", "`striatal train --out DIR` while another process holds DIR",
       "exit 2, one line, nothing written", two_trains),
+    S("two-sweeps", "runs", "`striatal sweep --out DIR` while another process holds DIR",
+      "exit 2, one line, nothing written", locked_out(SMALL_SWEEP)),
+    S("two-ablations", "runs", "`striatal ablation --out DIR` while another process holds DIR "
+      "(its lock also covers ablation.json and ablation.md, written after its sweep)",
+      "exit 2, one line, nothing written", locked_out(SMALL_ABLATION)),
     S("resume-changed", "runs", "`striatal train --resume --alpha 3 --seed 4` on a run with "
       "alpha 5, seed 0", "exit 2, one line naming --alpha and --seed",
       usage_error(("train", "--resume", "--alpha", "3", "--seed", "4", "--out", "OUT"),

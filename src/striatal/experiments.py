@@ -914,15 +914,17 @@ def sweep(
     address: str | None = None,
     connect_timeout: float = CONNECT_TIMEOUT,
     progress: bool = False,
+    locked: bool = False,
 ) -> SweepResult:
     """Run the specs not already in ``out``/runs.csv, appending each row as it finishes,
     then write ``out``/summary.json (atomically) from all rows.
 
     ``settings`` is stored in ``out``/sweep.json; a rerun in the same folder must use
     the same settings (ParameterError otherwise). ``out`` is locked for the whole
-    sweep: a second sweep on it gets DataFileError.
+    sweep: a second sweep on it gets DataFileError. ``locked``: the caller already
+    holds ``RunDir(out).lock()`` (to write more files under the same lock).
     """
-    if out is None:
+    if out is None or locked:
         return _sweep(
             specs, settings, None, max_trials, backend, workers, address, connect_timeout, progress
         )

@@ -8,6 +8,7 @@ output folder's lock); the table and ablation.json are written from its rows.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 
 from striatal import experiments
@@ -15,6 +16,7 @@ from striatal.ablation import VARIANT_NAMES, build, markdown_table, table_rows, 
 from striatal.cli import options
 from striatal.errors import ParameterError
 from striatal.files import atomic_write_text, check_out_dir, write_json
+from striatal.rundir import RunDir
 
 COMMAND = "ablation"
 ORDER = 45
@@ -85,24 +87,27 @@ def run(args: argparse.Namespace) -> int:
     chosen = [variant(n) for n in names]
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     specs, settings = build(chosen, seeds, args.max_trials, args.eval_draws)
-    result = experiments.sweep(
-        specs,
-        settings,
-        out=args.out,
-        max_trials=args.max_trials,
-        backend=args.backend,
-        workers=args.workers,
-        address=args.address,
-        connect_timeout=args.connect_timeout,
-        progress=not args.no_progress and sys.stderr.isatty(),
-    )
-    rows, data = table_rows(chosen, result)
-    for v, s in rows:
-        brief = {k: s[k] for k in ("runs", "successes", "median_trials", "p90_trials")}
-        print(f"{v.name}: {brief}", file=sys.stderr, flush=True)
-    table = markdown_table(rows)
-    if args.out is not None:
-        write_json(args.out / "ablation.json", data)
-        atomic_write_text(args.out / "ablation.md", table)
+    # the lock covers ablation.json and ablation.md too, written after the sweep
+    with RunDir(args.out).lock() if args.out is not None else contextlib.nullcontext():
+        result = experiments.sweep(
+            specs,
+            settings,
+            out=args.out,
+            max_trials=args.max_trials,
+            backend=args.backend,
+            workers=args.workers,
+            address=args.address,
+            connect_timeout=args.connect_timeout,
+            progress=not args.no_progress and sys.stderr.isatty(),
+            locked=args.out is not None,
+        )
+        rows, data = table_rows(chosen, result)
+        for v, s in rows:
+            brief = {k: s[k] for k in ("runs", "successes", "median_trials", "p90_trials")}
+            print(f"{v.name}: {brief}", file=sys.stderr, flush=True)
+        table = markdown_table(rows)
+        if args.out is not None:
+            write_json(args.out / "ablation.json", data)
+            atomic_write_text(args.out / "ablation.md", table)
     sys.stdout.write(table)
     return 0
