@@ -926,7 +926,7 @@ def sweep(
     """
     if out is None or locked:
         return _sweep(
-            specs, settings, None, max_trials, backend, workers, address, connect_timeout, progress
+            specs, settings, out, max_trials, backend, workers, address, connect_timeout, progress
         )
     with RunDir(out).lock():
         return _sweep(
