@@ -437,7 +437,9 @@ WATCHED = """
 import os, sys, time
 from concurrent.futures import ProcessPoolExecutor
 from striatal import experiments
-pool = ProcessPoolExecutor(max_workers=2, initializer=experiments._worker_init)
+pool = ProcessPoolExecutor(
+    max_workers=2, initializer=experiments._worker_init, initargs=(os.getpid(),)
+)
 futures = [pool.submit(time.sleep, 120) for _ in range(2)]
 time.sleep(1.0)
 print(" ".join(str(p) for p in pool._processes), flush=True)

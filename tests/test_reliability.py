@@ -15,15 +15,19 @@ gap note can go.
 from __future__ import annotations
 
 import ast
+import contextlib
 import csv
 import io
 import json
 import math
 import os
 import re
+import shutil
 import signal
+import socket
 import subprocess
 import sys
+import tempfile
 import time
 import traceback
 from collections.abc import Callable
@@ -37,6 +41,7 @@ import pytest
 
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError, StriatalError
+from striatal.experiments import WATCHDOG_SECONDS
 from striatal.files import read_json
 from striatal.learners import LearnerConfig, initial_state, learning_step
 from striatal.learners.chapter import gain_update
@@ -592,6 +597,23 @@ def two_trains(tmp: Path) -> tuple[bool, str]:
     )
 
 
+def locked_out(argv: tuple[str, ...]) -> Callable[[Path], tuple[bool, str]]:
+    """``striatal ARGV --out DIR`` while this process holds DIR's lock: refused, no file."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        from striatal.rundir import RunDir
+
+        out = tmp / "OUT"
+        with RunDir(out).lock():
+            r = cli_process(*argv, "--out", str(out))
+        line = one_line(r.err).replace(str(out), "OUT")
+        empty = not any(out.iterdir())
+        ok = r.rc == 2 and len(r.err.strip().splitlines()) == 1 and empty
+        return ok, f"exit {r.rc}: `{line}`; nothing written: {'yes' if empty else 'no'}"
+
+    return run
+
+
 def resume_extends(tmp: Path) -> tuple[bool, str]:
     """`--resume --max-trials 40` on a finished 30-trial run = the uninterrupted 40-trial run."""
     ref, out = tmp / "ref", tmp / "OUT"
@@ -983,6 +1005,258 @@ def interrupted_train(
     return run
 
 
+# ---- issue 16, round 2: duplicates, wrong-typed files, the Gymnasium reset, hangs
+
+SMALL_SWEEP = (
+    "sweep", "--seeds", "2", "--max-trials", "5", "--duration", "2", "--eval-draws", "0",
+    "--no-progress",
+)  # fmt: skip
+SMALL_ABLATION = ("ablation", "--variants", "chapter", "--seeds", "1", "--max-trials", "2",
+                  "--eval-draws", "0")  # fmt: skip
+_MADE: dict[str, Path] = {}
+
+
+def _made(name: str, argv: tuple[str, ...], tmp_root: Path) -> Path:
+    """A folder written once by ``striatal ARGV --out FOLDER`` (in this process)."""
+    if name not in _MADE:
+        out = Path(tempfile.mkdtemp(prefix=f"striatal-{name}-", dir=tmp_root.parent))
+        r = cli_in_process(*argv, "--out", str(out / "run"))
+        assert r.rc == 0, r.err
+        _MADE[name] = out / "run"
+    return _MADE[name]
+
+
+def duplicate_rows_counted_once(tmp: Path) -> tuple[bool, str]:
+    """runs.csv holding one (arm, init, seed) twice: the rerun's summary counts it once."""
+    ref = _made("sweep", SMALL_SWEEP, tmp)
+    out = tmp / "OUT"
+    shutil.copytree(ref, out)
+    lines = (out / "runs.csv").read_text().splitlines(keepends=True)
+    (out / "runs.csv").write_text("".join([*lines, lines[1], lines[2]]))
+    (out / "summary.json").unlink()
+    r = cli_in_process(*SMALL_SWEEP, "--out", str(out))
+    got, want = read_json(out / "summary.json"), read_json(ref / "summary.json")
+    runs = sorted({a["runs"] for a in got["arms"]})
+    same = _without_wall(got) == _without_wall(want)
+    kept = len((out / "runs.csv").read_text().splitlines()) == len(lines)
+    ok = r.rc == 0 and runs == [2] and same and kept
+    return ok, (
+        f"exit {r.rc}; runs per arm in summary.json: {', '.join(map(str, runs))}; summary.json "
+        f"identical (but wall_seconds_*) to the sweep without the duplicates: "
+        f"{'yes' if same else 'no'}; the duplicate lines dropped from runs.csv: "
+        f"{'yes' if kept else 'no'}"
+    )
+
+
+def _summary_with(field: str, value: Any) -> Callable[[Path], None]:
+    """A sweep's summary.json in OUT whose first arm's ``field`` is ``value``."""
+
+    def prepare(out: Path) -> None:
+        summary = read_json(_made("sweep", SMALL_SWEEP, out.parent) / "summary.json")
+        summary["arms"][0][field] = value
+        out.mkdir(parents=True)
+        (out / "summary.json").write_text(json.dumps(summary))
+
+    return prepare
+
+
+def _ablation_runs(value: Any) -> Callable[[Path], None]:
+    """An ablation.json in OUT whose variant's ``runs`` is ``value``."""
+
+    def prepare(out: Path) -> None:
+        ablation = read_json(_made("ablation", SMALL_ABLATION, out.parent) / "ablation.json")
+        ablation["chapter"]["runs"] = value
+        out.mkdir(parents=True)
+        (out / "ablation.json").write_text(json.dumps(ablation))
+
+    return prepare
+
+
+def _env_reset(options: Any) -> Any:
+    import gymnasium as gym
+
+    import striatal.envs  # noqa: F401 - registers the ids
+
+    env = gym.make("striatal/CartPoleSwingUp-v0")
+    try:
+        return env.reset(seed=0, options=options)
+    finally:
+        env.close()
+
+
+def _env_make(**kwargs: Any) -> Any:
+    import gymnasium as gym
+
+    import striatal.envs  # noqa: F401 - registers the ids
+
+    return gym.make("striatal/CartPoleSwingUp-v0", **kwargs)
+
+
+class _SilentPort:
+    """A TCP port that accepts connections (the kernel's backlog) and never answers."""
+
+    def __enter__(self) -> int:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(64)
+        return int(self.sock.getsockname()[1])
+
+    def __exit__(self, *exc: object) -> None:
+        self.sock.close()
+
+
+RAY_SWEEP = ("sweep", "--backend", "ray", "--seeds", "1", "--max-trials", "2", "--duration",
+             "2", "--eval-draws", "0", "--no-progress")  # fmt: skip
+
+
+def ray_gives_up(silent: bool, timeout: float = 3.0) -> Callable[[Path], tuple[bool, str]]:
+    """``sweep --backend ray`` at an address that refuses, or accepts and stays silent."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        with _SilentPort() if silent else contextlib.nullcontext(1) as port:
+            t0 = time.monotonic()
+            r = cli_in_process(*RAY_SWEEP, "--address", f"127.0.0.1:{port}",
+                               "--connect-timeout", f"{timeout:g}")  # fmt: skip
+            took = time.monotonic() - t0
+        line = one_line(r.err).replace(f":{port}", ":PORT")
+        lines = r.err.strip().splitlines()
+        # the bound: the timeout, plus Ray's import and a probe process's start on a loaded machine
+        bounded = took < timeout + 60
+        ok = r.rc == 2 and len(lines) == 1 and bounded and f"{timeout:g} s" in line
+        return ok, (
+            f"exit {r.rc}, {len(lines)} line: `{line}`; gave up within --connect-timeout "
+            f"(+ start-up): {'yes' if bounded else 'no'}"
+        )
+
+    return run
+
+
+def _children(pid: int) -> list[int]:
+    kids: list[int] = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        with contextlib.suppress(OSError):
+            kids += [int(k) for k in (task / "children").read_text().split()]
+    return kids
+
+
+def _dead(pid: int) -> bool:
+    """Exited: no such process, or a zombie waiting for its new parent to reap it."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return True
+    return state in ("Z", "X")
+
+
+def _wait_dead(pids: list[int], seconds: float) -> bool:
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        if all(_dead(p) for p in pids):
+            return True
+        time.sleep(0.02)
+    return all(_dead(p) for p in pids)
+
+
+def _wait_children(proc: subprocess.Popen[str], n: int) -> list[int]:
+    deadline = time.monotonic() + 120
+    while len(kids := _children(proc.pid)) < n:
+        assert proc.poll() is None, "the process ended before it started its children"
+        assert time.monotonic() < deadline, "no child process within 120 s"
+        time.sleep(0.02)
+    return kids
+
+
+ORPHAN_SWEEP = ("sweep", "--seeds", "40", "--max-trials", "300", "--duration", "30",
+                "--workers", "2", "--no-progress")  # fmt: skip
+
+
+def orphaned_workers(tmp: Path) -> tuple[bool, str]:
+    """SIGKILL a 2-worker sweep: its workers must not keep running (issue 16 item 6)."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "striatal", *ORPHAN_SWEEP, "--out", str(tmp / "OUT")],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        preexec_fn=_default_sigint,
+    )
+    workers = _wait_children(proc, 2)
+    time.sleep(1.0)  # both in a learning run
+    running = [w for w in workers if not _dead(w)]
+    proc.kill()
+    proc.wait()
+    gone = _wait_dead(running, 5.0)
+    ok = len(running) == 2 and gone
+    return ok, (
+        f"{len(running)} workers running when the sweep was killed; all exited within 5 s: "
+        f"{'yes' if gone else 'no'}"
+    )
+
+
+def watchdog_without_pdeathsig(tmp: Path) -> tuple[bool, str]:
+    """The portable fallback alone: a worker whose parent exits, with no PR_SET_PDEATHSIG.
+
+    This process forks a parent, which forks the worker (it runs the pool's
+    initializer) and then exits at once with no clean-up, as a SIGKILL leaves it.
+    """
+    import striatal.experiments as experiments
+
+    read_end, write_end = os.pipe()
+    parent = os.fork()
+    if parent == 0:  # the parent: fork the worker, report its pid, die
+        try:
+            worker = os.fork()
+            if worker == 0:
+                try:
+                    experiments._die_with_parent = lambda: False  # the fallback alone
+                    experiments._worker_init(os.getppid())
+                    time.sleep(60)
+                finally:
+                    os._exit(0)
+            os.write(write_end, f"{worker}\n".encode())
+            time.sleep(0.3)
+        finally:
+            os._exit(0)
+    os.close(write_end)
+    with os.fdopen(read_end) as fh:
+        worker = int(fh.readline())
+    os.waitpid(parent, 0)
+    alive_first = not _dead(worker)
+    gone = _wait_dead([worker], 3.0)
+    if not gone:
+        os.kill(worker, signal.SIGKILL)
+    ok = alive_first and gone
+    return ok, (
+        f"worker alive when its parent exited: {'yes' if alive_first else 'no'}; exited within "
+        f"3 s (its watchdog looks every {WATCHDOG_SECONDS:g} s): {'yes' if gone else 'no'}"
+    )
+
+
+def ray_sigterm(tmp: Path) -> tuple[bool, str]:
+    """SIGTERM while ``sweep --backend ray`` waits for a silent address (issue 16 item 7)."""
+    with _SilentPort() as port:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "striatal", *RAY_SWEEP, "--address", f"127.0.0.1:{port}"],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+            preexec_fn=_default_sigint,
+        )
+        probes = _wait_children(proc, 1)  # Ray's handshake has begun, in a child
+        time.sleep(1.0)
+        t0 = time.monotonic()
+        proc.terminate()
+        _, err = proc.communicate(timeout=120)
+        took = time.monotonic() - t0
+        probe_gone = _wait_dead(probes, 5.0)
+    prompt = took < 5.0
+    ok = proc.returncode == -signal.SIGTERM and prompt and probe_gone and "Traceback" not in err
+    return ok, (
+        f"exit {proc.returncode} (SIGTERM) within 5 s of the signal: "
+        f"{'yes' if prompt else 'no'}; the connecting child exited too: "
+        f"{'yes' if probe_gone else 'no'}"
+    )
+
+
 S = Scenario
 SCENARIOS: tuple[Scenario, ...] = (
     # ---- bad input at the command line, as a new user types it
@@ -1241,6 +1515,11 @@ SCENARIOS: tuple[Scenario, ...] = (
       "run's", "exit 2, one line, files untouched", resume_mixed("history.csv")),
     S("two-trains", "runs", "`striatal train --out DIR` while another process holds DIR",
       "exit 2, one line, nothing written", two_trains),
+    S("two-sweeps", "runs", "`striatal sweep --out DIR` while another process holds DIR",
+      "exit 2, one line, nothing written", locked_out(SMALL_SWEEP)),
+    S("two-ablations", "runs", "`striatal ablation --out DIR` while another process holds DIR "
+      "(its lock also covers ablation.json and ablation.md, written after its sweep)",
+      "exit 2, one line, nothing written", locked_out(SMALL_ABLATION)),
     S("resume-changed", "runs", "`striatal train --resume --alpha 3 --seed 4` on a run with "
       "alpha 5, seed 0", "exit 2, one line naming --alpha and --seed",
       usage_error(("train", "--resume", "--alpha", "3", "--seed", "4", "--out", "OUT"),
@@ -1262,6 +1541,55 @@ SCENARIOS: tuple[Scenario, ...] = (
       usage_error(("simulate", "--out", ""))),
     S("umask", "runs", "`striatal simulate --out DIR` under umask 022 and 077",
       "files 0644 and 0600, as `open()` makes them", files_follow_umask),
+    # ---- issue 16, round 2: duplicates, wrong-typed files, the Gymnasium reset, Ray
+    S("sweep-duplicate", "runs", "a finished sweep's runs.csv with two of its rows appended "
+      "again, then the same `striatal sweep` command", "each (arm, init, seed) counted once",
+      duplicate_rows_counted_once),
+    S("compare-rate-text", "bad file", "`striatal compare summary.json` whose arm has "
+      "`\"success_rate\": \"x\"`", "exit 2, one line",
+      usage_error(("compare", "OUT/summary.json"), prepare=_summary_with("success_rate", "x"),
+                  says="success_rate")),
+    S("compare-arm-int", "bad file", "`striatal compare summary.json` whose arm has "
+      "`\"arm\": 5`", "exit 2, one line",
+      usage_error(("compare", "OUT/summary.json"), prepare=_summary_with("arm", 5), says="arm")),
+    S("compare-wall-dict", "bad file", "`striatal compare summary.json` whose arm has "
+      "`\"wall_seconds_total\": {}`", "exit 2, one line",
+      usage_error(("compare", "OUT/summary.json"),
+                  prepare=_summary_with("wall_seconds_total", {}), says="wall_seconds_total")),
+    S("robustness-runs-text", "bad file", "`striatal robustness ablation.json` whose "
+      "`\"runs\"` is `\"x\"`", "exit 2, one line",
+      usage_error(("robustness", "OUT/ablation.json", "--repeats", "1"),
+                  prepare=_ablation_runs("x"), says="runs")),
+    S("robustness-runs-list", "bad file", "`striatal robustness ablation.json` whose "
+      "`\"runs\"` is `[5]`", "exit 2, one line",
+      usage_error(("robustness", "OUT/ablation.json", "--repeats", "1"),
+                  prepare=_ablation_runs([5]), says="runs")),
+    S("ablation-variants-empty", "bad input", "`striatal ablation --variants \"\"`",
+      "exit 2, one line", usage_error(("ablation", "--variants", "", "--out", "OUT"),
+                                      says="--variants")),
+    S("env-reset-huge", "bad input", "Gymnasium `env.reset(options={\"perturbation\": 1e308})`",
+      "ParameterError, as `gymnasium.make(..., perturbation=1e308)`",
+      library_error(lambda _: _env_reset({"perturbation": 1e308}), ParameterError)),
+    S("env-reset-text", "bad input", "Gymnasium `env.reset(options=\"x\")`", "ParameterError",
+      library_error(lambda _: _env_reset("x"), ParameterError)),
+    S("env-reset-unknown", "bad input", "Gymnasium `env.reset(options={\"perturbaton\": 0.1})` "
+      "(a misspelt key)", "ParameterError naming the key",
+      library_error(lambda _: _env_reset({"perturbaton": 0.1}), ParameterError)),
+    S("env-reset-state-huge", "bad input", "Gymnasium `env.reset(options={\"initial_state\": "
+      "[1e308, 0, 0, 0]})`", "ParameterError (the start is beyond the kernel's blow-up bound)",
+      library_error(lambda _: _env_reset({"initial_state": [1e308, 0, 0, 0]}), ParameterError)),
+    S("env-make-state-huge", "bad input", "`gymnasium.make(..., initial_state=[0, 0, 0, 1e9])`",
+      "ParameterError, as reset",
+      library_error(lambda _: _env_make(initial_state=[0, 0, 0, 1e9]), ParameterError)),
+    S("ray-refused", "hang", "`striatal sweep --backend ray --address 127.0.0.1:PORT "
+      "--connect-timeout 3`, PORT refusing connections", "exit 2, one line, after about 3 s",
+      ray_gives_up(silent=False)),
+    S("ray-silent", "hang", "the same, PORT accepting connections and never answering (no Ray "
+      "head; Ray alone retries for minutes)", "exit 2, one line, after about 3 s",
+      ray_gives_up(silent=True)),
+    S("worker-watchdog", "hang", "a sweep worker (its initializer run, PR_SET_PDEATHSIG "
+      "switched off) whose parent exits without clean-up", "the worker exits within 3 s",
+      watchdog_without_pdeathsig),
     # ---- files are data, never code
     S("no-code", "files are data", "every module of src/striatal parsed: imports of pickle, "
       "marshal, shelve, dill, cloudpickle, joblib; calls of eval, exec, yaml.load; "
@@ -1310,6 +1638,12 @@ INTERRUPTIONS: tuple[Scenario, ...] = (
     S("broken-pipe", "interruption",
       "`striatal simulate --chapter-final` writing into a pipe whose reader has gone "
       "(as `| head` does)", "no traceback", broken_pipe),
+    S("orphan-workers", "interruption", f"`striatal {' '.join(ORPHAN_SWEEP)} --out DIR`, "
+      "SIGKILL once both workers run", "the workers exit within seconds",
+      orphaned_workers),
+    S("ray-sigterm", "interruption", "SIGTERM while `striatal sweep --backend ray` waits for an "
+      "address that accepts connections and never answers (default --connect-timeout 30)",
+      "ends within 5 s, its connecting child too", ray_sigterm),
 )  # fmt: skip
 
 

@@ -42,12 +42,15 @@ completion order; its bootstrap intervals are seeded by the arm and init.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import logging
 import math
 import os
+import signal
 import socket
+import sys
 import threading
 import time
 import zlib
@@ -380,19 +383,55 @@ def _ray_worker(spec: RunSpec) -> dict[str, Any]:
 
 #: How often a local worker checks that the sweep that started it is still there [s].
 WATCHDOG_SECONDS = 0.5
+#: prctl(2) option: the signal the kernel sends this process when its parent dies (Linux).
+_PR_SET_PDEATHSIG = 1
 
 
-def _watch_parent(parent: int) -> None:
+def _die_with_parent() -> bool:
+    """Ask Linux to SIGKILL this process when its parent dies; False where unavailable."""
+    if not sys.platform.startswith("linux"):
+        return False
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        return int(libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _watch_parent(parent: int, ppid: int) -> None:
     while True:
-        time.sleep(WATCHDOG_SECONDS)
-        if os.getppid() != parent:
+        if os.getppid() != ppid or not _alive(parent):
             os._exit(1)  # the sweep is gone (even SIGKILLed): stop its run at once
+        time.sleep(WATCHDOG_SECONDS)
 
 
-def _worker_init() -> None:
-    """Initializer of every local worker: a daemon thread ends the worker within
-    about WATCHDOG_SECONDS of its parent's death (issue 16 item 6)."""
-    threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True).start()
+def _worker_init(parent: int) -> None:
+    """Initializer of every local worker: it ends when the sweep ``parent`` (its pid) dies.
+
+    On Linux the kernel kills it as soon as its parent process dies (prctl
+    PR_SET_PDEATHSIG); everywhere a daemon thread also ends it within about
+    WATCHDOG_SECONDS once its parent changes (it was re-parented) or the sweep's
+    pid is gone, so a SIGKILLed sweep leaves no worker behind (issue 16 item 6).
+    Under the fork and spawn start methods the parent is the sweep; under
+    forkserver it is the server, which exits with the sweep.
+    """
+    _die_with_parent()
+    ppid = os.getppid()
+    if not _alive(parent):
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent, ppid), daemon=True).start()
 
 
 def execute(
@@ -422,16 +461,44 @@ def execute(
         for spec in specs:
             yield run_one(spec)
         return
-    with ProcessPoolExecutor(max_workers=workers, initializer=_worker_init) as pool:
+    pool = ProcessPoolExecutor(
+        max_workers=workers, initializer=_worker_init, initargs=(os.getpid(),)
+    )
+    try:
         pending = {pool.submit(run_one, s) for s in specs}
-        try:
-            while pending:
-                done, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for fut in done:
-                    yield fut.result()
-        finally:
-            for fut in pending:
-                fut.cancel()
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in done:
+                yield fut.result()
+    except BaseException:
+        _stop_pool(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """End ``pool`` now: queued runs cancelled, running ones (never recorded) killed.
+
+    A plain ``shutdown`` waits for the running runs, and a second Ctrl-C inside it
+    leaves workers waiting for work that never comes, which the interpreter then
+    joins at exit for ever. SIGINT is blocked meanwhile (a pending one is raised
+    afterwards).
+    """
+    main = threading.current_thread() is threading.main_thread()
+    if main:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        workers = list((getattr(pool, "_processes", None) or {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for worker in workers:
+            with contextlib.suppress(OSError, ValueError):
+                worker.kill()
+        for worker in workers:
+            with contextlib.suppress(OSError, ValueError, AssertionError):
+                worker.join(timeout=5)
+    finally:
+        if main:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def wait_for_address(address: str, timeout: float) -> None:
@@ -459,6 +526,46 @@ def wait_for_address(address: str, timeout: float) -> None:
             time.sleep(0.5)
 
 
+#: Run in a child process: connect to the Ray cluster at argv[1], then disconnect.
+_RAY_PROBE = (
+    "import logging, sys, ray; "
+    "ray.init(address=sys.argv[1], logging_level=logging.ERROR, log_to_driver=False); "
+    "ray.shutdown()"
+)
+
+
+def _probe_ray(address: str, timeout: float, shown: float) -> None:
+    """Connect to Ray at ``address`` in a child process killed after ``timeout`` s.
+
+    Ray has no connect timeout of its own: on a port that accepts connections but is
+    no Ray head it retries for minutes, logging each attempt to stderr from C++, and
+    the SIGTERM handler it installs cannot run while its client waits. A child can be
+    killed and its stderr kept; it dies with this process (PR_SET_PDEATHSIG on
+    Linux), so SIGTERM, which keeps its default action here, ends both at once
+    (issue 16 item 7). ParameterError (one line) when it fails or times out.
+    """
+    import subprocess
+
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", _RAY_PROBE, address],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            preexec_fn=_die_with_parent,
+            check=False,
+        )
+    except subprocess.TimeoutExpired:
+        raise ParameterError(
+            f"the Ray cluster at {address} did not answer within {shown:g} s "
+            "(is it a Ray head's GCS port?); see --connect-timeout"
+        ) from None
+    if done.returncode != 0:
+        lines = [ln.strip() for ln in done.stderr.splitlines() if ln.strip()]
+        reason = lines[-1] if lines else f"exit {done.returncode}"
+        raise ParameterError(f"cannot connect to the Ray cluster at {address}: {reason}")
+
+
 def _execute_ray(
     specs: Sequence[RunSpec], address: str | None, connect_timeout: float
 ) -> Iterator[dict[str, Any]]:
@@ -470,7 +577,11 @@ def _execute_ray(
         raise ParameterError(
             "--backend ray needs the [cluster] extra: pip install 'striatal[cluster]'"
         ) from None
+    # the whole connection, the TCP check and Ray's handshake, within connect_timeout
+    started = time.monotonic()
     wait_for_address(address, connect_timeout)
+    left = connect_timeout - (time.monotonic() - started)
+    _probe_ray(address, max(left, 1.0), connect_timeout)
     ray.init(address=address, logging_level=logging.ERROR, log_to_driver=False)
     try:
         remote = ray.remote(num_cpus=1)(_ray_worker)
@@ -869,6 +980,7 @@ def sweep(
     connect_timeout: float = CONNECT_TIMEOUT,
     progress: bool = False,
     engine: Engine = "processes",
+    locked: bool = False,
 ) -> SweepResult:
     """Run the specs not already in ``out``/runs.csv, appending each row as it finishes,
     then write ``out``/summary.json (atomically) from all rows.
@@ -881,6 +993,8 @@ def sweep(
     the same settings (ParameterError otherwise), ``settings["options"]`` aside: the
     options as they were given, recorded for ``--print-config --from-summary``.
     ``out`` is locked for the whole sweep: a second sweep on it gets DataFileError.
+    ``locked``: the caller already holds ``RunDir(out).lock()`` (to write more files
+    under the same lock).
     """
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
@@ -888,11 +1002,11 @@ def sweep(
         from striatal.lockstep_sweep import check_specs
 
         check_specs(specs)
-    if out is None:
+    if out is None or locked:
         return _sweep(
             specs,
             settings,
-            None,
+            out,
             max_trials,
             backend,
             workers,

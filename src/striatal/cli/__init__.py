@@ -12,12 +12,15 @@ import importlib
 import os
 import pkgutil
 import re
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
 from typing import Any, NoReturn
 
+from striatal import interrupts
 from striatal.cli import config
 from striatal.cli.helpformat import DefaultsHelpFormatter
 from striatal.errors import StriatalError
@@ -96,19 +99,49 @@ def tolerate_any_encoding() -> None:
             reconfigure(errors="backslashreplace")
 
 
+def ignore_late_interrupts() -> None:
+    """Ignore SIGINT from now on: the command is stopped or done, the process ending.
+
+    A Ctrl-C while the interpreter exits (joining a worker pool's threads, running
+    atexit handlers) would otherwise end the process by SIGINT, after the run was
+    already stopped or finished and its files written.
+    """
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``striatal`` and ``python -m striatal``; returns the exit code.
 
     Ctrl-C at any point, while the libraries load too (they load here, when the
     parser imports the commands, not when ``striatal.cli`` is imported), exits 130
-    without a traceback.
+    without a traceback. Run as the program (``argv`` None: it parses ``sys.argv``),
+    a Ctrl-C once the first is being handled, or once the command has returned,
+    is ignored: the exit code stays the command's.
     """
+    if argv is None:
+        interrupts.install()  # the ``striatal`` script; ``python -m striatal`` did already
+    rc = _main(argv)
+    if argv is None:
+        # the command is over, its files written and its exit code chosen; what is
+        # left is the interpreter's exit, which a Ctrl-C would turn into death by SIGINT
+        ignore_late_interrupts()
+        if interrupts.received():
+            interrupts.forget_unhandled()
+    return rc
+
+
+def _main(argv: Sequence[str] | None) -> int:
     tolerate_any_encoding()
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
+    except Exception:
+        if interrupts.received():  # an import cut short by Ctrl-C, reported as another error
+            return EXIT_INTERRUPTED
+        raise
     try:
         if config.wants_file(args):
             args = config.apply(parser, args, sys.argv[1:] if argv is None else argv)
@@ -138,3 +171,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f"{exc.filename}: " if exc.filename else ""
         sys.stderr.write(f"striatal {args.command}: error: {where}{exc.strerror or exc}\n")
         return EXIT_USAGE
+    except Exception:
+        if interrupts.received():  # a Ctrl-C that a library turned into another error
+            sys.stderr.write(f"striatal {args.command}: interrupted\n")
+            return EXIT_INTERRUPTED
+        raise

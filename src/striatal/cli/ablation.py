@@ -8,6 +8,7 @@ output folder's lock); the table and ablation.json are written from its rows.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from typing import Any
@@ -18,6 +19,7 @@ from striatal.cli import config, options
 from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
 from striatal.files import atomic_write_text, check_out_dir, dumps_json, write_json
+from striatal.rundir import RunDir
 
 COMMAND = "ablation"
 ORDER = 45
@@ -125,24 +127,27 @@ def run(args: argparse.Namespace) -> int:
     specs, settings = build(chosen, seeds, args.max_trials, args.eval_draws)
     settings["options"] = config.recorded_options(args)
     talk = not (args.no_progress or args.json)
-    result = experiments.sweep(
-        specs,
-        settings,
-        out=args.out,
-        max_trials=args.max_trials,
-        backend=args.backend,
-        workers=args.workers,
-        address=args.address,
-        connect_timeout=args.connect_timeout,
-        progress=talk and sys.stderr.isatty(),
-    )
-    rows, data = table_rows(chosen, result)
-    if talk:
-        for v, s in rows:
-            print(variant_line(v.name, s), file=sys.stderr, flush=True)
-    table = markdown_table(rows)
-    if args.out is not None:
-        write_json(args.out / "ablation.json", data)
-        atomic_write_text(args.out / "ablation.md", table)
+    # the lock covers ablation.json and ablation.md too, written after the sweep
+    with RunDir(args.out).lock() if args.out is not None else contextlib.nullcontext():
+        result = experiments.sweep(
+            specs,
+            settings,
+            out=args.out,
+            max_trials=args.max_trials,
+            backend=args.backend,
+            workers=args.workers,
+            address=args.address,
+            connect_timeout=args.connect_timeout,
+            progress=talk and sys.stderr.isatty(),
+            locked=args.out is not None,
+        )
+        rows, data = table_rows(chosen, result)
+        if talk:
+            for v, s in rows:
+                print(variant_line(v.name, s), file=sys.stderr, flush=True)
+        table = markdown_table(rows)
+        if args.out is not None:
+            write_json(args.out / "ablation.json", data)
+            atomic_write_text(args.out / "ablation.md", table)
     sys.stdout.write(dumps_json(data) if args.json else table)
     return 0

@@ -193,7 +193,8 @@ def check_reset_options(
 
 
 def check_state(state: object) -> tuple[float, float, float, float]:
-    """A finite start state [x, x_dot, theta, theta_dot], or ParameterError."""
+    """A finite start state [x, x_dot, theta, theta_dot], each |component| < 1e8
+    (:data:`striatal.kernel.BLOW_UP`), or ParameterError."""
     try:
         s = np.asarray(state, dtype=float).ravel()
     except (TypeError, ValueError):
@@ -201,6 +202,11 @@ def check_state(state: object) -> tuple[float, float, float, float]:
     if s.shape != (4,) or not np.all(np.isfinite(s)):
         raise ParameterError(
             f"initial_state must be four finite numbers [x, x_dot, theta, theta_dot], got {state!r}"
+        )
+    if not np.all(np.abs(s) < kernel.BLOW_UP):
+        # as for the perturbation: such a start is a numerical fault before the first step
+        raise ParameterError(
+            f"initial_state components must be < {kernel.BLOW_UP:g} in size, got {state!r}"
         )
     return (float(s[0]), float(s[1]), float(s[2]), float(s[3]))
 

@@ -1,0 +1,69 @@
+"""Ctrl-C for the command line: the first SIGINT raises, the later ones are ignored.
+
+Python's own handler raises KeyboardInterrupt on every SIGINT, so a second Ctrl-C
+can land in the code that handles the first (an ``except`` clause, an import in
+it, a worker pool's shutdown, the interpreter's exit) and end the process with a
+traceback or by SIGINT instead of exit 130. ``python -m striatal`` and the
+``striatal`` script install :func:`first_only` before anything heavy loads;
+:func:`received` tells the command line that a Ctrl-C came, so that an error it
+caused (an import cut short, reported by a C extension as an ImportError) still
+exits 130. Only ``signal`` is imported here, to keep the window before it small.
+"""
+
+from __future__ import annotations
+
+import signal
+
+__all__ = ["first_only", "forget_unhandled", "install", "received"]
+
+_state = {"received": False}
+
+
+def first_only(signum: int, frame: object) -> None:
+    """SIGINT handler: KeyboardInterrupt the first time, nothing afterwards."""
+    if _state["received"]:
+        return
+    _state["received"] = True
+    raise KeyboardInterrupt
+
+
+def install() -> None:
+    """Make :func:`first_only` the SIGINT handler (main thread only; else a no-op).
+
+    A SIGINT that was ignored when the process started (``nohup``, a background
+    job of a non-interactive shell) stays ignored.
+    """
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        return
+    signal.signal(signal.SIGINT, first_only)
+
+
+def received() -> bool:
+    """Whether a SIGINT reached :func:`first_only` in this process."""
+    return _state["received"]
+
+
+def forget_unhandled() -> None:
+    """Clear CPython's record of a KeyboardInterrupt that escaped C-level ``PyRun_*`` code.
+
+    A Ctrl-C that lands while a C extension runs Python source through
+    ``PyRun_String`` during its import (SciPy's and Numba's start-up do) sets a
+    global flag that makes the interpreter end by SIGINT at exit, silently, even
+    though striatal caught the KeyboardInterrupt and exits 130. Each ``PyRun_*``
+    call resets that flag first; running an empty string through one does only
+    that. Not CPython, or no ``ctypes``: nothing to do.
+    """
+    import sys
+
+    if sys.implementation.name != "cpython":
+        return
+    try:
+        import ctypes
+
+        ctypes.pythonapi.PyRun_SimpleString(b"")
+    except (ImportError, AttributeError, OSError):
+        return
