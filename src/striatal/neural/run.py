@@ -5,10 +5,12 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 
 from striatal import kernel
+from striatal.errors import ParameterError
 from striatal.neural.network import NetworkConfig, build, require_nengo
 from striatal.params import Controller, Plant, Simulation, check_seed
 
@@ -18,7 +20,9 @@ __all__ = [
     "UPRIGHT_WINDOW",
     "KernelPlant",
     "NeuralRun",
+    "MotorExploration",
     "SpikeBins",
+    "add_exploration",
     "held_state_response",
     "run_network",
     "upright_throughout",
@@ -67,6 +71,16 @@ class KernelPlant:
             self.k += 1
             self.states[self.k] = self.state
         return self.sensed()
+
+
+class MotorExploration(Protocol):
+    """A nengo Node function that adds exploration to the motor command (see
+    :class:`striatal.neural.learn.Eligibility`): called once per network step with the
+    pathways' presynaptic signals, returns the exploration added to u."""
+
+    n_pre: int
+
+    def __call__(self, t: float, pre: np.ndarray) -> np.ndarray: ...
 
 
 class SpikeBins:
@@ -157,6 +171,7 @@ def run_network(
     *,
     net_dt: float = 0.001,
     record_rates: bool = True,
+    exploration: MotorExploration | None = None,
 ) -> NeuralRun:
     """Simulate the spiking controller on the plant from ``sim.initial_state``.
 
@@ -164,6 +179,9 @@ def run_network(
     population rates are sampled every ``sim.dt``. ``seed`` sets the network's random
     encoders, gains and biases (``nengo.Network(seed=...)``); the plant is
     deterministic. ``record_rates`` False leaves ``rates`` empty (a faster run).
+    ``exploration`` (the dopamine stage, :mod:`striatal.neural.learn`): a Node function
+    fed with each pathway's presynaptic signal (its decoded output in the term's units,
+    filtered by the motor's synapse) whose output is added to the plant's u.
     Success is the chapter's test at T_f (``sim.success``, end of
     section 2.4) on the final state; ``upright_last_10s`` the issue's looser test.
     """
@@ -194,6 +212,8 @@ def run_network(
                         transform=np.full((1, e.n_neurons), 1.0 / e.n_neurons),
                         synapse=None,
                     )
+        if exploration is not None:
+            add_exploration(nengo, h, node, exploration, config.synapse)
     simulator = nengo.Simulator(h.model, dt=net_dt, progress_bar=False, seed=seed)
     t1 = time.perf_counter()
     c1 = time.process_time()
@@ -235,6 +255,36 @@ def run_network(
         config=config,
         seed=seed,
     )
+
+
+def add_exploration(
+    nengo: Any, h: Any, plant_node: Any, exploration: MotorExploration, synapse: float
+) -> None:
+    """Wire ``exploration`` into ``h.model`` (inside ``with h.model``): one connection per
+    pathway from its presynaptic population, with the pathway's function and its scale in
+    place of the coefficient, into the Node; the Node's output into the plant's u. In a
+    subnetwork, so that the main network's seeds (and so its neurons) do not change."""
+    if exploration.n_pre != len(h.pathways):
+        raise ParameterError(
+            f"exploration takes {exploration.n_pre} signals, {len(h.pathways)} given"
+        )
+    with nengo.Network(label="dopamine: eligibility and exploration"):
+        node = nengo.Node(
+            exploration, size_in=exploration.n_pre, size_out=1, label="exploration + traces"
+        )
+        for i, ((_channel, term, conn), scale) in enumerate(
+            zip(h.pathways, h.pathway_scales, strict=True)
+        ):
+            kw = {} if conn.function is None else {"function": conn.function}
+            nengo.Connection(
+                conn.pre_obj,
+                node[i],
+                transform=scale,
+                synapse=synapse,
+                label=f"pre {term.signal} -> trace",
+                **kw,
+            )
+        nengo.Connection(node, plant_node, synapse=None)
 
 
 def held_state_response(
