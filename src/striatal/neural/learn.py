@@ -88,7 +88,8 @@ N_PATHWAYS = len(PATHWAYS)
 
 def pathway_coefficients(W: object, plant: Plant, sign: float = 1.0) -> np.ndarray:
     """c(W), the seven pathway coefficients of eqs 22-23 (:mod:`striatal.interpret`), (7,)."""
-    terms = (*balancing_terms(W, plant, sign), *swingup_terms(W))
+    w = check_gains(W)
+    terms = (*balancing_terms(w, plant, sign), *swingup_terms(w))
     return np.array([t.coefficient for t in terms])
 
 
