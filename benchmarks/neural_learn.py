@@ -167,6 +167,50 @@ def summarize(paths: list[Path]) -> None:
             )
 
 
+def learn_figure(paths: list[Path], out: Path) -> None:
+    """W1..W6 per trial, network (solid) and rate learner (dashed), one colour per seed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
+    trials = [r for r in rows if r["kind"] == "trial" and r["alpha"] > 0]
+    fig, axes = plt.subplots(2, 3, figsize=(10, 5.5), sharex=True, constrained_layout=True)
+    seeds = sorted({r["seed"] for r in trials})
+    for side, style in (("network", "-"), ("rate", "--")):
+        for ci, s in enumerate(seeds):
+            ts = sorted(
+                (r for r in trials if r["side"] == side and r["seed"] == s),
+                key=lambda r: r["trial"],
+            )
+            if not ts:
+                continue
+            W = np.array([r["W"] for r in ts])
+            t = [r["trial"] for r in ts]
+            for i, ax in enumerate(axes.ravel()):
+                ax.plot(
+                    t,
+                    W[:, i],
+                    style,
+                    color=f"C{ci}",
+                    marker="o",
+                    ms=3,
+                    label=f"{side} seed {s}" if i == 0 else None,
+                )
+    for i, ax in enumerate(axes.ravel()):
+        ax.set_title(f"W{i + 1}", fontsize=9)
+        ax.axhline(CHAPTER_INITIAL_W[i], color="0.7", lw=0.8)
+    for ax in axes[1]:
+        ax.set_xlabel("trial (W used in it)")
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle(
+        "chapter's rule from the chapter's W(0): spiking network (solid) vs rate learner (dashed)",
+        fontsize=10,
+    )
+    fig.savefig(out, dpi=110)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--summary", type=Path, nargs="+", help="summarize these files and stop")
@@ -177,9 +221,12 @@ def main() -> int:
     parser.add_argument("--neurons", type=int, default=1500)
     parser.add_argument("--alpha", type=float, default=5.0)
     parser.add_argument("--out", type=Path)
+    parser.add_argument("--figure", type=Path, help="with --summary: also draw W per trial here")
     args = parser.parse_args()
     if args.summary:
         summarize(args.summary)
+        if args.figure is not None:
+            learn_figure(args.summary, args.figure)
         return 0
     if args.out is None or args.side is None:
         parser.error("--side and --out are required")
