@@ -7,6 +7,8 @@ stopped keeps what it has. Example (what docs/neural.md reports):
     OPENBLAS_NUM_THREADS=1 python benchmarks/neural_seeds.py --neurons 2500 \
         --seeds 0-9 --out docs/data/neural_seeds.jsonl
     python benchmarks/neural_seeds.py --summary docs/data/neural_seeds.jsonl
+    python benchmarks/neural_seeds.py --summary docs/data/neural_curve.jsonl \
+        docs/data/neural_seeds.jsonl --figure docs/img/neural_curve.png
 """
 
 from __future__ import annotations
@@ -55,6 +57,48 @@ def summarize(paths: list[Path]) -> None:
             )
 
 
+def curve_figure(paths: list[Path], out: Path) -> None:
+    """Seeds upright over the last 10 s against the neuron count (cerebellar switch), with
+    exact 95 % intervals: the curve of docs/neural.md."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from scipy.stats import binomtest
+
+    rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
+    groups: dict[int, list[dict]] = {}
+    for r in rows:
+        if r["selection"] == "cerebellum":
+            groups.setdefault(r["neurons"], []).append(r)
+    ns = sorted(groups)
+    k = [sum(r["upright_last_10s"] for r in groups[n]) for n in ns]
+    m = [len(groups[n]) for n in ns]
+    cis = [binomtest(a, b).proportion_ci(0.95, method="exact") for a, b in zip(k, m, strict=True)]
+    frac = [a / b for a, b in zip(k, m, strict=True)]
+    fig, ax = plt.subplots(figsize=(5.5, 3.5), constrained_layout=True)
+    ax.errorbar(
+        ns,
+        frac,
+        yerr=[
+            [f - c.low for f, c in zip(frac, cis, strict=True)],
+            [c.high - f for f, c in zip(frac, cis, strict=True)],
+        ],
+        marker="o",
+        capsize=3,
+    )
+    for n, f, a, b in zip(ns, frac, k, m, strict=True):
+        ax.annotate(f"{a}/{b}", (n, f), textcoords="offset points", xytext=(4, -12), fontsize=8)
+    ax.set_xscale("log")
+    ax.set_xticks(ns, [str(n) for n in ns])
+    ax.minorticks_off()
+    ax.set_xlabel("LIF neurons (cortex, channels, switch)")
+    ax.set_ylabel("seeds with |theta| < 0.1 over the last 10 s")
+    ax.set_ylim(-0.05, 1.05)
+    ax.set_title("chapter's final gains, 60-s runs, exact 95 % intervals", fontsize=9)
+    fig.savefig(out, dpi=120)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--summary", type=Path, nargs="+", help="summarize these files and stop")
@@ -65,9 +109,12 @@ def main() -> int:
     )
     parser.add_argument("--duration", type=float, default=60.0)
     parser.add_argument("--out", type=Path)
+    parser.add_argument("--figure", type=Path, help="with --summary: also draw the curve here")
     args = parser.parse_args()
     if args.summary:
         summarize(args.summary)
+        if args.figure is not None:
+            curve_figure(args.summary, args.figure)
         return 0
     if args.out is None:
         parser.error("--out is required")

@@ -282,3 +282,207 @@ def test_recording_rates_does_not_change_the_network() -> None:
     np.testing.assert_allclose(a.data, b.data, rtol=0, atol=1e-12)
     assert a.rates.shape == (50, len(a.populations)) and a.rates.sum() > 0
     assert b.rates.sum() == 0
+
+
+# --------------------------------------------------------------------------- dopamine stage
+
+from striatal.learners.chapter import gain_update  # noqa: E402
+from striatal.neural.learn import (  # noqa: E402
+    PATHWAYS,
+    Eligibility,
+    coefficient_jacobian,
+    gain_eligibility,
+    gains_from_transforms,
+    learn_network,
+    network_transforms,
+    pathway_coefficients,
+)
+from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W  # noqa: E402
+
+START = Controller(gains=CHAPTER_INITIAL_W, theta_c=CHAPTER_INITIAL_THETA_C)
+SHORT = Simulation(duration=0.6)
+
+
+def test_eligibility_node_accumulates_pre_times_exploration_per_draw() -> None:
+    # two draws of two network steps each: eps = sigma n_k, held; E <- eps pre + gamma E
+    node = Eligibility(sigma=0.5, noise=np.array([1.0, -2.0]), gamma=0.9, every=2)
+    pre = [np.arange(1.0, 8.0), np.full(7, 9.0), -np.arange(1.0, 8.0), np.full(7, 9.0)]
+    eps = [float(node(0.001 * (k + 1), p)[0]) for k, p in enumerate(pre)]
+    assert eps == [0.5, 0.5, -1.0, -1.0]
+    # the trace samples pre at each draw (steps 0 and 2), not in between
+    want = -1.0 * pre[2] + 0.9 * (0.5 * pre[0])
+    np.testing.assert_allclose(node.trace, want, rtol=1e-12)
+    s = 0.5
+    want6 = (1.0 - s * s) * (1.1 - s) + 0.9 * ((0.25 - s * s) * (1.1 - s))
+    assert node.sigma_trace == pytest.approx(want6, rel=1e-12)
+    # past the last draw the exploration stops and the trace stays
+    assert float(node(0.005, pre[0])[0]) == 0.0
+    np.testing.assert_allclose(node.trace, want, rtol=1e-12)
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_pathway_traces_give_the_rate_learners_eligibility(sign: float) -> None:
+    # J^T applied to the terms' signals is kernel.policy_mean's d mu / d W (eq 3's e / eps)
+    W = np.array(CHAPTER_INITIAL_W)
+    p = PLANT.as_array()
+    for state, theta_c in (([0.3, -0.2, 0.1, 0.4], 0.6), ([0.5, 0.7, 2.5, -1.5], 0.6)):
+        x, xd, th, thd = state
+        grad = np.zeros(5)
+        kernel.policy_mean(x, xd, th, thd, W, theta_c, sign, False, 50.0, p, False, grad)
+        balancing = abs(th) < theta_c
+        e = kernel.energy_error(th, thd, p)
+        s = np.array(
+            [th, thd, x, xd, 0.0, 0.0, 0.0]
+            if balancing
+            else [0.0, 0.0, 0.0, 0.0, e * thd * math.cos(th), x, xd]
+        )
+        D = gain_eligibility(s, 0.0, W, PLANT, sign)
+        np.testing.assert_allclose(D[:5], grad, rtol=1e-12, atol=1e-12)
+    # and J is the derivative of c(W) (central differences)
+    J = coefficient_jacobian(W, PLANT, sign)
+    for j in range(5):
+        d = np.zeros(6)
+        d[j] = 1e-6
+        fd = pathway_coefficients(W + d, PLANT, sign) - pathway_coefficients(W - d, PLANT, sign)
+        np.testing.assert_allclose(J[:, j], fd / 2e-6, rtol=1e-6, atol=1e-8)
+
+
+def test_network_transforms_and_gains_round_trip() -> None:
+    for W, sign in ((CHAPTER_INITIAL_W, 1.0), (CTRL.gains, -1.0)):
+        ctrl = Controller(gains=W, theta_c=0.6, balance_sign="corrected" if sign > 0 else "chapter")
+        h = build(ctrl, PLANT, NetworkConfig(neurons=300), seed=0)
+        assert tuple((ch, t.signal) for ch, t, _ in h.pathways) == PATHWAYS
+        c = network_transforms(h)
+        np.testing.assert_allclose(c, pathway_coefficients(W, PLANT, sign), rtol=1e-12)
+        back = gains_from_transforms(c, W[5], PLANT, sign)
+        np.testing.assert_allclose(back, W, rtol=1e-12, atol=1e-12)
+    # transforms that no W produces are refused (c_thetadot inconsistent with c_theta)
+    bad = pathway_coefficients(CHAPTER_INITIAL_W, PLANT)
+    bad[1] *= 1.1
+    with pytest.raises(ParameterError, match="not the coefficients of one W"):
+        gains_from_transforms(bad, 0.0, PLANT)
+
+
+def test_update_is_alpha_times_dopamine_times_eligibility() -> None:
+    # hand-made traces: a positive dopamine (r - b > 0) moves W along D, a dip against it
+    W = np.array(CHAPTER_INITIAL_W)
+    E = np.array([0.2, -0.1, 0.3, 0.05, 2.0, -0.4, 0.6])
+    D = gain_eligibility(E, -0.3, W, PLANT)
+    J = coefficient_jacobian(W, PLANT)
+    np.testing.assert_allclose(D, [*(J.T @ E), -0.3])
+    for reward, baseline in ((10.0, 0.0), (-5.0, 0.0), (10.0, 12.0)):
+        new = gain_update(
+            W, D, reward, alpha=5.0, gamma=0.999, baseline=baseline, max_step=1.0, w1_floor=1e-3
+        )
+        np.testing.assert_allclose(new - W, 5.0 * 0.001 * (reward - baseline) * D, rtol=1e-12)
+        assert np.all(np.sign(new - W) == np.sign(reward - baseline) * np.sign(D))
+
+
+def test_network_learning_trial_updates_by_its_own_trace_and_reward() -> None:
+    r = learn_network(START, PLANT, SHORT, NetworkConfig(neurons=300), 2, trials=2)
+    assert len(r.trials) == 2
+    t1, t2 = r.trials
+    assert START.gains == t1.W
+    assert t1.reward == -5.0  # 0.6 s from the bottom: eq 25's failure
+    step = 5.0 * (1.0 - 0.999) * (t1.reward - 0.0) * np.array(t1.eligibility)
+    np.testing.assert_allclose(np.array(t2.W) - np.array(t1.W), np.clip(step, -1.0, 1.0))
+    assert np.any(np.abs(step) > 1e-6)  # the trace is not empty: learning happened
+    # the transforms the second trial ran with are c(W(2))
+    np.testing.assert_allclose(t2.transforms, pathway_coefficients(t2.W, PLANT), rtol=1e-12)
+    # the pump trace is what moved W4 (eq 23's E~ theta_dot cos theta, swing-up channel open)
+    assert t1.pathway_trace[4] != 0.0
+
+
+def test_no_dopamine_leaves_the_weights() -> None:
+    r = learn_network(START, PLANT, SHORT, NetworkConfig(neurons=300), 2, trials=2, alpha=0.0)
+    for t in r.trials:
+        assert START.gains == t.W
+        np.testing.assert_allclose(t.transforms, pathway_coefficients(START.gains, PLANT))
+    assert START.gains == r.W
+
+
+def test_network_learning_is_deterministic_under_a_seed() -> None:
+    cfg = NetworkConfig(neurons=300)
+    a = learn_network(START, PLANT, SHORT, cfg, 4, trials=2)
+    b = learn_network(START, PLANT, SHORT, cfg, 4, trials=2)
+    c = learn_network(START, PLANT, SHORT, cfg, 5, trials=2)
+    assert [t.W for t in a.trials] == [t.W for t in b.trials]
+    assert [t.pathway_trace for t in a.trials] == [t.pathway_trace for t in b.trials]
+    assert a.W == b.W
+    assert a.W != c.W
+
+
+def test_exploration_subnetwork_leaves_the_network_unchanged() -> None:
+    # zero exploration: the same trajectory as the plain run, so the wiring changes no seed
+    sim = Simulation(theta0=0.3, duration=0.4)
+    cfg = NetworkConfig(neurons=300)
+    plain = run_network(START, PLANT, sim, cfg, 3, record_rates=False)
+
+    class Quiet(Eligibility):
+        def __init__(self, *args: object) -> None:
+            super().__init__(*args)  # type: ignore[arg-type]
+            self.seen: list[np.ndarray] = []
+
+        def __call__(self, t: float, pre: np.ndarray) -> np.ndarray:
+            self.seen.append(np.array(pre))
+            return super().__call__(t, pre)
+
+    quiet = Quiet(0.5, np.zeros(sim.n_steps), 0.999, 10)
+    wired = run_network(START, PLANT, sim, cfg, 3, record_rates=False, exploration=quiet)
+    np.testing.assert_allclose(wired.data[:, 1:5], plain.data[:, 1:5], rtol=0, atol=1e-12)
+    # the presynaptic signals did reach the Node: near upright the balancing theta
+    # pathway carries theta (0.3 rad, the balancing channel open), the swing-up one ~0
+    late = np.mean(quiet.seen[-50:], axis=0)
+    assert late[0] == pytest.approx(wired.data[-1, 3], abs=0.1)
+    assert abs(late[4]) < 0.2
+
+
+def test_learning_rejects_long_trials_and_bad_counts() -> None:
+    with pytest.raises(ParameterError, match="at most 30 s"):
+        learn_network(
+            START, PLANT, Simulation(duration=31.0), NetworkConfig(neurons=300), 0, trials=1
+        )
+    with pytest.raises(ParameterError, match="trials"):
+        learn_network(START, PLANT, SHORT, NetworkConfig(neurons=300), 0, trials=0)
+
+
+def test_cli_learn_json_and_files(tmp_path, capsys) -> None:
+    out = tmp_path / "learn"
+    argv = [
+        "neural",
+        "--chapter-initial",
+        "--learn",
+        "--trials",
+        "2",
+        "--duration",
+        "0.6",
+        "--neurons",
+        "300",
+        "--seed",
+        "2",
+        "--json",
+        "--out",
+        str(out),
+    ]
+    assert main(argv) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["trials_run"] == 2 and got["W0"] == list(CHAPTER_INITIAL_W)
+    assert got["history"][1]["W"] != got["history"][0]["W"]  # the first update happened
+    rows = (out / "learn_history.csv").read_text().splitlines()
+    assert rows[0].startswith("trial,reward,W1") and len(rows) == 3
+    assert json.loads((out / "learn_summary.json").read_text())["W"] == got["W"]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["--chapter-initial", "--learn", "--duration", "40"],
+        ["--chapter-initial", "--learn", "--trials", "0", "--duration", "1"],
+        ["--chapter-initial", "--alpha", "1"],
+        ["--chapter-initial", "--learn", "--alpha", "-1", "--duration", "1"],
+    ],
+)
+def test_cli_learn_bad_input_exits_2(argv, capsys) -> None:
+    assert main(["neural", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1

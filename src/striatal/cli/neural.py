@@ -5,10 +5,15 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from striatal.cli import progress
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, Simulation, check_seed
+
+if TYPE_CHECKING:
+    from striatal.neural.network import NetworkConfig
+    from striatal.params import Controller, Plant
 
 COMMAND = "neural"
 ORDER = 45
@@ -61,7 +66,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     run_g = parser.add_argument_group("run")
     run_g.add_argument("--theta0", type=float, default=CHAPTER_THETA0, help="initial angle [rad]")
     run_g.add_argument("--x0", type=float, default=0.0, help="initial cart position [m]")
-    run_g.add_argument("--duration", type=float, default=60.0, help="T_f [s]")
+    run_g.add_argument(
+        "--duration", type=float, default=None, help="T_f [s] (default 60; 30 with --learn)"
+    )
+    learn = parser.add_argument_group("dopamine (second stage: the chapter's rule on the pathways)")
+    learn.add_argument(
+        "--learn",
+        action="store_true",
+        help="run --trials learning trials: exploration on the motor command, eligibility "
+        "pre x post per pathway during the trial, the eq-25 reward as dopamine at its end, "
+        "the chapter's update (eqs 1-5) of W and so of the transforms between trials",
+    )
+    learn.add_argument(
+        "--trials", type=int, default=20, help="learning trials (with --learn; at most 30 s each)"
+    )
+    learn.add_argument(
+        "--alpha",
+        type=float,
+        default=None,
+        help="learning rate of eq 4 (with --learn; default the chapter learner's 5.0, "
+        "0: no learning)",
+    )
     options.add_plant_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     progress.add_progress_argument(parser)
@@ -89,7 +114,10 @@ def run(args: argparse.Namespace) -> int:
     from striatal.neural.run import NEURAL_TRAJ_COLUMNS, run_network
 
     controller, plant = options.controller_and_plant(args)
-    sim = Simulation(theta0=args.theta0, x0=args.x0, duration=args.duration, dt=0.01)
+    if not args.learn and args.alpha is not None:
+        raise ParameterError("--alpha needs --learn")
+    duration = args.duration if args.duration is not None else (30.0 if args.learn else 60.0)
+    sim = Simulation(theta0=args.theta0, x0=args.x0, duration=duration, dt=0.01)
     seed = check_seed(args.seed)
     if sim.duration > 3600.0:
         raise ParameterError(f"duration must be at most 3600 s, got {sim.duration}")
@@ -106,6 +134,8 @@ def run(args: argparse.Namespace) -> int:
 
         check_image_path(args.circuit_figure, (".png", ".svg", ".pdf"))
     require_nengo()
+    if args.learn:
+        return run_learning(args, controller, plant, sim, config, seed)
     shown = progress.bar(args, total=sim.duration, unit="s")
 
     def on_progress(t: float) -> None:
@@ -192,4 +222,81 @@ def run(args: argparse.Namespace) -> int:
         print("numerical fault: the state blew up")
     if args.out is not None:
         print(f"wrote {args.out}/trajectory.csv, rates.csv, summary.json, activity.png")
+    return 0
+
+
+def run_learning(
+    args: argparse.Namespace,
+    controller: Controller,
+    plant: Plant,
+    sim: Simulation,
+    config: NetworkConfig,
+    seed: int,
+) -> int:
+    """``--learn``: the dopamine stage over trials; one line per trial, or one JSON object."""
+    from striatal.files import dumps_json, write_csv, write_json
+    from striatal.neural.learn import NeuralTrial, learn_network
+
+    if args.circuit_figure is not None:
+        raise ParameterError("--circuit-figure cannot be combined with --learn")
+
+    def show(t: NeuralTrial) -> None:
+        if args.json:
+            return
+        w = " ".join(f"{v:+.4f}" for v in t.W)
+        print(
+            f"trial {t.trial:3d}: W [{w}] theta_c {t.theta_c:.3f}  reward {t.reward:+g}  "
+            f"upright_last_10s {'yes' if t.upright_last_10s else 'no'}  "
+            f"success {'yes' if t.success else 'no'}",
+            flush=True,
+        )
+
+    result = learn_network(
+        controller, plant, sim, config, seed, trials=args.trials, alpha=args.alpha, on_trial=show
+    )
+    out = result.to_dict()
+    out["settings"] = {
+        "controller": controller.to_dict(),
+        "theta0": sim.theta0,
+        "x0": sim.x0,
+        "duration": sim.duration,
+        "network": {"neurons_requested": config.neurons, "selection": config.selection},
+    }
+    if args.out is not None:
+        cols = (
+            "trial",
+            "reward",
+            *(f"W{i}" for i in range(1, 7)),
+            "theta_c",
+            "success",
+            "upright_last_10s",
+            "first_switch",
+            *(f"D{i}" for i in range(1, 7)),
+        )
+        rows = [
+            [
+                t.trial,
+                t.reward,
+                *t.W,
+                t.theta_c,
+                t.success,
+                t.upright_last_10s,
+                t.first_switch,
+                *t.eligibility,
+            ]
+            for t in result.trials
+        ]
+        write_csv(args.out / "learn_history.csv", cols, rows)
+        write_json(args.out / "learn_summary.json", out)
+    if args.json:
+        sys.stdout.write(dumps_json(out))
+        return 0
+    w = " ".join(f"{v:+.4f}" for v in result.W)
+    print(f"neurons: {result.neurons}  ({config.selection} switch, seed {seed})")
+    print(
+        f"after {len(result.trials)} trials: W [{w}] theta_c {result.theta_c:.3f}  "
+        f"({'solved' if result.solved else 'not solved'})"
+    )
+    if args.out is not None:
+        print(f"wrote {args.out}/learn_history.csv, learn_summary.json")
     return 0

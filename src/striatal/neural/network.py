@@ -154,6 +154,9 @@ class Handles:
     gates: dict[str, Any] = field(default_factory=dict)
     pathways: list[tuple[str, Term, Any]] = field(default_factory=list)
     extra_neurons: int = 0
+    #: per pathway: transform / coefficient, the factor that turns the connection's decoded
+    #: output into the term's signal in physical units (1, or the pump population's scale)
+    pathway_scales: list[float] = field(default_factory=list)
 
     @property
     def n_neurons(self) -> int:
@@ -254,6 +257,7 @@ def build(
         nengo.Connection(mu_2, motor, synapse=syn)
 
         pathways: list[tuple[str, Term, Any]] = []
+        scales: list[float] = []
         sources = {"theta": bal_theta, "theta_dot": bal_omega, "x": bal_x, "x_dot": bal_v}
         for t in mu1_terms:
             c = nengo.Connection(
@@ -264,6 +268,7 @@ def build(
                 label=f"mu_1 {t.signal} {t.pathway}",
             )
             pathways.append(("mu_1", t, c))
+            scales.append(1.0)
         for t in mu2_terms:
             if t.signal == "energy_pump":
                 c = nengo.Connection(
@@ -284,6 +289,7 @@ def build(
                     label=f"mu_2 {t.signal} {t.pathway}",
                 )
             pathways.append(("mu_2", t, c))
+            scales.append(pump_scale if t.signal == "energy_pump" else 1.0)
 
         # the switch: fibres carry clip(gamma (theta_c - |theta|), -1, 1), |theta| = arccos(cos)
         fibres = ens("fibres", 1, 1.0)
@@ -387,5 +393,6 @@ def build(
             gates=gates,
             pathways=pathways,
             extra_neurons=extra,
+            pathway_scales=scales,
         )
     return h

@@ -6,10 +6,12 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 
 from striatal import kernel
+from striatal.errors import ParameterError
 from striatal.neural.network import NetworkConfig, build, require_nengo
 from striatal.params import Controller, Plant, Simulation, check_seed
 
@@ -18,8 +20,10 @@ __all__ = [
     "UPRIGHT_THETA",
     "UPRIGHT_WINDOW",
     "KernelPlant",
+    "MotorExploration",
     "NeuralRun",
     "SpikeBins",
+    "add_exploration",
     "held_state_response",
     "run_network",
     "upright_throughout",
@@ -68,6 +72,16 @@ class KernelPlant:
             self.k += 1
             self.states[self.k] = self.state
         return self.sensed()
+
+
+class MotorExploration(Protocol):
+    """A nengo Node function that adds exploration to the motor command (see
+    :class:`striatal.neural.learn.Eligibility`): called once per network step with the
+    pathways' presynaptic signals, returns the exploration added to u."""
+
+    n_pre: int
+
+    def __call__(self, t: float, pre: np.ndarray) -> np.ndarray: ...
 
 
 class SpikeBins:
@@ -159,6 +173,7 @@ def run_network(
     net_dt: float = 0.001,
     record_rates: bool = True,
     on_progress: Callable[[float], None] | None = None,
+    exploration: MotorExploration | None = None,
 ) -> NeuralRun:
     """Simulate the spiking controller on the plant from ``sim.initial_state``.
 
@@ -168,6 +183,9 @@ def run_network(
     deterministic. ``record_rates`` False leaves ``rates`` empty (a faster run).
     ``on_progress(t)`` is called with the simulated time [s] after each simulated
     second (a progress bar); stepping in chunks leaves the run unchanged.
+    ``exploration`` (the dopamine stage, :mod:`striatal.neural.learn`): a Node function
+    fed with each pathway's presynaptic signal (its decoded output in the term's units,
+    filtered by the motor's synapse) whose output is added to the plant's u.
     Success is the chapter's test at T_f (``sim.success``, end of
     section 2.4) on the final state; ``upright_last_10s`` the issue's looser test.
     """
@@ -198,6 +216,8 @@ def run_network(
                         transform=np.full((1, e.n_neurons), 1.0 / e.n_neurons),
                         synapse=None,
                     )
+        if exploration is not None:
+            add_exploration(nengo, h, node, exploration, config.synapse)
     simulator = nengo.Simulator(h.model, dt=net_dt, progress_bar=False, seed=seed)
     t1 = time.perf_counter()
     c1 = time.process_time()
@@ -244,6 +264,36 @@ def run_network(
         config=config,
         seed=seed,
     )
+
+
+def add_exploration(
+    nengo: Any, h: Any, plant_node: Any, exploration: MotorExploration, synapse: float
+) -> None:
+    """Wire ``exploration`` into ``h.model`` (inside ``with h.model``): one connection per
+    pathway from its presynaptic population, with the pathway's function and its scale in
+    place of the coefficient, into the Node; the Node's output into the plant's u. In a
+    subnetwork, so that the main network's seeds (and so its neurons) do not change."""
+    if exploration.n_pre != len(h.pathways):
+        raise ParameterError(
+            f"exploration takes {exploration.n_pre} signals, {len(h.pathways)} given"
+        )
+    with nengo.Network(label="dopamine: eligibility and exploration"):
+        node = nengo.Node(
+            exploration, size_in=exploration.n_pre, size_out=1, label="exploration + traces"
+        )
+        for i, ((_channel, term, conn), scale) in enumerate(
+            zip(h.pathways, h.pathway_scales, strict=True)
+        ):
+            kw = {} if conn.function is None else {"function": conn.function}
+            nengo.Connection(
+                conn.pre_obj,
+                node[i],
+                transform=scale,
+                synapse=synapse,
+                label=f"pre {term.signal} -> trace",
+                **kw,
+            )
+        nengo.Connection(node, plant_node, synapse=None)
 
 
 def held_state_response(
