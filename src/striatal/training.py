@@ -206,6 +206,8 @@ def _resume_changes(
         **setup.config.to_dict(),
         "robust": setup.config.robust,
         "symmetric": setup.config.symmetric,
+        "max_force": setup.config.max_force,
+        "track": setup.config.track,
     }
     differ = []
     for name, value in given.items():
