@@ -40,7 +40,8 @@ cmaes
 
 Robust (``robust=True``, ``sweep --baselines random,cmaes --robust``): the protocol of
 the learner's robust stop rule. Every trial holds the motor force of eq 12
-(``striatal.robust.ROBUST_HARDWARE``), and a candidate whose trial passes the success
+(``striatal.robust.ROBUST_HARDWARE``; ``hardware=``: with a force limit or a track, as
+``LearnerConfig.hardware`` gives them), and a candidate whose trial passes the success
 test is run through the robustness set (:func:`striatal.robust.stop_check`, up to the
 first failing case; the nominal case is the trial itself for a noise-free 60-s trial
 from the chapter's start); only a robust candidate ends the search. Each of those runs
@@ -78,10 +79,11 @@ from striatal.params import (
     CHAPTER_HARDWARE,
     N_GAINS,
     Controller,
+    Hardware,
     Plant,
     Simulation,
 )
-from striatal.robust import ROBUST_HARDWARE, nominal_is_the_case, stop_check
+from striatal.robust import nominal_is_the_case, robust_hardware, stop_check
 from striatal.rollout import Protocol, recorded_trial, run_trial
 
 __all__ = [
@@ -191,11 +193,16 @@ def _trial(
     rng: np.random.Generator,
     shaped: bool = False,
     robust: bool = False,
+    hardware: Hardware | None = None,
 ) -> tuple[bool, float, float, int]:
     """(success, shaped score or nan, simulated seconds, simulations) of one 60-s trial
     of p; with ``robust`` the force held and, when the trial passes, the robust stop
-    rule's runs (module docstring) added to the seconds and simulations."""
-    ok, score, seconds = _one_trial(plant, template, sim, p, success_on, rng, shaped, robust)
+    rule's runs (module docstring) added to the seconds and simulations. ``hardware``:
+    the motor and track of the trial and of the stop rule's runs (None: the force held
+    with ``robust``, the chapter's idealisation otherwise; no limit, no track)."""
+    if hardware is None:
+        hardware = robust_hardware() if robust else CHAPTER_HARDWARE
+    ok, score, seconds = _one_trial(plant, template, sim, p, success_on, rng, shaped, hardware)
     if not (robust and ok):
         return ok, score, seconds, 1
     verdict = stop_check(
@@ -204,6 +211,7 @@ def _trial(
         sim.dt,
         gains=np.array(p[:N_GAINS], dtype=float),
         nominal_passed=success_on == "mean" and nominal_is_the_case(sim),
+        hardware=hardware,
     )
     return verdict.robust, score, seconds + verdict.simulated_seconds, 1 + verdict.simulations
 
@@ -216,12 +224,11 @@ def _one_trial(
     success_on: SuccessOn,
     rng: np.random.Generator,
     shaped: bool,
-    robust: bool,
+    hardware: Hardware,
 ) -> tuple[bool, float, float]:
     controller = template.with_gains(template.gains, float(p[6]))
     W = np.array(p[:N_GAINS], dtype=float)
     noise = rng if success_on == "noisy" else None
-    hardware = ROBUST_HARDWARE if robust else CHAPTER_HARDWARE
     if shaped:
         outcome, data = recorded_trial(
             plant,
@@ -275,6 +282,7 @@ def fixed_controller(
     max_trials: int,
     success_on: SuccessOn,
     robust: bool = False,
+    hardware: Hardware | None = None,
 ) -> dict[str, Any]:
     """Trials of a fixed (W, theta_c) until one passes (lqr, hand)."""
     p = np.array([*W, theta_c])
@@ -282,7 +290,9 @@ def fixed_controller(
     budget = max_trials if success_on == "noisy" else 1
     seconds, runs = 0.0, 0
     for trial in range(1, budget + 1):
-        ok, _, t, n = _trial(plant, template, sim, p, success_on, rng, robust=robust)
+        ok, _, t, n = _trial(
+            plant, template, sim, p, success_on, rng, robust=robust, hardware=hardware
+        )
         seconds, runs = seconds + t, runs + n
         if ok:
             return _result(True, trial, p, seconds, runs)
@@ -300,6 +310,7 @@ def random_search(
     max_trials: int,
     success_on: SuccessOn,
     robust: bool = False,
+    hardware: Hardware | None = None,
 ) -> dict[str, Any]:
     """Uniform draws of (W1..W6, theta_c) from RANDOM_BOX, one trial each."""
     draw = np.random.default_rng([seed, 3])
@@ -310,7 +321,9 @@ def random_search(
     for trial in range(1, max_trials + 1):
         if trial > 1:
             p = draw.uniform(low, high)
-        ok, _, t, n = _trial(plant, template, sim, p, success_on, rng, robust=robust)
+        ok, _, t, n = _trial(
+            plant, template, sim, p, success_on, rng, robust=robust, hardware=hardware
+        )
         seconds, runs = seconds + t, runs + n
         if ok:
             return _result(True, trial, p, seconds, runs)
@@ -328,6 +341,7 @@ def cmaes(
     success_on: SuccessOn,
     sigma0: float = 1.0,
     robust: bool = False,
+    hardware: Hardware | None = None,
 ) -> dict[str, Any]:
     """IPOP-CMA-ES over (W1..W6, theta_c) from (W0, theta_c0) on minus the shaped reward.
 
@@ -362,7 +376,15 @@ def cmaes(
                 trials += 1
                 p = np.clip(np.array(x), lower, upper)
                 ok, score, t, n = _trial(
-                    plant, template, sim, p, success_on, rng, shaped=True, robust=robust
+                    plant,
+                    template,
+                    sim,
+                    p,
+                    success_on,
+                    rng,
+                    shaped=True,
+                    robust=robust,
+                    hardware=hardware,
                 )
                 seconds, runs = seconds + t, runs + n
                 if ok:

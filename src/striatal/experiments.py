@@ -68,14 +68,13 @@ from striatal.evaluate import pass_probability
 from striatal.files import atomic_write_text, csv_text, read_text
 from striatal.learners import LearnerConfig, learn, random_initial_gains, rule_of
 from striatal.params import (
-    CHAPTER_HARDWARE,
     CHAPTER_INITIAL_W,
     N_GAINS,
     Controller,
     Plant,
     Simulation,
 )
-from striatal.robust import ROBUST_HARDWARE, check_robust
+from striatal.robust import check_robust
 from striatal.rollout import Protocol, simulate
 from striatal.rundir import RunDir
 
@@ -281,6 +280,7 @@ def search(spec: RunSpec, W0: tuple[float, ...]) -> dict[str, Any]:
             cfg.max_trials,
             cfg.success_on,
             robust=cfg.robust,
+            hardware=cfg.hardware,
         )
     if spec.method == "random":
         return baselines.random_search(
@@ -291,6 +291,7 @@ def search(spec: RunSpec, W0: tuple[float, ...]) -> dict[str, Any]:
             cfg.max_trials,
             cfg.success_on,
             robust=cfg.robust,
+            hardware=cfg.hardware,
         )
     if spec.method == "cmaes":
         return baselines.cmaes(
@@ -303,6 +304,7 @@ def search(spec: RunSpec, W0: tuple[float, ...]) -> dict[str, Any]:
             cfg.max_trials,
             cfg.success_on,
             robust=cfg.robust,
+            hardware=cfg.hardware,
         )
     raise ParameterError(f"unknown method {spec.method!r}; choose from {', '.join(METHODS)}")
 
@@ -331,13 +333,13 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
             final,
             spec.sim,
             protocol=Protocol(),
-            hardware=ROBUST_HARDWARE if cfg.robust else CHAPTER_HARDWARE,
+            hardware=cfg.hardware,
         ).outcome.success
     )
     evals = 1 if final is not None else 0
     robust = math.nan
     if cfg.robust and final is not None:
-        report = check_robust(final, plant=spec.plant)
+        report = check_robust(final, plant=spec.plant, max_force=cfg.max_force, track=cfg.track)
         robust, evals = float(report.robust), evals + report.simulations
     rate0 = rate = math.nan
     if spec.eval_draws > 0:

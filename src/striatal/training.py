@@ -32,7 +32,6 @@ from striatal.learners import (
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
-    CHAPTER_HARDWARE,
     CHAPTER_INITIAL_THETA_C,
     CHAPTER_INITIAL_W,
     Controller,
@@ -41,7 +40,7 @@ from striatal.params import (
     check_gains,
     check_seed,
 )
-from striatal.robust import ROBUST_HARDWARE, check_robust
+from striatal.robust import check_robust
 from striatal.rollout import Trajectory
 from striatal.rollout import simulate as _simulate
 from striatal.rundir import RUN_FILES, RunDir, Setup, rule_columns, run_id, run_settings, setup_of
@@ -207,6 +206,8 @@ def _resume_changes(
         **setup.config.to_dict(),
         "robust": setup.config.robust,
         "symmetric": setup.config.symmetric,
+        "max_force": setup.config.max_force,
+        "track": setup.config.track,
     }
     differ = []
     for name, value in given.items():
@@ -410,9 +411,15 @@ def _run(
     if not history.columns:
         history = History(config.learner, columns, (), config.reward)
     learned = setup.template.with_gains(result.W, result.theta_c)
-    hardware = ROBUST_HARDWARE if config.robust else CHAPTER_HARDWARE
+    hardware = config.hardware
     check = _simulate(setup.plant, learned, setup.sim, hardware=hardware).outcome
-    report = check_robust(learned, plant=setup.plant).to_dict() if config.robust else None
+    report = (
+        check_robust(
+            learned, plant=setup.plant, max_force=config.max_force, track=config.track
+        ).to_dict()
+        if config.robust
+        else None
+    )
     out = Run(
         success=result.success,
         trials=result.trials,

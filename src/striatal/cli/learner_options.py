@@ -37,6 +37,8 @@ _FIELDS = {
     "critic_rate": "critic_rate",
     "td_discount": "td_discount",
     "critic_decay": "critic_decay",
+    "max_force": "max_force",
+    "track": "track",
 }
 
 
@@ -202,6 +204,22 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         default=None,
         help="ac: lambda of the critic's trace; " + _default_text("critic_decay"),
+    )
+    lg.add_argument(
+        "--max-force",
+        type=float,
+        default=None,
+        metavar="NEWTONS",
+        help="motor limit [N] of every trial and check, the robustness set's included: the "
+        "force is clipped to [-F, F] (default: none)",
+    )
+    lg.add_argument(
+        "--track",
+        type=float,
+        default=None,
+        metavar="METRES",
+        help="track half-length [m] of every trial and check: |x| beyond it ends the trial "
+        "as a failure (default: none)",
     )
 
 

@@ -28,7 +28,7 @@ same exploring trials with the same critic as the learning run's first trial.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import Any
 
@@ -142,6 +142,8 @@ class AcRule(Rule):
             action_every=trial["action_every"],
             chapter_eligibility=plan.eligibility == "chapter",
             model=trial["model"],
+            # u held, as ever; the run's force limit and track apply
+            hardware=replace(trial["hardware"], hold="u"),
             normalise=c.normalise,
             square_rate=c.rpe_rate,
             square=plan.scratch["square"],

@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass, fields
 from typing import Any, Literal, TypeVar
 
 from striatal.errors import ParameterError
-from striatal.params import as_float, require_finite
+from striatal.params import Hardware, as_float, require_finite, require_finite_positive
 
 __all__ = [
     "W1_FLOOR",
@@ -92,9 +92,14 @@ class LearnerConfig:
     td_discount : discount gamma_v per control step of the TD error
         delta = r + gamma_v V(s') - V(s) (ac); 1 - dt / tau for a value horizon tau.
     critic_decay : lambda of the critic's trace z <- gamma_v lambda z + phi(s) (ac).
+    max_force : the motor's limit [N] for every trial and check of the run, the
+        robustness set's included (None: unlimited; :class:`striatal.params.Hardware`).
+    track : the track's half-length [m]: |x| beyond it ends the trial as a failure
+        (None: endless).
 
     ``symmetric`` and ``robust`` (added with issue 15) are left out of :meth:`to_dict`
-    when False, so the settings and run ids of runs without them stay as they were.
+    when False, and ``max_force`` and ``track`` when None, so the settings and run ids
+    of runs without them stay as they were.
     """
 
     alpha: float = 5.0
@@ -121,6 +126,8 @@ class LearnerConfig:
     critic_rate: float = 0.01
     td_discount: float = 0.99
     critic_decay: float = 0.9
+    max_force: float | None = None
+    track: float | None = None
 
     def __post_init__(self) -> None:
         a = require_finite("alpha", self.alpha)
@@ -177,17 +184,33 @@ class LearnerConfig:
         lam = require_finite("critic_decay", self.critic_decay)
         if not 0.0 <= lam <= 1.0:
             raise ParameterError(f"critic_decay must be in [0, 1], got {self.critic_decay}")
+        for name in _LATER_LIMITS:
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, require_finite_positive(name, getattr(self, name)))
+
+    @property
+    def hardware(self) -> Hardware:
+        """The motor and track of every trial and check of the run: the force held with
+        ``robust`` (u otherwise, the chapter's idealisation), ``max_force`` and ``track``."""
+        return Hardware(
+            hold="force" if self.robust else "u", max_force=self.max_force, track=self.track
+        )
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         for name in _LATER_FLAGS:
             if not d[name]:
                 del d[name]
+        for name in _LATER_LIMITS:
+            if d[name] is None:
+                del d[name]
         return d
 
 
 #: Flags added after the settings schema 2 (issue 15): stored only when set.
 _LATER_FLAGS = ("symmetric", "robust")
+#: Limits added with issue 15: stored only when given.
+_LATER_LIMITS = ("max_force", "track")
 
 C = TypeVar("C")
 

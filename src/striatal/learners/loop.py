@@ -17,7 +17,9 @@ not rerun when the success test's noise-free nominal run already was it). With a
 jittered plant, a rule judged on its noise-free candidate is first filtered by its
 own trial on that plant (no nominal rerun); the set then decides. A rule that runs its
 trial itself (``runs_trial``: ac's online loop, ``striatal.online``) runs it with u
-held even then; its success checks and the set hold the force.
+held even then; its success checks and the set hold the force. ``config.max_force``
+and ``config.track`` (:attr:`LearnerConfig.hardware`) apply to every trial, check and
+case of the set.
 :func:`learn` repeats it until success or ``max_trials``.
 """
 
@@ -41,7 +43,7 @@ from striatal.learners.rpe import RPE
 from striatal.learners.rule import Rule, Update
 from striatal.learners.state import LearnerState, TrainResult, TrialRecord
 from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Plant, Simulation
-from striatal.robust import ROBUST_HARDWARE, nominal_is_the_case, stop_check
+from striatal.robust import nominal_is_the_case, stop_check
 from striatal.rollout import Protocol, TrialOutcome, recorded_trial, run_trial
 
 __all__ = ["LEARNERS", "RULES", "check_config", "learn", "learning_step", "rule_of"]
@@ -130,7 +132,7 @@ def learning_step(
     true_plant = plan.plant or plant
     model = plant if plan.plant is not None else None
     trial_controller = replace(template, theta_c=plan.theta_c)
-    hardware = ROBUST_HARDWARE if config.robust else CHAPTER_HARDWARE
+    hardware = config.hardware
     kwargs = dict(
         plant=true_plant,
         controller=trial_controller,
@@ -197,6 +199,7 @@ def learning_step(
             sim.dt,
             gains=W,
             nominal_passed=nominal_run and nominal_is_the_case(sim, config.action_every),
+            hardware=hardware,
         )
         simulations += verdict.simulations
         seconds += verdict.simulated_seconds

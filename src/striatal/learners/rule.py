@@ -28,7 +28,15 @@ from striatal.rollout import TrialOutcome
 __all__ = ["LOOP_OPTIONS", "Rule", "TrialPlan", "Update"]
 
 #: LearnerConfig fields the loop itself reads, whatever the rule.
-LOOP_OPTIONS = ("learner", "max_trials", "success_on", "action_every", "robust")
+LOOP_OPTIONS = (
+    "learner",
+    "max_trials",
+    "success_on",
+    "action_every",
+    "robust",
+    "max_force",
+    "track",
+)
 
 
 @dataclass(frozen=True)
