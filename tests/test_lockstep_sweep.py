@@ -141,6 +141,9 @@ def test_what_the_batch_engine_does_not_run_is_refused() -> None:
     assert "shaped" in (unsupported(_specs(shaped)) or "")
     jitter = default_config("pgpe", max_trials=3, reward="sparse", plant_jitter=0.1)
     assert "plant_jitter" in (unsupported(_specs(jitter)) or "")
+    for limit, flag_name in (("track", "--track"), ("max_force", "--max-force")):
+        limited = replace(chapter, **{limit: 2.0})
+        assert flag_name in (unsupported(_specs(limited)) or "")
     for flag in ("robust", "symmetric"):
         flagged = replace(chapter, **{flag: True})
         assert f"--{flag}" in (unsupported(_specs(flagged)) or "")

@@ -98,6 +98,12 @@ def unsupported(specs: Sequence[RunSpec]) -> str | None:
                 "--engine batch runs the nominal plant, not plant_jitter "
                 f"{c.plant_jitter:g}; use --engine processes"
             )
+        for limit in ("track", "max_force"):
+            if getattr(c, limit) is not None:
+                return (
+                    f"--engine batch runs the chapter's endless track and unlimited motor, "
+                    f"not --{limit.replace('_', '-')}; use --engine processes"
+                )
         for flag in ("robust", "symmetric"):
             if getattr(c, flag):
                 return (
