@@ -8,6 +8,13 @@ traceback or by SIGINT instead of exit 130. ``python -m striatal`` and the
 :func:`received` tells the command line that a Ctrl-C came, so that an error it
 caused (an import cut short, reported by a C extension as an ImportError) still
 exits 130. Only ``signal`` is imported here, to keep the window before it small.
+
+A KeyboardInterrupt raised while C code runs a Python callback (llvmlite's object
+cache hook while Numba compiles, for one) is swallowed there and reported as an
+"Exception ignored" traceback; the command would then run on to exit 0 with the
+Ctrl-C lost. :func:`install` also sets a ``sys.unraisablehook`` that re-arms the
+handler and raises the signal again a moment later, so it lands outside the
+callback.
 """
 
 from __future__ import annotations
@@ -16,7 +23,7 @@ import signal
 
 __all__ = ["first_only", "forget_unhandled", "install", "received"]
 
-_state = {"received": False}
+_state: dict[str, object] = {"received": False}
 
 
 def first_only(signum: int, frame: object) -> None:
@@ -39,12 +46,35 @@ def install() -> None:
         return
     if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
         return
+    import sys
+
+    if sys.unraisablehook is not _redeliver:
+        _state["previous_hook"] = sys.unraisablehook
+        sys.unraisablehook = _redeliver
     signal.signal(signal.SIGINT, first_only)
+
+
+def _redeliver(unraisable: object) -> None:
+    """``sys.unraisablehook``: a Ctrl-C swallowed by a C callback is raised again.
+
+    Any other unraisable exception goes to the hook that was there before.
+    """
+    if isinstance(getattr(unraisable, "exc_value", None), KeyboardInterrupt) and _state["received"]:
+        _state["received"] = False  # first_only raises it again
+        import threading
+
+        # raised from a thread a moment later: the main thread then handles it at its
+        # next bytecode, out of the callback and this hook (both of which swallow it)
+        threading.Timer(0.02, signal.raise_signal, (signal.SIGINT,)).start()
+        return
+    previous = _state.get("previous_hook")
+    if callable(previous):
+        previous(unraisable)
 
 
 def received() -> bool:
     """Whether a SIGINT reached :func:`first_only` in this process."""
-    return _state["received"]
+    return bool(_state["received"])
 
 
 def forget_unhandled() -> None:
