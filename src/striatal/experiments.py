@@ -1004,20 +1004,9 @@ def sweep(
         from striatal.lockstep_sweep import check_specs
 
         check_specs(specs)
-    if out is None or locked:
-        return _sweep(
-            specs,
-            settings,
-            out,
-            max_trials,
-            backend,
-            workers,
-            address,
-            connect_timeout,
-            progress,
-            engine,
-        )
-    with RunDir(out).lock():
+    # a folder not yet locked is locked for the whole sweep
+    guard = contextlib.nullcontext() if out is None or locked else RunDir(out).lock()
+    with guard:
         return _sweep(
             specs,
             settings,
