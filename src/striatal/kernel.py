@@ -54,6 +54,7 @@ __all__ = [
     "Gains",
     "NoiseArgs",
     "PlantArgs",
+    "PlantTerms",
     "ProtocolArgs",
     "TraceArgs",
     "accelerations",
@@ -63,6 +64,7 @@ __all__ = [
     "judge_batch",
     "motor_force",
     "plant_step",
+    "plant_terms",
     "policy_mean",
     "rk4_force_step",
     "rk4_step",
@@ -350,17 +352,122 @@ def _rk4_sc(
     mismatch: bool,
 ) -> tuple[float, float, float, float]:
     """:func:`rk4_step` given s = sin theta and c = cos theta of the first stage."""
-    a1, b1 = _accelerations_sc(x_dot, s, c, theta_dot, u, plant, model, mismatch)
+    return _rk4_terms(
+        x,
+        x_dot,
+        theta,
+        theta_dot,
+        s,
+        c,
+        u,
+        dt,
+        plant[0],
+        plant[1],
+        plant[2],
+        plant[3],
+        model[0],
+        model[1],
+        model[2],
+        model[3],
+        mismatch,
+    )
+
+
+@njit(cache=True, error_model="numpy")
+def _rk4_terms(
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    s: float,
+    c: float,
+    u: float,
+    dt: float,
+    cart_mass: float,
+    m: float,
+    length: float,
+    g: float,
+    model_cart_mass: float,
+    mh: float,
+    model_length: float,
+    model_g: float,
+    mismatch: bool,
+) -> tuple[float, float, float, float]:
+    """:func:`_rk4_sc` on plain floats: plant [M, m, l, g] and model (eqs 13-14, or 12 and 8-9)."""
+    a1, b1 = _accelerations_terms(
+        x_dot,
+        s,
+        c,
+        theta_dot,
+        u,
+        cart_mass,
+        m,
+        length,
+        g,
+        model_cart_mass,
+        mh,
+        model_length,
+        model_g,
+        mismatch,
+    )
     h = 0.5 * dt
     xd2 = x_dot + h * a1
     thd2 = theta_dot + h * b1
-    a2, b2 = accelerations(xd2, theta + h * theta_dot, thd2, u, plant, model, mismatch)
+    t2 = theta + h * theta_dot
+    a2, b2 = _accelerations_terms(
+        xd2,
+        math.sin(t2),
+        math.cos(t2),
+        thd2,
+        u,
+        cart_mass,
+        m,
+        length,
+        g,
+        model_cart_mass,
+        mh,
+        model_length,
+        model_g,
+        mismatch,
+    )
     xd3 = x_dot + h * a2
     thd3 = theta_dot + h * b2
-    a3, b3 = accelerations(xd3, theta + h * thd2, thd3, u, plant, model, mismatch)
+    t3 = theta + h * thd2
+    a3, b3 = _accelerations_terms(
+        xd3,
+        math.sin(t3),
+        math.cos(t3),
+        thd3,
+        u,
+        cart_mass,
+        m,
+        length,
+        g,
+        model_cart_mass,
+        mh,
+        model_length,
+        model_g,
+        mismatch,
+    )
     xd4 = x_dot + dt * a3
     thd4 = theta_dot + dt * b3
-    a4, b4 = accelerations(xd4, theta + dt * thd3, thd4, u, plant, model, mismatch)
+    t4 = theta + dt * thd3
+    a4, b4 = _accelerations_terms(
+        xd4,
+        math.sin(t4),
+        math.cos(t4),
+        thd4,
+        u,
+        cart_mass,
+        m,
+        length,
+        g,
+        model_cart_mass,
+        mh,
+        model_length,
+        model_g,
+        mismatch,
+    )
     w = dt / 6.0
     return (
         x + w * (x_dot + 2.0 * xd2 + 2.0 * xd3 + xd4),
@@ -431,10 +538,25 @@ def rk4_force_step(
     plant: np.ndarray,
 ) -> tuple[float, float, float, float]:
     """One classical RK4 step of length dt of eqs 8-9 with the cart force f [N] held."""
-    cart_mass = plant[0]
-    m = plant[1]
-    length = plant[2]
-    g = plant[3]
+    return _rk4_force_terms(
+        x, x_dot, theta, theta_dot, f, dt, plant[0], plant[1], plant[2], plant[3]
+    )
+
+
+@njit(cache=True)
+def _rk4_force_terms(
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    f: float,
+    dt: float,
+    cart_mass: float,
+    m: float,
+    length: float,
+    g: float,
+) -> tuple[float, float, float, float]:
+    """:func:`rk4_force_step` on plain floats: the true plant [M, m, l, g]."""
     a1, b1 = _force_accelerations(
         math.sin(theta), math.cos(theta), theta_dot, f, cart_mass, m, length, g
     )
@@ -460,30 +582,90 @@ def rk4_force_step(
     )
 
 
+class PlantTerms(NamedTuple):
+    """:class:`PlantArgs` as plain floats, unpacked once per trial (:func:`plant_terms`).
+
+    The trial loops take these instead of the parameter arrays: a loop that stores to
+    an output buffer would otherwise load the arrays' entries again at every step
+    (the compiler cannot rule out that the arrays alias the buffer). ``limited``:
+    ``max_force`` is finite.
+    """
+
+    cart_mass: float
+    m: float
+    length: float
+    g: float
+    model_cart_mass: float
+    model_m: float
+    model_length: float
+    model_g: float
+    mismatch: bool
+    dt: float
+    hold_force: bool
+    max_force: float
+    limited: bool
+
+
+@njit(cache=True)
+def plant_terms(plant: PlantArgs) -> PlantTerms:
+    """The :class:`PlantTerms` of ``plant``: its arrays' entries read once."""
+    p = plant.plant
+    q = plant.model
+    return PlantTerms(
+        p[0],
+        p[1],
+        p[2],
+        p[3],
+        q[0],
+        q[1],
+        q[2],
+        q[3],
+        plant.mismatch,
+        plant.dt,
+        plant.hold_force,
+        plant.max_force,
+        plant.max_force < math.inf,
+    )
+
+
 @njit(cache=True, error_model="numpy")
 def _accelerations_limited(
     x_dot: float,
     theta: float,
     theta_dot: float,
     u: float,
-    plant: np.ndarray,
-    model: np.ndarray,
-    mismatch: bool,
-    max_force: float,
+    pt: PlantTerms,
 ) -> tuple[float, float]:
-    """:func:`accelerations` (u held) behind a motor limited to |f| <= max_force [N].
+    """The accelerations of eqs 13-14 (u held) behind a motor limited to |f| <= pt.max_force [N].
 
-    The force of eq 12 that realises u (with the ``model``) is computed at this state;
+    The force of eq 12 that realises u (with the model) is computed at this state;
     within the limit the accelerations are :func:`accelerations`' (the same arithmetic),
-    beyond it the true ``plant`` answers the clipped force through eqs 8-9.
+    beyond it the true plant answers the clipped force through eqs 8-9.
     """
     s = math.sin(theta)
     c = math.cos(theta)
-    f = _force_terms(s, c, theta_dot, u, model[0], model[1], model[2], model[3])
-    if abs(f) <= max_force:
-        return _accelerations_sc(x_dot, s, c, theta_dot, u, plant, model, mismatch)
-    fc = max_force if f > 0.0 else -max_force
-    return _force_accelerations(s, c, theta_dot, fc, plant[0], plant[1], plant[2], plant[3])
+    f = _force_terms(
+        s, c, theta_dot, u, pt.model_cart_mass, pt.model_m, pt.model_length, pt.model_g
+    )
+    if abs(f) <= pt.max_force:
+        return _accelerations_terms(
+            x_dot,
+            s,
+            c,
+            theta_dot,
+            u,
+            pt.cart_mass,
+            pt.m,
+            pt.length,
+            pt.g,
+            pt.model_cart_mass,
+            pt.model_m,
+            pt.model_length,
+            pt.model_g,
+            pt.mismatch,
+        )
+    fc = pt.max_force if f > 0.0 else -pt.max_force
+    return _force_accelerations(s, c, theta_dot, fc, pt.cart_mass, pt.m, pt.length, pt.g)
 
 
 @njit(cache=True)
@@ -493,30 +675,21 @@ def _rk4_limited(
     theta: float,
     theta_dot: float,
     u: float,
-    dt: float,
-    plant: np.ndarray,
-    model: np.ndarray,
-    mismatch: bool,
-    max_force: float,
+    pt: PlantTerms,
 ) -> tuple[float, float, float, float]:
     """:func:`rk4_step` (u held), every stage's force clipped (:func:`_accelerations_limited`)."""
-    a1, b1 = _accelerations_limited(x_dot, theta, theta_dot, u, plant, model, mismatch, max_force)
+    dt = pt.dt
+    a1, b1 = _accelerations_limited(x_dot, theta, theta_dot, u, pt)
     h = 0.5 * dt
     xd2 = x_dot + h * a1
     thd2 = theta_dot + h * b1
-    a2, b2 = _accelerations_limited(
-        xd2, theta + h * theta_dot, thd2, u, plant, model, mismatch, max_force
-    )
+    a2, b2 = _accelerations_limited(xd2, theta + h * theta_dot, thd2, u, pt)
     xd3 = x_dot + h * a2
     thd3 = theta_dot + h * b2
-    a3, b3 = _accelerations_limited(
-        xd3, theta + h * thd2, thd3, u, plant, model, mismatch, max_force
-    )
+    a3, b3 = _accelerations_limited(xd3, theta + h * thd2, thd3, u, pt)
     xd4 = x_dot + dt * a3
     thd4 = theta_dot + dt * b3
-    a4, b4 = _accelerations_limited(
-        xd4, theta + dt * thd3, thd4, u, plant, model, mismatch, max_force
-    )
+    a4, b4 = _accelerations_limited(xd4, theta + dt * thd3, thd4, u, pt)
     w = dt / 6.0
     return (
         x + w * (x_dot + 2.0 * xd2 + 2.0 * xd3 + xd4),
@@ -544,20 +717,23 @@ def motor_force(
     theta_dot: float,
     a: float,
     noisy_sensor: bool,
-    plant: PlantArgs,
+    pt: PlantTerms,
 ) -> float:
     """The motor's force f [N] over a step: eq 12 with the model for the action a, clipped.
 
     ``s``, ``c``: sin and cos of the true theta; ``otheta``: the angle the controller
-    sees. With the force held and a noisy sensor the digital controller computes eq 12
-    from the angle it sees. Shared by :func:`run_trial` and the online learners' loops.
+    sees; ``pt``: :func:`plant_terms` of the trial's PlantArgs. With the force held and
+    a noisy sensor the digital controller computes eq 12 from the angle it sees.
+    Shared by :func:`run_trial` and the online learners' loops.
     """
-    if plant.hold_force and noisy_sensor:
-        f = _force_sc(math.sin(otheta), math.cos(otheta), theta_dot, a, plant.model)
-    else:
-        f = _force_sc(s, c, theta_dot, a, plant.model)
-    if plant.max_force < math.inf:
-        f = _clip_force(f, plant.max_force)
+    if pt.hold_force and noisy_sensor:
+        s = math.sin(otheta)
+        c = math.cos(otheta)
+    f = _force_terms(
+        s, c, theta_dot, a, pt.model_cart_mass, pt.model_m, pt.model_length, pt.model_g
+    )
+    if pt.limited:
+        f = _clip_force(f, pt.max_force)
     return f
 
 
@@ -571,33 +747,41 @@ def plant_step(
     c: float,
     a: float,
     f: float,
-    plant: PlantArgs,
+    pt: PlantTerms,
 ) -> tuple[float, float, float, float]:
     """One control step dt of the plant (eqs 8-9 or 13-14) under the action a held.
 
     ``s``, ``c``: sin and cos of theta; ``f``: the step's motor force
-    (:func:`motor_force`). With ``plant.hold_force`` f is held (:func:`rk4_force_step`);
-    with a finite ``plant.max_force`` u is held behind the limited motor
-    (:func:`_rk4_limited`); otherwise u is held (:func:`rk4_step`'s arithmetic). The one
-    plant step of :func:`run_trial` and of the online learners' compiled loops.
+    (:func:`motor_force`); ``pt``: :func:`plant_terms` of the trial's PlantArgs. With
+    ``hold_force`` f is held (:func:`rk4_force_step`'s arithmetic); with a finite
+    ``max_force`` u is held behind the limited motor (:func:`_rk4_limited`); otherwise
+    u is held (:func:`rk4_step`'s arithmetic). The one plant step of :func:`run_trial`
+    and of the online learners' compiled loops.
     """
-    if plant.hold_force:
-        return rk4_force_step(x, x_dot, theta, theta_dot, f, plant.dt, plant.plant)
-    if plant.max_force < math.inf:
-        return _rk4_limited(
-            x,
-            x_dot,
-            theta,
-            theta_dot,
-            a,
-            plant.dt,
-            plant.plant,
-            plant.model,
-            plant.mismatch,
-            plant.max_force,
+    if pt.hold_force:
+        return _rk4_force_terms(
+            x, x_dot, theta, theta_dot, f, pt.dt, pt.cart_mass, pt.m, pt.length, pt.g
         )
-    return _rk4_sc(
-        x, x_dot, theta, theta_dot, s, c, a, plant.dt, plant.plant, plant.model, plant.mismatch
+    if pt.limited:
+        return _rk4_limited(x, x_dot, theta, theta_dot, a, pt)
+    return _rk4_terms(
+        x,
+        x_dot,
+        theta,
+        theta_dot,
+        s,
+        c,
+        a,
+        pt.dt,
+        pt.cart_mass,
+        pt.m,
+        pt.length,
+        pt.g,
+        pt.model_cart_mass,
+        pt.model_m,
+        pt.model_length,
+        pt.model_g,
+        pt.mismatch,
     )
 
 
@@ -720,8 +904,56 @@ def _policy_wrapped(
     ``root`` = sqrt(W1 g) and ``inv_root`` = sqrt(g / W1) (constant over a trial);
     ``cos_th`` = cos th when ``have_cos`` (else computed here). The same arithmetic.
     """
-    length = model[2]
-    g = model[3]
+    return _policy_terms(
+        x,
+        x_dot,
+        th,
+        theta_dot,
+        W[0],
+        W[1],
+        W[2],
+        W[3],
+        W[4],
+        theta_c,
+        sign,
+        soft,
+        inhibition,
+        model[1],
+        model[2],
+        model[3],
+        chapter_eligibility,
+        root,
+        inv_root,
+        cos_th,
+        have_cos,
+    )
+
+
+@njit(cache=True)
+def _policy_terms(
+    x: float,
+    x_dot: float,
+    th: float,
+    theta_dot: float,
+    w1: float,
+    w2: float,
+    w3: float,
+    w4: float,
+    w5: float,
+    theta_c: float,
+    sign: float,
+    soft: bool,
+    inhibition: float,
+    m: float,
+    length: float,
+    g: float,
+    chapter_eligibility: bool,
+    root: float,
+    inv_root: float,
+    cos_th: float,
+    have_cos: bool,
+) -> tuple[float, float, float, float, float, float]:
+    """:func:`_policy_wrapped` on plain floats: W1..W5 and the model's m, l, g (eqs 22-23)."""
     wb, ws = switch_weights(abs(th), theta_c, soft, inhibition)
     mu = 0.0
     g1 = 0.0
@@ -730,12 +962,12 @@ def _policy_wrapped(
     g4 = 0.0
     g5 = 0.0
     if wb > 0.0:
-        if W[0] == 0.0:
-            inv_root = math.sqrt(g / W[0])  # raises ZeroDivisionError, as g / W1 always did
+        if w1 == 0.0:
+            inv_root = math.sqrt(g / w1)  # raises ZeroDivisionError, as g / W1 always did
         mu += wb * (
-            sign * ((1.0 + W[0] * length) * g * th + 2.0 * length * root * theta_dot)
-            - W[1] * x
-            - W[2] * x_dot
+            sign * ((1.0 + w1 * length) * g * th + 2.0 * length * root * theta_dot)
+            - w2 * x
+            - w3 * x_dot
         )
         if chapter_eligibility:
             d1 = -length * (g * th - inv_root * theta_dot)
@@ -746,11 +978,10 @@ def _policy_wrapped(
         g3 = -wb * x_dot
     if ws > 0.0:
         c = cos_th if have_cos else math.cos(th)
-        m = model[1]
         e_tilde = 0.5 * m * length * length * theta_dot * theta_dot + m * g * length * (c - 1.0)
-        mu += ws * (W[3] * e_tilde * theta_dot * c - 0.25 * W[4] * W[4] * x - W[4] * x_dot)
+        mu += ws * (w4 * e_tilde * theta_dot * c - 0.25 * w5 * w5 * x - w5 * x_dot)
         g4 = ws * e_tilde * theta_dot * c
-        g5 = -ws * (0.5 * W[4] * x + x_dot)
+        g5 = -ws * (0.5 * w5 * x + x_dot)
     return mu, g1, g2, g3, g4, g5
 
 
@@ -914,6 +1145,13 @@ def run_trial(
     W = gains.W
     theta_c = gains.theta_c
     model = plant.model
+    pt = plant_terms(plant)
+    # W1..W5 read once (a store to a buffer would otherwise reload them every step)
+    w1 = W[0]
+    w2 = W[1]
+    w3 = W[2]
+    w4 = W[3]
+    w5 = W[4]
     dt = plant.dt
     action_every = control.action_every
     trace = learning.trace
@@ -985,17 +1223,23 @@ def run_trial(
             prev_mode = mode
             if hold == 0:
                 hold = action_every
-                mu, g1, g2, g3, g4, g5 = _policy_wrapped(
+                mu, g1, g2, g3, g4, g5 = _policy_terms(
                     ox,
                     x_dot,
                     th,
                     theta_dot,
-                    W,
+                    w1,
+                    w2,
+                    w3,
+                    w4,
+                    w5,
                     theta_c,
                     sign,
                     soft,
                     inhibition,
-                    model,
+                    pt.model_m,
+                    pt.model_length,
+                    pt.model_g,
                     chapter_eligibility,
                     root,
                     inv_root,
@@ -1012,7 +1256,7 @@ def run_trial(
                     a = mu
                 draw += 1
             hold -= 1
-            f = motor_force(s, c, otheta, theta_dot, a, noisy_sensor, plant)
+            f = motor_force(s, c, otheta, theta_dot, a, noisy_sensor, pt)
             if abs(f) > max_abs_f:
                 max_abs_f = abs(f)
             if record:
@@ -1024,7 +1268,7 @@ def run_trial(
                 traj[k, 5] = a
                 traj[k, 6] = f
                 traj[k, 7] = mode
-            x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, plant)
+            x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
             status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
             if status == STATUS_FAULT:
                 end_step = k + 1

@@ -51,6 +51,7 @@ from striatal.kernel import (
     judge,
     motor_force,
     plant_step,
+    plant_terms,
     sigma_of,
     trace_step,
     wrap_angle,
@@ -214,6 +215,7 @@ def run_online_trial(
     W = gains.W
     theta_c = gains.theta_c
     model = plant.model
+    pt = plant_terms(plant)
     dt = plant.dt
     action_every = control.action_every
     trace = learning.trace
@@ -318,10 +320,10 @@ def run_online_trial(
                     a = mu
                 draw += 1
             hold -= 1
-            f = motor_force(s, c, theta, theta_dot, a, False, plant)
+            f = motor_force(s, c, theta, theta_dot, a, False, pt)
             if abs(f) > max_abs_f:
                 max_abs_f = abs(f)
-            x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, plant)
+            x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
             status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
             # the TD error: the ends of the protocol in time (eq 24's check at 30 s, T_f)
             # bootstrap, as the critic sees no time; the track and a fault are terminal
