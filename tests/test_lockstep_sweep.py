@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from striatal import experiments
+from striatal import experiments, kernel
 from striatal.cli import main
 from striatal.errors import ParameterError
 from striatal.learners import LearnerConfig, default_config
@@ -205,10 +205,11 @@ def test_cli_refusals_are_one_line_and_exit_2(
     assert not (tmp_path / "x" / "runs.csv").exists()  # refused before anything ran
 
 
-def test_the_lockstep_kernel_variant_runs_but_its_learning_drifts_from_round_off() -> None:
-    """trial_kernel "lockstep" (for measurement only): the SIMD kernel's trials equal the
-    scalar kernel's within round-off, but learning amplifies the difference over trials
-    (here W of one run ends far away), which is why the exact kernel is the default."""
+def test_the_simd_kernel_drifts_from_round_off_but_keeps_what_is_exact() -> None:
+    """trial_kernel "lockstep" (``--engine simd``): every trial, evaluation included, on the
+    SIMD kernel, whose trials equal the scalar kernel's within round-off; learning amplifies
+    the difference over trials (here W of one run ends far away), which is why a folder
+    never mixes the two kinds and "batch" keeps the exact kernel."""
     specs = _specs(default_config("chapter", max_trials=8), seeds=SEEDS[:2], eval_draws=2)
     exact = experiments.sort_rows(execute_batch(specs))
     fast = experiments.sort_rows(execute_batch(specs, trial_kernel="lockstep"))
@@ -223,5 +224,59 @@ def test_the_lockstep_kernel_variant_runs_but_its_learning_drifts_from_round_off
     control = [(a, b) for a, b in zip(exact, fast, strict=True) if a["arm"] == "control"]
     for a, b in control:  # alpha = 0: W never moves, theta_c only through eq 21
         assert [b[f"W{i}"] for i in range(1, 7)] == [a[f"W{i}"] for i in range(1, 7)]
+    # the counts are the protocol's, whatever the kernel
+    for a, b in zip(exact, fast, strict=True):
+        assert b["eval_simulations"] == a["eval_simulations"]
     with pytest.raises(ParameterError, match="trial_kernel"):
         list(execute_batch(specs, trial_kernel="simd"))
+
+
+def test_the_w0_evaluation_a_learner_shares_with_its_control_is_run_once(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Learner and control of a seed start from the same W(0) and draw the same evaluation
+    noise: the batch engines run that evaluation once, and both rows still count it."""
+    draws: list[int] = []
+    real = kernel.run_trials_batch
+
+    def counting(*args: Any) -> None:
+        noise, learning = args[5], args[6]
+        if learning.gamma == 0.0 and noise.shape[1] > 0:  # an evaluation's noise draws
+            draws.append(noise.shape[0])
+        real(*args)
+
+    specs = _specs(default_config("chapter", max_trials=2), seeds=SEEDS[:1], eval_draws=4)
+    serial = experiments.sort_rows(experiments.execute(specs))
+    monkeypatch.setattr(kernel, "run_trials_batch", counting)
+    batch = experiments.sort_rows(execute_batch(specs))
+    assert _no_wall(batch) == _no_wall(serial)
+    # 2 inits x (learner, control); the first of each pair evaluates W(0) and its final
+    # gains (2 mean trials, 2 x 4 draws), the second only its final gains (1 + 4)
+    assert sorted(draws) == [4, 4, 8, 8]
+    assert all(r["eval_simulations"] == 1 + 2 * (4 + 1) for r in batch)
+
+
+def test_cli_simd_engine_gives_the_same_statistics_not_the_same_rows(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--engine simd beside --engine processes on a small sweep with successes: each arm's
+    success rate lies in the other engine's 95 % interval, and the folder says which
+    kernel ran (a sweep folder is never resumed across the two)."""
+    argv = ["sweep", "--seeds", "20", "--max-trials", "100", "--eval-draws", "5"]
+    argv += ["--init", "chapter", "--json"]
+    assert main([*argv, "--out", str(tmp_path / "p")]) == 0
+    processes = json.loads(capsys.readouterr().out)
+    assert main([*argv, "--out", str(tmp_path / "s"), "--engine", "simd"]) == 0
+    simd = json.loads(capsys.readouterr().out)
+    arms = {a["arm"]: a for a in processes["arms"]}
+    assert sum(a["successes"] for a in arms.values()) >= 5  # a comparison with successes
+    for a in simd["arms"]:
+        p = arms[a["arm"]]
+        assert a["runs"] == p["runs"] == 20
+        assert p["success_rate_ci"][0] <= a["success_rate"] <= p["success_rate_ci"][1]
+        assert a["success_rate_ci"][0] <= p["success_rate"] <= a["success_rate_ci"][1]
+    assert "trial_kernel" in json.loads((tmp_path / "s" / "sweep.json").read_text())
+    assert "trial_kernel" not in json.loads((tmp_path / "p" / "sweep.json").read_text())
+    # resuming the processes sweep on the SIMD kernel would mix two kinds of rows
+    assert main([*argv, "--out", str(tmp_path / "p"), "--engine", "simd"]) == 2
+    assert "other settings" in capsys.readouterr().err

@@ -87,6 +87,7 @@ __all__ = [
     "NOTE_BUDGET",
     "NOTE_CONTROL",
     "NOTE_ROBUST",
+    "NOTE_SIMD",
     "ROLES",
     "RUN_COLUMNS",
     "WATCHDOG_SECONDS",
@@ -120,9 +121,10 @@ __all__ = [
 
 Init = Literal["chapter", "random"]
 Backend = Literal["local", "ray"]
-Engine = Literal["processes", "batch"]
-#: How a sweep runs its specs: one learning loop per run, or the runs of an arm in lockstep.
-ENGINES: tuple[str, ...] = ("processes", "batch")
+Engine = Literal["processes", "batch", "simd"]
+#: How a sweep runs its specs: one learning loop per run, or the runs of an arm in lockstep
+#: on the exact batch kernel ("batch") or on the SIMD lockstep kernel ("simd").
+ENGINES: tuple[str, ...] = ("processes", "batch", "simd")
 METHODS: tuple[str, ...] = ("learn", *baselines.BASELINES)
 CONTROL_ARM = "control"
 ROLES = ("learner", "control", "baseline")
@@ -172,6 +174,13 @@ NOTE_ROBUST = (
     "9 mean-policy runs of 60 s, run up to the first failing case, each counted in "
     "simulations) for the run to stop; the robust column re-checks the final gains on "
     "all 9 cases (eval_simulations)"
+)
+NOTE_SIMD = (
+    "--engine simd: every trial on kernel.run_trials_lockstep (polynomial sin/cos, within "
+    "1 ulp of libm's), not on the exact scalar kernel; a trial equals the scalar kernel's "
+    "within round-off, which a chaotic swing-up and learning over many trials amplify, "
+    "so a run's row differs from --engine processes/batch but the arms' distributions do "
+    "not (docs/performance.md)"
 )
 
 
@@ -989,7 +998,10 @@ def sweep(
 
     ``engine`` "processes": :func:`execute` (one learning loop per run, on ``backend``);
     "batch": :func:`striatal.lockstep_sweep.execute_batch` (the runs of an arm advance
-    in lockstep in this process; the same rows but wall_seconds).
+    in lockstep in this process; the same rows but wall_seconds); "simd": the same on
+    the SIMD kernel (:func:`striatal.kernel.run_trials_lockstep`), rows equal only
+    within round-off (docs/performance.md), so ``settings`` must say so (the sweep CLI
+    adds ``trial_kernel``) and a folder is never resumed across the two kinds.
 
     ``settings`` is stored in ``out``/sweep.json; a rerun in the same folder must use
     the same settings (ParameterError otherwise), ``settings["options"]`` aside: the
@@ -1000,10 +1012,10 @@ def sweep(
     """
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
-    if engine == "batch":
+    if engine != "processes":
         from striatal.lockstep_sweep import check_specs
 
-        check_specs(specs)
+        check_specs(specs, engine)
     # a folder not yet locked is locked for the whole sweep
     guard = contextlib.nullcontext() if out is None or locked else RunDir(out).lock()
     with guard:
@@ -1067,10 +1079,10 @@ def _sweep(
     todo = [s for s in specs if s.key not in done]
     bar = tqdm(total=len(specs), initial=len(specs) - len(todo), unit="run", disable=not progress)
     try:
-        if engine == "batch":
+        if engine != "processes":
             from striatal.lockstep_sweep import execute_batch
 
-            rows_in = execute_batch(todo)
+            rows_in = execute_batch(todo, trial_kernel="lockstep" if engine == "simd" else "exact")
         else:
             rows_in = execute(
                 todo,

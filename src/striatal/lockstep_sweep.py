@@ -37,8 +37,11 @@ gets ParameterError naming it (:func:`check_specs`).
 from __future__ import annotations
 
 import math
+import os
 import time
+from collections import Counter
 from collections.abc import Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -71,51 +74,54 @@ BATCH_LEARNERS: tuple[str, ...] = ("chapter", "rpe", "pgpe")
 TRIAL_KERNELS: tuple[str, ...] = ("exact", "lockstep")
 #: Trials a kernel thread takes at a time (numba.set_parallel_chunksize).
 CHUNK = 2
+#: Normals a batch of runs draws at once from which their rows are filled by threads.
+PARALLEL_NORMALS = 50_000
 
 
-def unsupported(specs: Sequence[RunSpec]) -> str | None:
-    """Why the batch engine cannot run ``specs`` (one line), or None if it can."""
+def unsupported(specs: Sequence[RunSpec], engine: str = "batch") -> str | None:
+    """Why the batch engine (``engine``: batch or simd) cannot run ``specs`` (one line),
+    or None if it can."""
     baselines = sorted({s.method for s in specs if s.method != "learn"})
     if baselines:
         return (
-            f"--engine batch runs learner arms only, not the baselines {', '.join(baselines)}; "
+            f"--engine {engine} runs learner arms only, not the baselines {', '.join(baselines)}; "
             "use --engine processes"
         )
     for s in specs:
         c = s.config
         if c.learner not in BATCH_LEARNERS:
             return (
-                f"--engine batch runs the learners {', '.join(BATCH_LEARNERS)}, not "
+                f"--engine {engine} runs the learners {', '.join(BATCH_LEARNERS)}, not "
                 f"{c.learner!r}; use --engine processes"
             )
         if c.reward != "sparse":
             return (
-                f"--engine batch needs the sparse reward of eqs 24-25, not {c.reward!r} "
+                f"--engine {engine} needs the sparse reward of eqs 24-25, not {c.reward!r} "
                 "(the shaped reward scores recorded trials); use --engine processes"
             )
         if c.plant_jitter > 0.0:
             return (
-                "--engine batch runs the nominal plant, not plant_jitter "
+                f"--engine {engine} runs the nominal plant, not plant_jitter "
                 f"{c.plant_jitter:g}; use --engine processes"
             )
         for limit in ("track", "max_force"):
             if getattr(c, limit) is not None:
                 return (
-                    f"--engine batch runs the chapter's endless track and unlimited motor, "
+                    f"--engine {engine} runs the chapter's endless track and unlimited motor, "
                     f"not --{limit.replace('_', '-')}; use --engine processes"
                 )
         for flag in ("robust", "symmetric"):
             if getattr(c, flag):
                 return (
-                    f"--engine batch does not run --{flag} (its checks and pairs are "
+                    f"--engine {engine} does not run --{flag} (its checks and pairs are "
                     "per-run); use --engine processes"
                 )
     return None
 
 
-def check_specs(specs: Sequence[RunSpec]) -> None:
-    """ParameterError (one line) if the batch engine cannot run ``specs``."""
-    why = unsupported(specs)
+def check_specs(specs: Sequence[RunSpec], engine: str = "batch") -> None:
+    """ParameterError (one line) if the batch engine (batch or simd) cannot run ``specs``."""
+    why = unsupported(specs, engine)
     if why is not None:
         raise ParameterError(why)
     for s in specs:
@@ -237,6 +243,18 @@ class _Baseline:
         self.square[idx] = np.where(np.isfinite(square), square, self.square[idx])
 
 
+def _idle_kernel_threads() -> bool:
+    """Whether Numba's threads sleep between kernel calls, so that other threads can
+    use the cores: not under libgomp's default wait policy, whose threads spin after
+    each parallel region (``striatal`` sets OMP_WAIT_POLICY=PASSIVE unless it is set)."""
+    if os.environ.get("OMP_WAIT_POLICY", "").upper() == "PASSIVE":
+        return True
+    try:
+        return numba.threading_layer() != "omp"
+    except ValueError:  # no parallel region has run yet: the layer is not chosen
+        return False
+
+
 class _Batch:
     """The runs of one group, advanced trial by trial together (state over the run axis)."""
 
@@ -272,6 +290,13 @@ class _Batch:
         self.wall = np.zeros(n)
         self.baseline = _Baseline(np.zeros(n), np.zeros(n))
         self.explore = np.tile(initial_explore(self.config.explore), (n, 1))
+        # the evaluation's noise per seed, and the W(0) pass counts per (seed, W(0)),
+        # shared by the runs that have them in common (a learner and its control):
+        # the same inputs give the same numbers, so each is computed once
+        self.pending = Counter(self.seeds)
+        self.eval_noise: dict[int, np.ndarray] = {}
+        self.w0_passes: dict[tuple[Any, ...], int] = {}
+        self.pool: ThreadPoolExecutor | None = None  # for _normals, made when first needed
 
     # ------------------------------------------------------------------ kernel calls
     def _kernel(
@@ -284,7 +309,6 @@ class _Batch:
         gamma: float = 0.0,
         action_every: int = 1,
         chapter_eligibility: bool = False,
-        learning: bool = False,
     ) -> np.ndarray:
         args = batch_args(
             self.plant,
@@ -303,7 +327,7 @@ class _Batch:
         # the long trials does not hold up the others at the end of the call
         old = numba.set_parallel_chunksize(CHUNK)
         try:
-            if learning and self.lockstep:
+            if self.lockstep:
                 kernel.run_trials_lockstep(*args)
             else:
                 kernel.run_trials_batch(*args)
@@ -312,10 +336,29 @@ class _Batch:
         return args[-1]
 
     def _normals(self, idx: np.ndarray, n: int) -> np.ndarray:
-        """Row j: the next ``n`` standard normals of run idx[j]'s generator."""
+        """Row j: the next ``n`` standard normals of run idx[j]'s generator.
+
+        Each run draws from its own generator, so the rows can be filled by several
+        threads at once (NumPy releases the GIL while it fills): the same numbers.
+        """
         out = np.empty((len(idx), n))
-        for j, r in enumerate(idx):
-            self.rngs[r].standard_normal(out=out[j])
+
+        def fill(part: range) -> None:
+            for j in part:
+                self.rngs[idx[j]].standard_normal(out=out[j])
+
+        threads = min(numba.get_num_threads(), len(idx))
+        if threads < 2 or len(idx) * n < PARALLEL_NORMALS or not _idle_kernel_threads():
+            fill(range(len(idx)))
+            return out
+        if self.pool is None:
+            self.pool = ThreadPoolExecutor(numba.get_num_threads())
+        step = -(-len(idx) // threads)
+        list(
+            self.pool.map(
+                fill, [range(i, min(i + step, len(idx))) for i in range(0, len(idx), step)]
+            )
+        )
         return out
 
     # ------------------------------------------------------------------ one trial
@@ -339,7 +382,6 @@ class _Batch:
                 gamma=c.gamma,
                 action_every=c.action_every,
                 chapter_eligibility=c.eligibility == "chapter",
-                learning=True,
             )
             scratch = {"trace": traces}
         reward = outs[:, kernel.OUT_REWARD].copy()
@@ -350,9 +392,7 @@ class _Batch:
             success = _success(outs, self.sim)
         else:
             W_mean, tc_mean = self.W[idx].copy(), self.theta_c[idx].copy()
-            check = self._kernel(
-                W_mean, tc_mean, noise=None, action_every=c.action_every, learning=True
-            )
+            check = self._kernel(W_mean, tc_mean, noise=None, action_every=c.action_every)
             sims += 1
             seconds = seconds + check[:, kernel.OUT_END_STEP] * dt
             success = _success(check, self.sim)
@@ -444,9 +484,7 @@ class _Batch:
         p_trial[:, 0] = np.maximum(p_trial[:, 0], c.w1_floor)
         W_trial = np.concatenate([p_trial[:, :5], self.W[idx, 5:]], axis=1)
         tc_trial = p_trial[:, 5].copy()
-        outs = self._kernel(
-            W_trial, tc_trial, noise=None, action_every=c.action_every, learning=True
-        )
+        outs = self._kernel(W_trial, tc_trial, noise=None, action_every=c.action_every)
         return outs, W_trial, tc_trial, {"p": p, "eps": p_trial - p, "s": s, "z": z}
 
     def _pgpe_update(
@@ -507,25 +545,39 @@ class _Batch:
             out = self._kernel(np.array([final.gains]), np.array([final.theta_c]), noise=None)
             mean_ok = bool(_success(out, self.sim)[0])
             evals = 1
+        seed = self.seeds[r]
         if spec.eval_draws > 0:
             n = check_draws(spec.eval_draws)
-            noise = np.random.default_rng(check_seed(spec.seed)).standard_normal(
-                (n, self.sim.n_steps)
-            )
-            ctrls = [self.templates[r]] + ([final] if final is not None else [])
-            W_rows = np.array([ct.gains for ct in ctrls])
-            tc_rows = np.array([ct.theta_c for ct in ctrls])
-            # pass_probability: one mean-policy trial, then the draws (one generator each)
-            self._kernel(W_rows, tc_rows, noise=None)
-            outs = self._kernel(
-                np.repeat(W_rows, n, axis=0),
-                np.repeat(tc_rows, n),
-                noise=np.tile(noise, (len(ctrls), 1)),
-            )
-            passes = _success(outs, self.sim).reshape(len(ctrls), n).sum(axis=1)
-            rate0, evals = int(passes[0]) / n, evals + n + 1
+            noise = self.eval_noise.get(seed)
+            if noise is None:
+                noise = np.random.default_rng(seed).standard_normal((n, self.sim.n_steps))
+                self.eval_noise[seed] = noise
+            w0_key = (seed, tuple(self.W0[r]))
+            ctrls = [] if w0_key in self.w0_passes else [self.templates[r]]
             if final is not None:
-                rate, evals = int(passes[1]) / n, evals + n + 1
+                ctrls.append(final)
+            passes = np.zeros(0, dtype=np.int64)
+            if ctrls:
+                W_rows = np.array([ct.gains for ct in ctrls])
+                tc_rows = np.array([ct.theta_c for ct in ctrls])
+                # pass_probability: one mean-policy trial, then the draws (one generator each)
+                self._kernel(W_rows, tc_rows, noise=None)
+                outs = self._kernel(
+                    np.repeat(W_rows, n, axis=0),
+                    np.repeat(tc_rows, n),
+                    noise=np.tile(noise, (len(ctrls), 1)),
+                )
+                passes = _success(outs, self.sim).reshape(len(ctrls), n).sum(axis=1)
+            if w0_key not in self.w0_passes:
+                self.w0_passes[w0_key] = int(passes[0])
+                passes = passes[1:]
+            # counted in every row as the process engine runs it: n draws + the mean trial
+            rate0, evals = self.w0_passes[w0_key] / n, evals + n + 1
+            if final is not None:
+                rate, evals = int(passes[0]) / n, evals + n + 1
+        self.pending[seed] -= 1
+        if self.pending[seed] == 0:
+            self.eval_noise.pop(seed, None)
         cfg = spec.config
         row: dict[str, Any] = {
             "arm": spec.arm,
@@ -554,6 +606,13 @@ class _Batch:
         return row
 
     def run(self) -> Iterator[dict[str, Any]]:
+        try:
+            yield from self._run()
+        finally:
+            if self.pool is not None:
+                self.pool.shutdown()
+
+    def _run(self) -> Iterator[dict[str, Any]]:
         while True:
             idx = np.flatnonzero(~self.done)
             if idx.size == 0:

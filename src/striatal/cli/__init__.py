@@ -133,6 +133,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _main(argv: Sequence[str] | None) -> int:
     tolerate_any_encoding()
+    # Numba's OpenMP threads then sleep between kernel calls instead of spinning, so the
+    # Python threads of a batch sweep (its noise) get the cores (docs/performance.md)
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     try:
         parser = build_parser()
         args = parser.parse_args(argv)

@@ -94,7 +94,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="processes: one learning loop per run (--workers, --backend); batch: the runs of "
         "the learner arms advance in lockstep, trial k of every seed in one batched kernel "
         "call on Numba's threads (the same runs.csv rows; learner arms of chapter, rpe, pgpe "
-        "with the sparse reward only)",
+        "with the sparse reward only); simd: batch on the SIMD kernel, about 3x faster, its "
+        "trials equal within round-off, so the rows differ run by run but not in "
+        "distribution (docs/performance.md)",
     )
     eg.add_argument(
         "--out", type=options.out_path, default=None, help="write runs.csv, summary.json here"
@@ -118,10 +120,10 @@ def prepare(
         raise ParameterError(f"--connect-timeout must be > 0 seconds, got {args.connect_timeout}")
     if args.eval_draws < 0:
         raise ParameterError(f"--eval-draws must be >= 0, got {args.eval_draws}")
-    if args.engine == "batch" and (args.backend != "local" or args.workers != 1):
+    if args.engine != "processes" and (args.backend != "local" or args.workers != 1):
         raise ParameterError(
-            "--engine batch runs in this process on Numba's threads (NUMBA_NUM_THREADS); "
-            "--workers and --backend ray are for --engine processes"
+            f"--engine {args.engine} runs in this process on Numba's threads "
+            "(NUMBA_NUM_THREADS); --workers and --backend ray are for --engine processes"
         )
     config = learner_options.learner_config_from(args)
     plant = options.plant_from(args)
@@ -186,6 +188,9 @@ def prepare(
     if config.robust:
         # only when set, so the settings of sweeps without it stay as they were
         settings["robust"] = experiments.NOTE_ROBUST
+    if args.engine == "simd":
+        # its rows are not the exact kernel's: a folder never mixes the two
+        settings["trial_kernel"] = experiments.NOTE_SIMD
     return specs, settings, config.max_trials
 
 
