@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from striatal import kernel
+from striatal import kernel, noise
 from striatal.bench import (
     TrialSetup,
     cache_misses,
@@ -306,7 +306,9 @@ def batch_vs_gymnasium_vector(config: BenchConfig, rng: np.random.Generator) -> 
         notes=(
             "steps = env-steps summed over the batch; the kernel does 4 derivative "
             "evaluations per step (RK4), the reference 1 (Euler); kernel noise generation "
-            "timed (one thread); kernel blocks of 64 trials parallel over "
+            "timed (bench.batch_normals: one child generator per Numba thread, on threads "
+            f"when Numba's sleep: {noise.idle_kernel_threads()}); kernel blocks of 64 "
+            "trials parallel over "
             f"{numba.get_num_threads()} Numba threads"
         ),
         extra={

@@ -19,10 +19,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 
+import numba
 import numpy as np
 
 from striatal import kernel, rollout
 from striatal.errors import ParameterError
+from striatal.noise import run_parts
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
 from striatal.rollout import Protocol
 
@@ -30,6 +32,7 @@ __all__ = [
     "BENCHMARKS_ENV",
     "TRACE_GAMMA",
     "TrialSetup",
+    "batch_normals",
     "benchmarks_dir",
     "cache_misses",
     "calibrate",
@@ -109,7 +112,7 @@ def run_batch_trials(
     else :func:`striatal.kernel.run_trials_batch` (one scalar trial per core at a time).
     """
     B = batch_size
-    noise = rng.standard_normal((B, setup.n_steps)) if stochastic else np.empty((B, 0))
+    noise = batch_normals(rng, B, setup.n_steps) if stochastic else np.empty((B, 0))
     args = rollout.batch_args(
         Plant(),
         setup.controller,
@@ -123,6 +126,28 @@ def run_batch_trials(
     run = kernel.run_trials_lockstep if lockstep else kernel.run_trials_batch
     run(*args[:-1], outs)
     return int(outs[:, kernel.OUT_END_STEP].sum())
+
+
+def batch_normals(rng: np.random.Generator, rows: int, n: int) -> np.ndarray:
+    """(rows, n) standard normals for a batch of trials, drawn on Numba's thread count.
+
+    The rows are split into one contiguous part per thread, each part drawn from its own
+    child of ``rng`` (``rng.spawn``), so the numbers do not depend on the threads' timing
+    (:func:`striatal.noise.run_parts`).
+    """
+    out = np.empty((rows, n))
+    parts = max(1, min(numba.get_num_threads(), rows))
+    step = -(-rows // parts)
+    children = rng.spawn(parts)
+
+    def part(i: int) -> Callable[[], None]:
+        def fill() -> None:
+            children[i].standard_normal(out=out[i * step : (i + 1) * step])
+
+        return fill
+
+    run_parts([part(i) for i in range(parts) if i * step < rows])
+    return out
 
 
 def cache_misses() -> int:

@@ -37,11 +37,9 @@ gets ParameterError naming it (:func:`check_specs`).
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections import Counter
-from collections.abc import Iterator, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -55,6 +53,7 @@ from striatal.experiments import RunSpec, initial_gains
 from striatal.learners import check_config, rule_of
 from striatal.learners.common import THETA_C_FLOOR, THETA_C_RESET_ABOVE, THETA_C_RESET_TO
 from striatal.learners.pgpe import EXPLORE_RANGE, THETA_C_LEARNED_RANGE, initial_explore
+from striatal.noise import run_parts
 from striatal.params import N_GAINS, Simulation, check_seed, check_theta_c
 from striatal.rollout import Protocol, batch_args
 
@@ -243,18 +242,6 @@ class _Baseline:
         self.square[idx] = np.where(np.isfinite(square), square, self.square[idx])
 
 
-def _idle_kernel_threads() -> bool:
-    """Whether Numba's threads sleep between kernel calls, so that other threads can
-    use the cores: not under libgomp's default wait policy, whose threads spin after
-    each parallel region (``striatal`` sets OMP_WAIT_POLICY=PASSIVE unless it is set)."""
-    if os.environ.get("OMP_WAIT_POLICY", "").upper() == "PASSIVE":
-        return True
-    try:
-        return numba.threading_layer() != "omp"
-    except ValueError:  # no parallel region has run yet: the layer is not chosen
-        return False
-
-
 class _Batch:
     """The runs of one group, advanced trial by trial together (state over the run axis)."""
 
@@ -296,7 +283,6 @@ class _Batch:
         self.pending = Counter(self.seeds)
         self.eval_noise: dict[int, np.ndarray] = {}
         self.w0_passes: dict[tuple[Any, ...], int] = {}
-        self.pool: ThreadPoolExecutor | None = None  # for _normals, made when first needed
 
     # ------------------------------------------------------------------ kernel calls
     def _kernel(
@@ -338,27 +324,23 @@ class _Batch:
     def _normals(self, idx: np.ndarray, n: int) -> np.ndarray:
         """Row j: the next ``n`` standard normals of run idx[j]'s generator.
 
-        Each run draws from its own generator, so the rows can be filled by several
-        threads at once (NumPy releases the GIL while it fills): the same numbers.
+        Each run draws from its own generator, so the rows are filled on threads
+        (:func:`striatal.noise.run_parts`): the same numbers.
         """
         out = np.empty((len(idx), n))
 
-        def fill(part: range) -> None:
-            for j in part:
-                self.rngs[idx[j]].standard_normal(out=out[j])
+        def part(lo: int, hi: int) -> Callable[[], None]:
+            def fill() -> None:
+                for j in range(lo, hi):
+                    self.rngs[idx[j]].standard_normal(out=out[j])
 
-        threads = min(numba.get_num_threads(), len(idx))
-        if threads < 2 or len(idx) * n < PARALLEL_NORMALS or not _idle_kernel_threads():
-            fill(range(len(idx)))
+            return fill
+
+        if len(idx) * n < PARALLEL_NORMALS:
+            part(0, len(idx))()
             return out
-        if self.pool is None:
-            self.pool = ThreadPoolExecutor(numba.get_num_threads())
-        step = -(-len(idx) // threads)
-        list(
-            self.pool.map(
-                fill, [range(i, min(i + step, len(idx))) for i in range(0, len(idx), step)]
-            )
-        )
+        step = -(-len(idx) // numba.get_num_threads())
+        run_parts([part(lo, min(lo + step, len(idx))) for lo in range(0, len(idx), step)])
         return out
 
     # ------------------------------------------------------------------ one trial
@@ -606,13 +588,6 @@ class _Batch:
         return row
 
     def run(self) -> Iterator[dict[str, Any]]:
-        try:
-            yield from self._run()
-        finally:
-            if self.pool is not None:
-                self.pool.shutdown()
-
-    def _run(self) -> Iterator[dict[str, Any]]:
         while True:
             idx = np.flatnonzero(~self.done)
             if idx.size == 0:

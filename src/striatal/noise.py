@@ -1,0 +1,59 @@
+"""Standard normals for batches of trials, drawn on several threads.
+
+A batch of B chapter trials needs B x 6000 standard normals (eq 5), which NumPy draws
+at about 10 ns each on one core: as long as the SIMD kernel takes to run the trials
+on two. NumPy releases the GIL while it fills an array, so parts drawn from
+different generators can be filled by threads at once, each part the same numbers
+as drawn alone. That pays only while Numba's own threads sleep between kernel calls:
+under libgomp's default wait policy they spin after each parallel region and take
+the cores back (``striatal`` sets OMP_WAIT_POLICY=PASSIVE unless it is set).
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+
+import numba
+
+__all__ = ["idle_kernel_threads", "run_parts"]
+
+_POOL: ThreadPoolExecutor | None = None
+_POOL_LOCK = threading.Lock()
+
+
+def idle_kernel_threads() -> bool:
+    """Whether Numba's threads sleep between kernel calls, so other threads can use the
+    cores: not under libgomp's default wait policy, whose threads spin after each
+    parallel region."""
+    if os.environ.get("OMP_WAIT_POLICY", "").upper() == "PASSIVE":
+        return True
+    try:
+        return numba.threading_layer() != "omp"
+    except ValueError:  # no parallel region has run yet: the layer is not chosen
+        return False
+
+
+def _pool() -> ThreadPoolExecutor:
+    global _POOL
+    with _POOL_LOCK:
+        if _POOL is None:
+            _POOL = ThreadPoolExecutor(numba.get_num_threads(), thread_name_prefix="normals")
+        return _POOL
+
+
+def run_parts(parts: Sequence[Callable[[], None]]) -> None:
+    """Call every part, on a shared pool of Numba's thread count when
+    :func:`idle_kernel_threads`, else one after another; the first exception is raised.
+
+    Parts must not share a generator or an output row: each is then the same whatever
+    runs beside it.
+    """
+    if len(parts) < 2 or numba.get_num_threads() < 2 or not idle_kernel_threads():
+        for part in parts:
+            part()
+        return
+    for future in [_pool().submit(part) for part in parts]:
+        future.result()
