@@ -1,12 +1,12 @@
-"""What the lockstep SIMD kernel would give a batch sweep (docs/performance.md).
+"""How far a sweep on the SIMD kernel is from the exact one, row by row (docs/performance.md).
 
     python benchmarks/sweep_trial_kernel.py RUNS_CSV -- SWEEP OPTIONS
 
-Runs the sweep that ``striatal sweep SWEEP OPTIONS --engine batch`` runs, but with the
-learning trials on :func:`striatal.kernel.run_trials_lockstep`
-(``lockstep_sweep.execute_batch(..., trial_kernel="lockstep")``), prints its wall
-time and, against RUNS_CSV (the runs.csv of the same sweep from either engine), how
-many rows differ and each arm's successes.
+Runs the sweep that ``striatal sweep SWEEP OPTIONS --engine simd`` runs (every trial on
+:func:`striatal.kernel.run_trials_lockstep`:
+``lockstep_sweep.execute_batch(..., trial_kernel="lockstep")``), prints its wall time
+and, against RUNS_CSV (the runs.csv of the same sweep from an exact engine, processes
+or batch), how many rows differ and each arm's successes.
 """
 
 from __future__ import annotations

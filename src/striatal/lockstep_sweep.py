@@ -1,28 +1,35 @@
-"""Sweeps in lockstep (``striatal sweep --engine batch``): an arm's seeds as one batch.
+"""Sweeps in lockstep (``striatal sweep --engine batch|simd``): an arm's seeds as one batch.
 
 The process engine (:func:`striatal.experiments.execute`) runs each (arm, init, seed)
 as its own :func:`striatal.learners.learn` loop. Here the runs of the arms that
 differ only in their learning rate (``alpha``; for pgpe also ``sigma_rate``: a
 learner and its no-learning control, an alpha grid) advance together: trial k of
-every unfinished run is one call of :func:`striatal.kernel.run_trials_batch`, the
-learning updates (eqs 3-4 and eq 21 for chapter; the prediction error, decay and
-floors for rpe and pgpe) are NumPy operations over the run axis, and finished runs
-are masked out. A run that stops (success or ``max_trials``) is evaluated as
+every unfinished run is one batched kernel call, the learning updates (eqs 3-4 and
+eq 21 for chapter; the prediction error, decay and floors for rpe and pgpe) are
+NumPy operations over the run axis, and finished runs are masked out. A run that
+stops (success or ``max_trials``) is evaluated as
 :func:`striatal.experiments.run_one` does (the noise-free re-simulation of its final
 gains, the pass probabilities of W(0) and of the final gains, each a batch of its
 noise draws) and its row is yielded at once, so the sweep writes it to runs.csv and
-a rerun skips it.
+a rerun skips it. The W(0) evaluation that runs share (a learner and its control:
+the same W(0), seed and draws) is run once; every row still counts it.
 
-Same rows as the process engine, bit for bit (apart from ``wall_seconds``):
-``run_trials_batch`` is a parallel loop over the scalar kernel and equals it bit for
-bit; every run keeps its own generator (``default_rng(seed)``) and draws from it what
-the loop draws, in the same order; and every update does the scalar code's floating-
-point operations in the scalar code's order, elementwise over runs (IEEE arithmetic
-gives the same result). tests/test_lockstep_sweep.py compares whole sweeps. The
-lockstep SIMD kernel (:func:`striatal.kernel.run_trials_lockstep`) is not used: it
-equals the scalar kernel only within 1e-8, and over hundreds of trials such
-differences can change which trial succeeds, so the rows would no longer be the
-process engine's.
+``trial_kernel`` "exact" (``--engine batch``): the same rows as the process engine,
+bit for bit (apart from ``wall_seconds``). :func:`striatal.kernel.run_trials_batch` is
+a parallel loop over the scalar kernel and equals it bit for bit; every run keeps its
+own generator (``default_rng(seed)``) and draws from it what the loop draws, in the
+same order (rows filled on threads, :mod:`striatal.noise`: the same numbers); and
+every update does the scalar code's floating-point operations in the scalar code's
+order, elementwise over runs (IEEE arithmetic gives the same result).
+tests/test_lockstep_sweep.py compares whole sweeps.
+
+``trial_kernel`` "lockstep" (``--engine simd``): every trial, the evaluation too, on
+the SIMD kernel :func:`striatal.kernel.run_trials_lockstep`, several times faster per
+core. Its trials equal the scalar kernel's only within round-off (its polynomial
+sin/cos are within 1 ulp of libm's), and a chaotic swing-up and learning over many
+trials amplify that, so its rows are a different sample of the same experiment:
+the arms' success rates agree within their intervals (tests/test_lockstep_sweep.py,
+docs/performance.md), a given run's row need not.
 
 ``wall_seconds`` of a row is its share of the engine's time: each batched call's
 wall time split evenly over the runs in it, plus its own evaluation, so the rows of
@@ -141,10 +148,10 @@ def execute_batch(
     The rows equal :func:`striatal.experiments.run_one`'s for the same specs except
     ``wall_seconds``. ParameterError if :func:`unsupported` says so.
 
-    ``trial_kernel`` "lockstep" runs the learning trials (not the evaluation) on
-    :func:`striatal.kernel.run_trials_lockstep` instead, for measuring what the SIMD
-    kernel would give (docs/performance.md): its trials equal the scalar kernel's only
-    within round-off, so its rows are not the process engine's.
+    ``trial_kernel`` "lockstep" (``--engine simd``) runs every trial, the evaluation
+    included, on :func:`striatal.kernel.run_trials_lockstep` instead: its trials equal
+    the scalar kernel's only within round-off, so its rows are not the process
+    engine's, only the same experiment (module docstring).
     """
     if trial_kernel not in TRIAL_KERNELS:
         raise ParameterError(
