@@ -106,7 +106,7 @@ def measure(config: Any, rng: np.random.Generator, compare: Any, comparison: Any
     def batch() -> int:
         return run_batch_trials(setup, B, rng, outs)
 
-    lock_name = f"kernel.run_trials_lockstep (B={B}) + rng.standard_normal"
+    lock_name = f"kernel.run_trials_lockstep (B={B}) + bench.batch_normals"
     rows = {
         "gymnax_1": (
             "kernel.run_trial + rng.standard_normal",

@@ -284,7 +284,7 @@ def batch_vs_gymnasium_vector(config: BenchConfig, rng: np.random.Generator) -> 
     actions = np.ones(B, dtype=np.int64)
     block = setup.n_steps
     k, r = compare(
-        f"kernel.run_trials_lockstep (B={B}) + rng.standard_normal",
+        f"kernel.run_trials_lockstep (B={B}) + bench.batch_normals",
         lambda: run_batch_trials(setup, B, rng, outs),
         f"gymnasium CartPoleVectorEnv (num_envs={B})",
         lambda: gymnasium_vector_steps(env, actions, block),
@@ -292,9 +292,9 @@ def batch_vs_gymnasium_vector(config: BenchConfig, rng: np.random.Generator) -> 
     )
     env.close()
     lk, pk = compare(
-        f"kernel.run_trials_lockstep (B={B}) + rng.standard_normal",
+        f"kernel.run_trials_lockstep (B={B}) + bench.batch_normals",
         lambda: run_batch_trials(setup, B, rng, outs),
-        f"kernel.run_trials_batch (B={B}, prange over scalar trials) + rng.standard_normal",
+        f"kernel.run_trials_batch (B={B}, prange over scalar trials) + bench.batch_normals",
         lambda: run_batch_trials(setup, B, rng, outs, lockstep=False),
         config,
     )
