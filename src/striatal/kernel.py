@@ -59,9 +59,11 @@ __all__ = [
     "TraceArgs",
     "accelerations",
     "energy_error",
+    "exp_libm",
     "force",
     "judge",
     "judge_batch",
+    "log10_libm",
     "motor_force",
     "plant_step",
     "plant_terms",
@@ -225,6 +227,23 @@ def wrap_angle(theta: float) -> float:
 def wrap_angles(theta: float) -> float:
     """:func:`wrap_angle` as a NumPy ufunc: any array shape, the same formula bit for bit."""
     return wrap_angle(theta)
+
+
+@vectorize(["float64(float64)"], cache=True)
+def exp_libm(x: float) -> float:
+    """exp(x) elementwise by the C library, as ``math.exp``: the same bits on every CPU.
+
+    NumPy's own ``np.exp`` (and log10, tanh, power) take SIMD code paths chosen by
+    the CPU (AVX-512 machines get different last bits), so a learning result that
+    goes through them would depend on the machine (docs/performance.md).
+    """
+    return math.exp(x)
+
+
+@vectorize(["float64(float64)"], cache=True)
+def log10_libm(x: float) -> float:
+    """log10(x) elementwise by the C library, as ``math.log10`` (see :func:`exp_libm`)."""
+    return math.log10(x)
 
 
 @njit(cache=True)

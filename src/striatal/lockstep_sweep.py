@@ -508,7 +508,7 @@ class _Batch:
         s0 = initial_explore(c.explore)
         adapt = (sr != 0.0) & np.isfinite(factor) & ~success
         with np.errstate(invalid="ignore", over="ignore"):
-            grown = s * np.exp(np.clip((sr * factor)[:, None] * (z * z - 1.0), -1.0, 1.0))
+            grown = s * kernel.exp_libm(np.clip((sr * factor)[:, None] * (z * z - 1.0), -1.0, 1.0))
         grown = np.clip(grown, EXPLORE_RANGE[0] * s0, EXPLORE_RANGE[1] * s0)
         new_s = np.where(adapt[:, None], grown, s)
         candidate = np.concatenate([W_trial[:, :5], tc_trial[:, None]], axis=1)

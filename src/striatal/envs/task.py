@@ -249,7 +249,7 @@ def _gaussian_tolerance(d: np.ndarray, margin: float, value_at_margin: float = 0
     """dm_control ``rewards.tolerance`` with bounds (0, 0) and a Gaussian sigmoid."""
     scale = math.sqrt(-2.0 * math.log(value_at_margin))
     z = d / margin * scale
-    return np.exp(-0.5 * z * z)
+    return kernel.exp_libm(-0.5 * z * z)  # the same bits on every CPU
 
 
 def _quadratic_tolerance(d: np.ndarray, margin: float) -> np.ndarray:

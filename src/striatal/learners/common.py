@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from striatal import kernel
 from striatal.dynamics import energy_error, wrap_angle
 from striatal.learners.config import W1_FLOOR, ThetaCRule
 from striatal.learners.state import LearnerState
@@ -116,7 +117,7 @@ def _closeness(states: np.ndarray, sim: Simulation) -> np.ndarray:
     to 0 at CLOSENESS_DECADES decades out; mean over the four components, (n,).
     """
     box = np.array([sim.success.x, sim.success.x_dot, sim.success.theta, sim.success.theta_dot])
-    decades = np.log10(np.maximum(np.abs(states) / box, 1.0))
+    decades = kernel.log10_libm(np.maximum(np.abs(states) / box, 1.0))
     return np.mean(1.0 - np.minimum(decades / CLOSENESS_DECADES, 1.0), axis=-1)
 
 

@@ -34,6 +34,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from striatal import kernel
 from striatal.errors import ParameterError
 from striatal.learners.common import (
     baseline_memory,
@@ -104,7 +105,7 @@ def adapt_explore(
     if sigma_rate == 0.0 or not math.isfinite(factor):
         return s.copy()
     s0 = initial_explore(explore)
-    new = s * np.exp(np.clip(sigma_rate * factor * (z * z - 1.0), -1.0, 1.0))
+    new = s * kernel.exp_libm(np.clip(sigma_rate * factor * (z * z - 1.0), -1.0, 1.0))
     return np.clip(new, EXPLORE_RANGE[0] * s0, EXPLORE_RANGE[1] * s0)
 
 
