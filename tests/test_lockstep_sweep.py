@@ -280,3 +280,20 @@ def test_cli_simd_engine_gives_the_same_statistics_not_the_same_rows(
     # resuming the processes sweep on the SIMD kernel would mix two kinds of rows
     assert main([*argv, "--out", str(tmp_path / "p"), "--engine", "simd"]) == 2
     assert "other settings" in capsys.readouterr().err
+    # the SIMD engine is recorded (it changes the rows), the exact ones are not
+    assert simd["settings"]["options"]["engine"] == "simd"
+    assert "engine" not in processes["settings"]["options"]
+    assert main(["sweep", "--from-summary", str(tmp_path / "s"), "--print-config"]) == 0
+    assert 'engine = "simd"' in capsys.readouterr().out
+    # the Python API records it too
+    specs, _ = experiments.build_specs(
+        config=default_config("chapter", max_trials=1),
+        template=Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
+        plant=Plant(),
+        sim=Simulation(duration=1.0),
+        seeds=SEEDS[:1],
+        inits=("chapter",),
+        eval_draws=0,
+    )
+    experiments.sweep(specs, {"x": 1}, out=tmp_path / "api", max_trials=1, engine="simd")
+    assert "trial_kernel" in json.loads((tmp_path / "api" / "sweep.json").read_text())

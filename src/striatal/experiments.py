@@ -1000,8 +1000,8 @@ def sweep(
     "batch": :func:`striatal.lockstep_sweep.execute_batch` (the runs of an arm advance
     in lockstep in this process; the same rows but wall_seconds); "simd": the same on
     the SIMD kernel (:func:`striatal.kernel.run_trials_lockstep`), rows equal only
-    within round-off (docs/performance.md), so ``settings`` must say so (the sweep CLI
-    adds ``trial_kernel``) and a folder is never resumed across the two kinds.
+    within round-off (docs/performance.md), so ``settings`` gets ``trial_kernel``
+    (:data:`NOTE_SIMD`) and a folder is never resumed across the two kinds.
 
     ``settings`` is stored in ``out``/sweep.json; a rerun in the same folder must use
     the same settings (ParameterError otherwise), ``settings["options"]`` aside: the
@@ -1016,6 +1016,9 @@ def sweep(
         from striatal.lockstep_sweep import check_specs
 
         check_specs(specs, engine)
+    if engine == "simd":
+        # its rows are not the exact kernel's: recorded, so a folder never mixes the two
+        settings = {**settings, "trial_kernel": NOTE_SIMD}
     # a folder not yet locked is locked for the whole sweep
     guard = contextlib.nullcontext() if out is None or locked else RunDir(out).lock()
     with guard:

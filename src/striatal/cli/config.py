@@ -96,8 +96,15 @@ def option_values(args: argparse.Namespace, *, skip: Sequence[str] = ()) -> dict
 
 
 def recorded_options(args: argparse.Namespace) -> dict[str, Any]:
-    """The options that decide what the run computes, as summary.json's settings.options."""
-    return {k: v for k, v in option_values(args, skip=RUN_ONLY).items() if v is not None}
+    """The options that decide what the run computes, as summary.json's settings.options.
+
+    ``--engine simd`` is recorded (its rows equal the exact engines' only within
+    round-off, so --from-summary must run it again); the exact engines are not.
+    """
+    values = option_values(args, skip=RUN_ONLY)
+    if getattr(args, "engine", None) == "simd":
+        values["engine"] = "simd"
+    return {k: v for k, v in values.items() if v is not None}
 
 
 def read_toml(path: Path) -> dict[str, Any]:

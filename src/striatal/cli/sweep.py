@@ -188,9 +188,6 @@ def prepare(
     if config.robust:
         # only when set, so the settings of sweeps without it stay as they were
         settings["robust"] = experiments.NOTE_ROBUST
-    if args.engine == "simd":
-        # its rows are not the exact kernel's: a folder never mixes the two
-        settings["trial_kernel"] = experiments.NOTE_SIMD
     return specs, settings, config.max_trials
 
 
