@@ -263,27 +263,10 @@ def accelerations(
     the force of eq 12 computed with the controller's ``model`` parameters, and the
     true ``plant`` answers through eqs 8-9.
     """
-    return _accelerations_sc(
-        x_dot, math.sin(theta), math.cos(theta), theta_dot, u, plant, model, mismatch
-    )
-
-
-@njit(cache=True, error_model="numpy")
-def _accelerations_sc(
-    x_dot: float,
-    s: float,
-    c: float,
-    theta_dot: float,
-    u: float,
-    plant: np.ndarray,
-    model: np.ndarray,
-    mismatch: bool,
-) -> tuple[float, float]:
-    """:func:`accelerations` given s = sin theta and c = cos theta (the same arithmetic)."""
     return _accelerations_terms(
         x_dot,
-        s,
-        c,
+        math.sin(theta),
+        math.cos(theta),
         theta_dot,
         u,
         plant[0],
@@ -341,43 +324,13 @@ def rk4_step(
     mismatch: bool,
 ) -> tuple[float, float, float, float]:
     """One classical Runge-Kutta step of length dt with u held constant."""
-    return _rk4_sc(
+    return _rk4_terms(
         x,
         x_dot,
         theta,
         theta_dot,
         math.sin(theta),
         math.cos(theta),
-        u,
-        dt,
-        plant,
-        model,
-        mismatch,
-    )
-
-
-@njit(cache=True)
-def _rk4_sc(
-    x: float,
-    x_dot: float,
-    theta: float,
-    theta_dot: float,
-    s: float,
-    c: float,
-    u: float,
-    dt: float,
-    plant: np.ndarray,
-    model: np.ndarray,
-    mismatch: bool,
-) -> tuple[float, float, float, float]:
-    """:func:`rk4_step` given s = sin theta and c = cos theta of the first stage."""
-    return _rk4_terms(
-        x,
-        x_dot,
-        theta,
-        theta_dot,
-        s,
-        c,
         u,
         dt,
         plant[0],
@@ -412,7 +365,8 @@ def _rk4_terms(
     model_g: float,
     mismatch: bool,
 ) -> tuple[float, float, float, float]:
-    """:func:`_rk4_sc` on plain floats: plant [M, m, l, g] and model (eqs 13-14, or 12 and 8-9)."""
+    """:func:`rk4_step` on plain floats, given s = sin theta and c = cos theta of the first
+    stage: plant [M, m, l, g] and model (eqs 13-14, or 12 and 8-9)."""
     a1, b1 = _accelerations_terms(
         x_dot,
         s,
