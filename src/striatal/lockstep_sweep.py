@@ -80,7 +80,8 @@ BATCH_LEARNERS: tuple[str, ...] = ("chapter", "rpe", "pgpe")
 TRIAL_KERNELS: tuple[str, ...] = ("exact", "lockstep")
 #: Trials a kernel thread takes at a time (numba.set_parallel_chunksize).
 CHUNK = 2
-#: Normals a batch of runs draws at once from which their rows are filled by threads.
+#: From this many normals in one draw (runs x draws each), the runs' rows are filled on
+#: threads (:func:`striatal.noise.run_parts`); fewer are drawn in turn.
 PARALLEL_NORMALS = 50_000
 
 
