@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from functools import partial
 
+import numba
 import numpy as np
 import pytest
 
@@ -54,7 +55,7 @@ def test_idle_kernel_threads_follows_the_wait_policy(monkeypatch: pytest.MonkeyP
     assert not noise.idle_kernel_threads()
 
 
-@pytest.mark.parametrize("rows", [1, 2, 5, 256])
+@pytest.mark.parametrize("rows", [0, 1, 2, 5, 256])
 def test_batch_normals_are_the_children_of_the_generator(rows: int) -> None:
     """One contiguous part per thread, each from its own rng.spawn child: reproducible
     from the seed, standard normal, whatever the timing of the threads."""
@@ -62,7 +63,7 @@ def test_batch_normals_are_the_children_of_the_generator(rows: int) -> None:
     b = bench.batch_normals(np.random.default_rng(7), rows, 300)
     assert a.shape == (rows, 300)
     assert np.array_equal(a, b)
-    parts = max(1, min(bench.numba.get_num_threads(), rows))
+    parts = max(1, min(numba.get_num_threads(), rows))
     step = -(-rows // parts)
     children = np.random.default_rng(7).spawn(parts)
     want = np.concatenate(
@@ -71,3 +72,14 @@ def test_batch_normals_are_the_children_of_the_generator(rows: int) -> None:
     assert np.array_equal(a, want)
     if rows == 256:
         assert abs(a.mean()) < 0.01 and abs(a.std() - 1.0) < 0.01
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3, 4])
+def test_row_parts_cover_the_rows_once_in_order(
+    monkeypatch: pytest.MonkeyPatch, threads: int
+) -> None:
+    monkeypatch.setattr(noise.numba, "get_num_threads", lambda: threads)
+    for rows in (0, 1, 2, 5, 7, 256):
+        parts = noise.row_parts(rows)
+        assert [j for p in parts for j in p] == list(range(rows))
+        assert len(parts) <= max(1, min(threads, rows)) and all(len(p) > 0 for p in parts)

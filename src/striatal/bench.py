@@ -19,12 +19,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 
-import numba
 import numpy as np
 
 from striatal import kernel, rollout
 from striatal.errors import ParameterError
-from striatal.noise import run_parts
+from striatal.noise import row_parts, run_parts
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
 from striatal.rollout import Protocol
 
@@ -136,17 +135,16 @@ def batch_normals(rng: np.random.Generator, rows: int, n: int) -> np.ndarray:
     (:func:`striatal.noise.run_parts`).
     """
     out = np.empty((rows, n))
-    parts = max(1, min(numba.get_num_threads(), rows))
-    step = -(-rows // parts)
-    children = rng.spawn(parts)
+    parts = row_parts(rows)
+    children = rng.spawn(len(parts))
 
     def part(i: int) -> Callable[[], None]:
         def fill() -> None:
-            children[i].standard_normal(out=out[i * step : (i + 1) * step])
+            children[i].standard_normal(out=out[parts[i].start : parts[i].stop])
 
         return fill
 
-    run_parts([part(i) for i in range(parts) if i * step < rows])
+    run_parts([part(i) for i in range(len(parts))])
     return out
 
 

@@ -60,7 +60,7 @@ from striatal.experiments import RunSpec, initial_gains
 from striatal.learners import check_config, rule_of
 from striatal.learners.common import THETA_C_FLOOR, THETA_C_RESET_ABOVE, THETA_C_RESET_TO
 from striatal.learners.pgpe import EXPLORE_RANGE, THETA_C_LEARNED_RANGE, initial_explore
-from striatal.noise import run_parts
+from striatal.noise import row_parts, run_parts
 from striatal.params import N_GAINS, Simulation, check_seed, check_theta_c
 from striatal.rollout import Protocol, batch_args
 
@@ -337,18 +337,17 @@ class _Batch:
         """
         out = np.empty((len(idx), n))
 
-        def part(lo: int, hi: int) -> Callable[[], None]:
+        def part(rows: range) -> Callable[[], None]:
             def fill() -> None:
-                for j in range(lo, hi):
+                for j in rows:
                     self.rngs[idx[j]].standard_normal(out=out[j])
 
             return fill
 
         if len(idx) * n < PARALLEL_NORMALS:
-            part(0, len(idx))()
+            part(range(len(idx)))()
             return out
-        step = -(-len(idx) // numba.get_num_threads())
-        run_parts([part(lo, min(lo + step, len(idx))) for lo in range(0, len(idx), step)])
+        run_parts([part(rows) for rows in row_parts(len(idx))])
         return out
 
     # ------------------------------------------------------------------ one trial
@@ -543,7 +542,8 @@ class _Batch:
                 noise = np.random.default_rng(seed).standard_normal((n, self.sim.n_steps))
                 self.eval_noise[seed] = noise
             w0_key = (seed, tuple(self.W0[r]))
-            ctrls = [] if w0_key in self.w0_passes else [self.templates[r]]
+            new_w0 = w0_key not in self.w0_passes
+            ctrls = [self.templates[r]] if new_w0 else []
             if final is not None:
                 ctrls.append(final)
             passes = np.zeros(0, dtype=np.int64)
@@ -558,7 +558,7 @@ class _Batch:
                     noise=np.tile(noise, (len(ctrls), 1)),
                 )
                 passes = _success(outs, self.sim).reshape(len(ctrls), n).sum(axis=1)
-            if w0_key not in self.w0_passes:
+            if new_w0:
                 self.w0_passes[w0_key] = int(passes[0])
                 passes = passes[1:]
             # counted in every row as the process engine runs it: n draws + the mean trial

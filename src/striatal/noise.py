@@ -18,7 +18,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numba
 
-__all__ = ["idle_kernel_threads", "run_parts"]
+__all__ = ["idle_kernel_threads", "row_parts", "run_parts"]
 
 _POOL: ThreadPoolExecutor | None = None
 _POOL_LOCK = threading.Lock()
@@ -34,6 +34,12 @@ def idle_kernel_threads() -> bool:
         return numba.threading_layer() != "omp"
     except ValueError:  # no parallel region has run yet: the layer is not chosen
         return False
+
+
+def row_parts(rows: int) -> list[range]:
+    """``range(rows)`` cut into one contiguous part per Numba thread (fewer if rows are few)."""
+    step = max(1, -(-rows // max(1, min(numba.get_num_threads(), rows))))
+    return [range(lo, min(lo + step, rows)) for lo in range(0, rows, step)]
 
 
 def _pool() -> ThreadPoolExecutor:
