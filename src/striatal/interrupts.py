@@ -9,29 +9,76 @@ traceback or by SIGINT instead of exit 130. ``python -m striatal`` and the
 caused (an import cut short, reported by a C extension as an ImportError) still
 exits 130. Only ``signal`` is imported here, to keep the window before it small.
 
-A KeyboardInterrupt raised while C code runs a Python callback (llvmlite's object
-cache hook while Numba compiles, for one) is swallowed there and reported as an
-"Exception ignored" traceback; the command would then run on to exit 0 with the
-Ctrl-C lost. :func:`install` also sets a ``sys.unraisablehook`` that re-arms the
-handler and raises the signal again a moment later, so it lands outside the
-callback.
+A KeyboardInterrupt must not be raised while Numba or llvmlite code runs (an
+import of either, a compilation, a load from Numba's cache): LLVM objects made in
+C and not yet owned by their Python wrappers are then freed twice, and the process
+dies by SIGSEGV or SIGABRT ("double free detected") instead of exiting 130. The
+handler therefore looks at the interrupted stack: inside either library it only
+marks the Ctrl-C pending and raises the signal again a moment later, until the
+main thread is out (:func:`raise_when_safe`).
+
+A KeyboardInterrupt raised while C code runs a Python callback of another library
+is swallowed there and reported as an "Exception ignored" traceback; the command
+would then run on to exit 0 with the Ctrl-C lost. :func:`install` also sets a
+``sys.unraisablehook`` that marks such a Ctrl-C pending and raises the signal again,
+so that it lands outside the callback.
 """
 
 from __future__ import annotations
 
 import signal
+from typing import TYPE_CHECKING
 
-__all__ = ["first_only", "forget_unhandled", "install", "received"]
+if TYPE_CHECKING:
+    from types import FrameType
 
-_state: dict[str, object] = {"received": False}
+__all__ = ["first_only", "forget_unhandled", "install", "raise_when_safe", "received"]
+
+_state: dict[str, object] = {"received": False, "pending": False}
+# top-level packages whose Python code owns LLVM objects in C: never interrupted
+_UNSAFE = frozenset({"numba", "llvmlite"})
+# seconds between two looks at the stack while a Ctrl-C is pending
+RETRY_S = 0.02
 
 
-def first_only(signum: int, frame: object) -> None:
-    """SIGINT handler: KeyboardInterrupt the first time, nothing afterwards."""
-    if _state["received"]:
+def first_only(signum: int, frame: FrameType | None) -> None:
+    """SIGINT handler: KeyboardInterrupt the first time (once it is safe), nothing afterwards."""
+    if _state["received"] and not _state["pending"]:
         return
     _state["received"] = True
+    raise_when_safe(frame)
+
+
+def in_unsafe_code(frame: FrameType | None) -> bool:
+    """Whether a frame of Numba or llvmlite is on the stack that ``frame`` ends."""
+    while frame is not None:
+        name = frame.f_globals.get("__name__")
+        if isinstance(name, str) and name.partition(".")[0] in _UNSAFE:
+            return True
+        frame = frame.f_back
+    return False
+
+
+def raise_when_safe(frame: FrameType | None) -> None:
+    """For a signal handler: raise KeyboardInterrupt now, or, while Numba or llvmlite
+    code runs (:func:`in_unsafe_code`), mark it pending and raise SIGINT again in
+    ``RETRY_S`` seconds, so that the handler looks again."""
+    if in_unsafe_code(frame):
+        _state["pending"] = True
+        _signal_again()
+        return
+    _state["pending"] = False
     raise KeyboardInterrupt
+
+
+def _signal_again() -> None:
+    import threading
+
+    # from a thread, a moment later: the main thread runs the handler at its next
+    # bytecode; a daemon, so that a pending Ctrl-C never holds up the exit
+    timer = threading.Timer(RETRY_S, signal.raise_signal, (signal.SIGINT,))
+    timer.daemon = True
+    timer.start()
 
 
 def install() -> None:
@@ -60,12 +107,9 @@ def _redeliver(unraisable: object) -> None:
     Any other unraisable exception goes to the hook that was there before.
     """
     if isinstance(getattr(unraisable, "exc_value", None), KeyboardInterrupt) and _state["received"]:
-        _state["received"] = False  # first_only raises it again
-        import threading
-
-        # raised from a thread a moment later: the main thread then handles it at its
-        # next bytecode, out of the callback and this hook (both of which swallow it)
-        threading.Timer(0.02, signal.raise_signal, (signal.SIGINT,)).start()
+        # first_only raises it again, out of the callback and this hook (both swallow it)
+        _state["pending"] = True
+        _signal_again()
         return
     previous = _state.get("previous_hook")
     if callable(previous):

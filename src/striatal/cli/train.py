@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from striatal import interrupts
 from striatal.cli import EXIT_INTERRUPTED, learner_options, options
 from striatal.errors import ParameterError
 from striatal.files import check_out_dir, dumps_json
@@ -89,7 +90,9 @@ class _StopRequest:
     The first signal only sets ``requested``: the run stops after the trial in
     progress, once its history row (and any checkpoint due) is written, so the final
     checkpoint never counts a trial that history.csv lacks. A second signal stops at
-    once (KeyboardInterrupt); the run then keeps only the trials already recorded.
+    once (KeyboardInterrupt, as soon as no Numba code runs: see
+    :func:`striatal.interrupts.raise_when_safe`); the run then keeps only the trials
+    already recorded.
     """
 
     SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -100,7 +103,8 @@ class _StopRequest:
 
     def __call__(self, signum: int, frame: FrameType | None) -> None:
         if self.requested:
-            raise KeyboardInterrupt
+            interrupts.raise_when_safe(frame)
+            return
         self.requested = True
 
     def __enter__(self) -> _StopRequest:
