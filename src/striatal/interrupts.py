@@ -27,8 +27,9 @@ so that it lands outside the callback.
 from __future__ import annotations
 
 import signal
-from typing import TYPE_CHECKING
 
+# not ``typing.TYPE_CHECKING``: importing typing would widen the start-up window
+TYPE_CHECKING = False
 if TYPE_CHECKING:
     from types import FrameType
 
@@ -78,7 +79,10 @@ def _signal_again() -> None:
     # bytecode; a daemon, so that a pending Ctrl-C never holds up the exit
     timer = threading.Timer(RETRY_S, signal.raise_signal, (signal.SIGINT,))
     timer.daemon = True
-    timer.start()
+    try:
+        timer.start()
+    except RuntimeError:  # "can't create new thread at interpreter shutdown": ending anyway
+        return
 
 
 def install() -> None:
