@@ -218,7 +218,9 @@ def run_network(
                     )
         if exploration is not None:
             add_exploration(nengo, h, node, exploration, config.synapse)
-    simulator = nengo.Simulator(h.model, dt=net_dt, progress_bar=False, seed=seed)
+    simulator = nengo.Simulator(
+        h.model, dt=net_dt, progress_bar=False, seed=seed, optimize=config.optimize
+    )
     t1 = time.perf_counter()
     c1 = time.process_time()
     chunk = max(1, int(round(1.0 / net_dt)))
@@ -335,7 +337,9 @@ def held_state_response(
         }
         for name, gate in h.gates.items():
             probes[f"gate_{name}"] = nengo.Probe(gate, synapse=config.synapse)
-    with nengo.Simulator(h.model, dt=net_dt, progress_bar=False, seed=seed) as simulator:
+    with nengo.Simulator(
+        h.model, dt=net_dt, progress_bar=False, seed=seed, optimize=config.optimize
+    ) as simulator:
         simulator.run_steps(n_hold * S.shape[0])
     out = {}
     for name, p in probes.items():
