@@ -174,6 +174,7 @@ def run(args: argparse.Namespace) -> int:
             "synapse": config.synapse,
             "neuron_type": "LIF",
             "network_dt": 0.001,
+            "nengo_optimize": config.optimize,
         },
         "integrator": "kernel.rk4_step every 1 ms of network time, u held over the step",
         "success_test": "|theta|<0.05, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.005 at T_f",
@@ -260,7 +261,11 @@ def run_learning(
         "theta0": sim.theta0,
         "x0": sim.x0,
         "duration": sim.duration,
-        "network": {"neurons_requested": config.neurons, "selection": config.selection},
+        "network": {
+            "neurons_requested": config.neurons,
+            "selection": config.selection,
+            "nengo_optimize": config.optimize,
+        },
     }
     if args.out is not None:
         cols = (
