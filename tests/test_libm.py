@@ -9,6 +9,8 @@ max_trials=300)` from 70 trials into 189 there.
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -55,3 +57,17 @@ def test_pgpe_spread_update_uses_libm_exp(rate: float) -> None:
     step = [math.exp(min(max(rate * 0.3 * (v * v - 1.0), -1.0), 1.0)) for v in z]
     want = np.clip(s0 * np.array(step), pgpe.EXPLORE_RANGE[0] * s0, pgpe.EXPLORE_RANGE[1] * s0)
     assert np.array_equal(got, want)
+
+
+def test_the_ufuncs_compile_at_their_first_call_not_at_import() -> None:
+    # a signature list would compile them at every import of striatal.kernel (0.2 s of
+    # LLVM work at the start of every command, and a wider window in which a Ctrl-C
+    # has to wait for Numba: striatal.interrupts)
+    script = (
+        "from striatal import kernel\n"
+        "print([len(f.types) for f in (kernel.wrap_angles, kernel.exp_libm, kernel.log10_libm)])\n"
+        "kernel.exp_libm(1.0)\n"
+        "print(kernel.exp_libm.types)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.stdout.split("\n")[:2] == ["[0, 0, 0]", "['d->d']"], done.stderr

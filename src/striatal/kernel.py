@@ -223,13 +223,17 @@ def wrap_angle(theta: float) -> float:
     return theta - TWO_PI * math.ceil((theta - math.pi) / TWO_PI)
 
 
-@vectorize(["float64(float64)"], cache=True)
+@vectorize(cache=True)
 def wrap_angles(theta: float) -> float:
-    """:func:`wrap_angle` as a NumPy ufunc: any array shape, the same formula bit for bit."""
+    """:func:`wrap_angle` as a NumPy ufunc: any array shape, the same formula bit for bit.
+
+    This and the two below are compiled at their first call, for the input's dtype (a
+    signature list would compile them at every import of this module: 0.2 s of
+    LLVM work, at start-up, for every command)."""
     return wrap_angle(theta)
 
 
-@vectorize(["float64(float64)"], cache=True)
+@vectorize(cache=True)
 def exp_libm(x: float) -> float:
     """exp(x) elementwise by the C library, as ``math.exp``: the same bits on every CPU.
 
@@ -240,7 +244,7 @@ def exp_libm(x: float) -> float:
     return math.exp(x)
 
 
-@vectorize(["float64(float64)"], cache=True)
+@vectorize(cache=True)
 def log10_libm(x: float) -> float:
     """log10(x) elementwise by the C library, as ``math.log10`` (see :func:`exp_libm`)."""
     return math.log10(x)
