@@ -69,5 +69,7 @@ def test_the_ufuncs_compile_at_their_first_call_not_at_import() -> None:
         "kernel.exp_libm(1.0)\n"
         "print(kernel.exp_libm.types)\n"
     )
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
     assert done.stdout.split("\n")[:2] == ["[0, 0, 0]", "['d->d']"], done.stderr

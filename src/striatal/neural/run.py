@@ -156,6 +156,15 @@ class NeuralRun:
         }
 
 
+def _simulator(nengo: Any, model: Any, net_dt: float, seed: int, config: NetworkConfig) -> Any:
+    """The one way this package builds a ``nengo.Simulator``: no progress bar, the
+    network seed, and nengo's operator merging as ``config.optimize`` says (off by
+    default, so that one seed gives one trajectory to the last bit)."""
+    return nengo.Simulator(
+        model, dt=net_dt, progress_bar=False, seed=seed, optimize=config.optimize
+    )
+
+
 def upright_throughout(t: np.ndarray, theta: np.ndarray, window: float = UPRIGHT_WINDOW) -> bool:
     """True if |wrap(theta)| < :data:`UPRIGHT_THETA` at every sample of the last ``window`` s."""
     last = t >= t[-1] - window - 1e-9
@@ -218,9 +227,7 @@ def run_network(
                     )
         if exploration is not None:
             add_exploration(nengo, h, node, exploration, config.synapse)
-    simulator = nengo.Simulator(
-        h.model, dt=net_dt, progress_bar=False, seed=seed, optimize=config.optimize
-    )
+    simulator = _simulator(nengo, h.model, net_dt, seed, config)
     t1 = time.perf_counter()
     c1 = time.process_time()
     chunk = max(1, int(round(1.0 / net_dt)))
@@ -337,9 +344,7 @@ def held_state_response(
         }
         for name, gate in h.gates.items():
             probes[f"gate_{name}"] = nengo.Probe(gate, synapse=config.synapse)
-    with nengo.Simulator(
-        h.model, dt=net_dt, progress_bar=False, seed=seed, optimize=config.optimize
-    ) as simulator:
+    with _simulator(nengo, h.model, net_dt, seed, config) as simulator:
         simulator.run_steps(n_hold * S.shape[0])
     out = {}
     for name, p in probes.items():
