@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from striatal import kernel
-from striatal.bench import TrialSetup, run_batch_trials, run_scalar_trial
 from striatal.errors import ParameterError
+from striatal.sim import kernel
+from striatal.sim.bench import TrialSetup, run_batch_trials, run_scalar_trial
 
 NEEDED = ("jax", "gymnax", "envpool")
 INSTALL = "striatal bench --anchors needs the [bench] extra: pip install -e '.[bench]'"

@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from striatal import bench, kernel
+from striatal.sim import bench, kernel
 
 
 def best(run, repeats: int) -> float:  # type: ignore[no-untyped-def]

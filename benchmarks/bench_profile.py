@@ -13,8 +13,8 @@ from collections.abc import Callable
 import harness
 import numpy as np
 
-from striatal import bench, kernel, rollout
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
+from striatal.sim import bench, kernel, rollout
 
 
 def best_seconds(fn: Callable[[], object], calls: int = 200, repeats: int = 7) -> float:

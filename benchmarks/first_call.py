@@ -13,7 +13,7 @@ import time
 t0 = time.perf_counter()
 import numpy as np  # noqa: E402  (the import is what is timed)
 
-from striatal import bench, kernel  # noqa: E402
+from striatal.sim import bench, kernel  # noqa: E402
 
 t_import = time.perf_counter() - t0
 rng = np.random.default_rng(0)

@@ -3,15 +3,15 @@
 What is measured (``striatal bench``; the table is docs/performance.md):
 
 1. ``scalar_vs_gymnasium``: single-core env-steps per second of one chapter trial
-   (:func:`striatal.kernel.run_trial`: RK4, switching controller, Gaussian policy
+   (:func:`striatal.sim.kernel.run_trial`: RK4, switching controller, Gaussian policy
    noise, eligibility trace), *including* drawing its standard-normal noise from a
    ``np.random.Generator`` each trial, against Gymnasium's ``CartPole-v1`` step loop
    (``gymnasium.make("CartPole-v1").unwrapped``: Euler physics only, a fixed action,
    reset on termination).
-2. ``batch_vs_gymnasium_vector``: :func:`striatal.kernel.run_trials_lockstep` (blocks
+2. ``batch_vs_gymnasium_vector``: :func:`striatal.sim.kernel.run_trials_lockstep` (blocks
    of 64 trials advancing in lockstep, vectorised over trials, blocks over all cores)
    against Gymnasium's ``CartPoleVectorEnv`` (NumPy over the batch, autoreset) at the
-   same batch size, and against :func:`striatal.kernel.run_trials_batch` (``prange``
+   same batch size, and against :func:`striatal.sim.kernel.run_trials_batch` (``prange``
    over scalar trials). Steps are env-steps summed over the batch. The kernel does
    four derivative evaluations per step (RK4), the reference one (Euler).
 3. ``train``: wall seconds of ``striatal train --init chapter`` (a fresh process).
@@ -42,8 +42,10 @@ from typing import Any
 
 import numpy as np
 
-from striatal import kernel, noise
-from striatal.bench import (
+from striatal.errors import ParameterError
+from striatal.params import Simulation
+from striatal.sim import kernel, noise
+from striatal.sim.bench import (
     TrialSetup,
     cache_misses,
     calibrate,
@@ -51,8 +53,6 @@ from striatal.bench import (
     run_scalar_trial,
     timed,
 )
-from striatal.errors import ParameterError
-from striatal.params import Simulation
 
 #: This folder: the subprocess scripts first_call.py and peak_rss.py live here.
 HERE = Path(__file__).resolve().parent

@@ -14,10 +14,10 @@ import math
 
 import numpy as np
 
-from striatal import kernel
 from striatal.neural.network import NetworkConfig
 from striatal.neural.run import held_state_response
 from striatal.params import Controller, Plant
+from striatal.sim import kernel
 
 
 def main() -> int:

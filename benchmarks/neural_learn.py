@@ -123,7 +123,7 @@ def run_rate_side(args: argparse.Namespace, seed: int) -> None:
 
 def summarize(paths: list[Path]) -> None:
     """Per side and alpha: rewards (+10 count), W(0) -> final W per seed, and the mean change."""
-    from striatal.stats import wilson_interval
+    from striatal.experiments.stats import wilson_interval
 
     rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
     groups: dict[tuple[str, float, int], list[dict]] = {}

@@ -43,7 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from striatal.cli import main as striatal_main
-from striatal.files import read_json
+from striatal.io.files import read_json
 
 WALL = ("wall_seconds", "wall_seconds_total", "wall_seconds_median")
 SIGNALS = ("SIGINT", "SIGTERM", "SIGKILL", "SIGINT x2")

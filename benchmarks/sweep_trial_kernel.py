@@ -3,7 +3,7 @@
     python benchmarks/sweep_trial_kernel.py RUNS_CSV -- SWEEP OPTIONS
 
 Runs the sweep that ``striatal sweep SWEEP OPTIONS --engine simd`` runs (every trial on
-:func:`striatal.kernel.run_trials_lockstep`:
+:func:`striatal.sim.kernel.run_trials_lockstep`:
 ``lockstep_sweep.execute_batch(..., trial_kernel="lockstep")``), prints its wall time
 and, against RUNS_CSV (the runs.csv of the same sweep from an exact engine, processes
 or batch), how many rows differ and each arm's successes.
@@ -16,10 +16,10 @@ import sys
 import time
 from pathlib import Path
 
-from striatal import experiments
 from striatal.cli import build_parser
 from striatal.cli.sweep import prepare
-from striatal.lockstep_sweep import execute_batch
+from striatal.experiments import runner as experiments
+from striatal.experiments.lockstep_sweep import execute_batch
 
 
 def main(argv: list[str]) -> int:

@@ -44,7 +44,7 @@ def split_items(text: str) -> str:
 
 
 def plain_roles(text: str) -> str:
-    """Sphinx roles (``:func:`~striatal.kernel.rk4_step```) as inline code.
+    """Sphinx roles (``:func:`~striatal.sim.kernel.rk4_step```) as inline code.
 
     Not cross-references: many roles name a target relative to their module, which
     autorefs cannot resolve, and strict mode would fail on each of them.

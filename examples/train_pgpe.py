@@ -22,11 +22,11 @@ print("W =", " ".join(f"{w:.4f}" for w in run.W), f"theta_c = {run.theta_c:.4f}"
 
 # one row per trial, in memory (also in out/history.csv)
 print("history columns:", ", ".join(run.history.columns))
-curves = striatal.plots.learning_curves(run.history, window=20)
-striatal.plots.save_figure(curves, out / "curves.png")
+curves = striatal.viz.plots.learning_curves(run.history, window=20)
+striatal.viz.plots.save_figure(curves, out / "curves.png")
 
 # the learned controller from theta = 3.12 at rest, 60 s, the mean policy
 trajectory = striatal.simulate(run.plant, run.controller)
-figure = striatal.plots.figure5(trajectory)
-striatal.plots.save_figure(figure, out / "figure5.png")
+figure = striatal.viz.plots.figure5(trajectory)
+striatal.viz.plots.save_figure(figure, out / "figure5.png")
 print(f"wrote {out / 'curves.png'}, {out / 'figure5.png'}")

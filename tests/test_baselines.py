@@ -5,9 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from striatal import baselines
-from striatal.control import balancing_gain_matrix
-from striatal.dynamics import linearization
+from striatal.experiments import baselines
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -17,6 +15,8 @@ from striatal.params import (
     Plant,
     Simulation,
 )
+from striatal.sim.control import balancing_gain_matrix
+from striatal.sim.dynamics import linearization
 
 TEMPLATE = Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C)
 

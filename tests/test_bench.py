@@ -1,6 +1,6 @@
 """The benchmark runs and reports finite rates; the batched kernel equals the scalar one.
 
-The harness is benchmarks/harness.py, found by :func:`striatal.bench.load_harness`.
+The harness is benchmarks/harness.py, found by :func:`striatal.sim.bench.load_harness`.
 
 No speed thresholds here: timings depend on the machine (docs/performance.md has them).
 """
@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from striatal import bench, kernel
 from striatal.cli import main
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plant, Simulation
-from striatal.rollout import Protocol, batch_args, trial_args
+from striatal.sim import bench, kernel
+from striatal.sim.rollout import Protocol, batch_args, trial_args
 
 SIM = Simulation(duration=35.0)  # past the 30-s check of eq 24
 PROTOCOL = Protocol()
@@ -146,7 +146,7 @@ def test_harness_outside_a_checkout_is_one_clear_line(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """No benchmarks/ folder to be found: one line on stderr, exit 2."""
-    monkeypatch.setattr(bench, "__file__", "/nonexistent/src/striatal/bench.py")
+    monkeypatch.setattr(bench, "__file__", "/nonexistent/src/striatal/sim/bench.py")
     monkeypatch.setenv(bench.BENCHMARKS_ENV, str(tmp_path))
     monkeypatch.delitem(sys.modules, "striatal_benchmarks_harness")
     assert main(["bench", "--quick"]) == 2

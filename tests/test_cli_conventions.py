@@ -254,7 +254,7 @@ def test_progress_shown_only_on_a_terminal(monkeypatch: pytest.MonkeyPatch) -> N
 
 
 def test_evaluate_progress_does_not_touch_the_draws() -> None:
-    from striatal.evaluate import pass_probability
+    from striatal.experiments.evaluate import pass_probability
     from striatal.params import (
         CHAPTER_FINAL_THETA_C,
         CHAPTER_FINAL_W,
@@ -262,7 +262,7 @@ def test_evaluate_progress_does_not_touch_the_draws() -> None:
         Plant,
         Simulation,
     )
-    from striatal.rollout import Protocol
+    from striatal.sim.rollout import Protocol
 
     ctrl = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
     seen: list[int] = []

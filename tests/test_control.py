@@ -5,8 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from striatal import control, kernel
-from striatal.dynamics import linearization
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -15,7 +13,9 @@ from striatal.params import (
     Plant,
     Simulation,
 )
-from striatal.rollout import simulate
+from striatal.sim import control, kernel
+from striatal.sim.dynamics import linearization
+from striatal.sim.rollout import simulate
 
 
 def closed_loop_eigenvalues(sign: float, plant: Plant) -> np.ndarray:

@@ -27,7 +27,7 @@ def test_section_items_become_numpydoc_descriptions() -> None:
     pytest.importorskip("griffe", reason="needs mkdocstrings-python (the [dev] extra)")
     ext = _extension()
     text = (
-        "Summary, see :func:`~striatal.kernel.rk4_step`.\n\n"
+        "Summary, see :func:`~striatal.sim.kernel.rk4_step`.\n\n"
         "Parameters\n----------\n"
         "state : (4,) [x, x_dot, theta, theta_dot]\n    continued.\n"
         "width, height : image size [px].\n\n"
@@ -35,7 +35,7 @@ def test_section_items_become_numpydoc_descriptions() -> None:
     )
     out = ext.plain_roles(ext.split_items(text))  # type: ignore[attr-defined]
     assert out.splitlines() == [
-        "Summary, see `striatal.kernel.rk4_step`.",
+        "Summary, see `striatal.sim.kernel.rk4_step`.",
         "",
         "Parameters",
         "----------",
@@ -77,7 +77,10 @@ def test_api_reference_builds_in_strict_mode(tmp_path: Path) -> None:
     for module in ("stats", "evaluate", "profiles"):
         assert f'id="striatal.{module}"' in learning, module
     training = (site / "api" / "training" / "index.html").read_text(encoding="utf-8")
-    assert 'id="striatal.training.train"' in training and 'id="striatal.rundir"' in training
+    assert (
+        'id="striatal.experiments.training.train"' in training
+        and 'id="striatal.io.rundir"' in training
+    )
     # Re-exports are documented once, where they are defined.
     assert 'id="striatal.learners.LearnerConfig"' not in learning
     # The tutorial is a page with its stored outputs; the architecture page is built.

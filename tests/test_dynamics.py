@@ -10,9 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numba import njit
 
-from striatal import dynamics, kernel
 from striatal.params import Controller, Plant, Simulation
-from striatal.rollout import NO_PROTOCOL, simulate
+from striatal.sim import dynamics, kernel
+from striatal.sim.rollout import NO_PROTOCOL, simulate
 
 
 def test_free_pendulum_conserves_energy(plant: Plant) -> None:

@@ -21,7 +21,7 @@ from striatal.envs import (
 )
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
-from striatal.rollout import Protocol, Trajectory, simulate
+from striatal.sim.rollout import Protocol, Trajectory, simulate
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ import pytest
 
 from striatal.errors import ParameterError
 from striatal.params import Plant
-from striatal.render import cartpole_frame
+from striatal.viz.render import cartpole_frame
 
 
 def _pole_pixels(img: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""striatal.evaluate.pass_probability and ``striatal evaluate``: the noisy success test."""
+"""pass_probability and ``striatal evaluate``: the noisy success test."""
 
 from __future__ import annotations
 
@@ -13,7 +13,8 @@ import pytest
 
 from striatal.cli import main
 from striatal.errors import ParameterError
-from striatal.evaluate import MAX_DRAWS, check_draws, pass_probability
+from striatal.experiments.evaluate import MAX_DRAWS, check_draws, pass_probability
+from striatal.experiments.stats import wilson_interval
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
     CHAPTER_INITIAL_W,
@@ -21,8 +22,7 @@ from striatal.params import (
     Plant,
     Simulation,
 )
-from striatal.rollout import Protocol, run_trial, simulate
-from striatal.stats import wilson_interval
+from striatal.sim.rollout import Protocol, run_trial, simulate
 
 SHORT = Simulation(duration=40.0)
 

@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-from striatal import experiments
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError
+from striatal.experiments import runner as experiments
 from striatal.learn import LearnerConfig, random_initial_gains, train
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
@@ -324,7 +324,7 @@ class KernelCalls:
     """Counts the calls of the kernel's trial entry (every simulated trial goes through it)."""
 
     def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
-        from striatal import kernel
+        from striatal.sim import kernel
 
         self.n = 0
         real = kernel.run_trial
@@ -380,7 +380,7 @@ def test_pgpe_control_draws_the_learners_perturbations(monkeypatch: pytest.Monke
     from striatal.learners import control_config, default_config, learning_step
     from striatal.learners.common import initial_state
     from striatal.learners.pgpe import PgpeRule
-    from striatal.rollout import Protocol
+    from striatal.sim.rollout import Protocol
 
     seen: dict[str, list[dict[str, Any]]] = {"learner": [], "control": []}
     real = PgpeRule.plan
@@ -421,7 +421,7 @@ def test_a_second_sweep_on_a_locked_out_is_refused(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """Issue 16 item 2: one line, exit 2, nothing written."""
-    from striatal.rundir import RunDir
+    from striatal.io.rundir import RunDir
 
     out = tmp_path / "s"
     with RunDir(out).lock():
@@ -436,7 +436,7 @@ def test_a_second_sweep_on_a_locked_out_is_refused(
 WATCHED = """
 import os, sys, time
 from concurrent.futures import ProcessPoolExecutor
-from striatal import experiments
+from striatal.experiments import runner as experiments
 pool = ProcessPoolExecutor(
     max_workers=2, initializer=experiments._worker_init, initargs=(os.getpid(),)
 )

@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from striatal import kernel
-from striatal.control import mean_action
-from striatal.dynamics import force, force_level_accelerations
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
-from striatal.rollout import NO_PROTOCOL, Protocol, batch_args, run_trial, simulate
+from striatal.sim import kernel
+from striatal.sim.control import mean_action
+from striatal.sim.dynamics import force, force_level_accelerations
+from striatal.sim.rollout import NO_PROTOCOL, Protocol, batch_args, run_trial, simulate
 
 
 def _force_level_run(

@@ -15,8 +15,8 @@ import pytest
 import striatal
 from striatal.cli import main
 from striatal.errors import ParameterError
+from striatal.experiments.training import floor_w1, initial_gains
 from striatal.learners import W1_FLOOR
-from striatal.training import floor_w1, initial_gains
 
 #: Seed 1's random draw has W1 = -0.336 (uniform in [-1, 1]^6 from default_rng([1, 1])).
 SEED = 1

@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from striatal import interpret
 from striatal.cli import main
-from striatal.control import balancing_mean, swingup_mean
-from striatal.dynamics import energy_error
 from striatal.errors import ParameterError
 from striatal.learn import HISTORY_COLUMNS
+from striatal.neural import interpret
 from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Plant
+from striatal.sim.control import balancing_mean, swingup_mean
+from striatal.sim.dynamics import energy_error
 
 
 def _coefs(terms: tuple[interpret.Term, ...]) -> dict[str, float]:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from striatal.params import CHAPTER_INITIAL_W, Controller, Plant, Simulation
-from striatal.rollout import Protocol, SensorNoise, run_trial, simulate
+from striatal.sim.rollout import Protocol, SensorNoise, run_trial, simulate
 
 
 def _hex(values: object) -> list[str]:

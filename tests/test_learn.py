@@ -24,7 +24,7 @@ from striatal.learners import (
 from striatal.learners import learn as train
 from striatal.learners.chapter import gain_update
 from striatal.params import CHAPTER_INITIAL_W, Controller, Plant, Simulation
-from striatal.rollout import Protocol, TrialOutcome
+from striatal.sim.rollout import Protocol, TrialOutcome
 
 START = Controller(CHAPTER_INITIAL_W, 0.6)
 
@@ -326,8 +326,8 @@ def test_library_never_imports_the_cli() -> None:
 def test_learner_layer_has_no_import_cycle() -> None:
     """No cycle through learn, learners.*, rundir or training (function-level imports too)."""
     graph = _module_graph()
-    ours = [m for m in graph if m.startswith(("striatal.learn", "striatal.rundir"))]
-    ours.append("striatal.training")
+    ours = [m for m in graph if m.startswith(("striatal.learn", "striatal.io.rundir"))]
+    ours.append("striatal.experiments.training")
 
     def reaches(start: str, goal: str) -> bool:
         seen, todo = set(), [start]
@@ -366,7 +366,7 @@ def test_resume_refuses_changed_settings_but_extends_max_trials(tmp_path: Path) 
     longer = striatal.train(out=out, resume=True, seed=1, max_trials=40)
     assert (longer.trials, longer.success) == (32, True)  # README: seed 1 succeeds after 32
     assert longer.run_id == first.run_id == json.loads((out / "result.json").read_text())["run_id"]
-    with striatal.rundir.RunDir(out).lock(), pytest.raises(DataFileError, match="in use"):
+    with striatal.io.rundir.RunDir(out).lock(), pytest.raises(DataFileError, match="in use"):
         striatal.train(out=out, resume=True)
 
 
@@ -385,7 +385,7 @@ def test_fresh_start_replaces_the_old_runs_files(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("mask", [0o022, 0o077])
 def test_written_files_follow_the_umask(tmp_path: Path, mask: int) -> None:
-    from striatal.files import write_json
+    from striatal.io.files import write_json
 
     old = os.umask(mask)
     try:

@@ -13,10 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from striatal import baselines, experiments
-from striatal.ablation import VARIANTS, build, markdown_table, runs_of, summary, variant
 from striatal.cli.learner_options import add_learner_arguments, learner_config_from
 from striatal.errors import ParameterError
+from striatal.experiments import baselines
+from striatal.experiments import runner as experiments
+from striatal.experiments.ablation import VARIANTS, build, markdown_table, runs_of, summary, variant
 from striatal.learn import random_initial_gains
 from striatal.params import Controller, Plant, Simulation
 

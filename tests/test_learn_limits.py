@@ -18,12 +18,13 @@ from typing import Any
 import pytest
 
 import striatal
-from striatal import baselines, online, rollout
 from striatal.cli import main
 from striatal.errors import ParameterError
+from striatal.experiments import baselines
 from striatal.learners import LearnerConfig, default_config, learn
 from striatal.learners import loop as loop_module
 from striatal.params import Controller, Hardware, Plant, Simulation
+from striatal.sim import online, rollout
 
 #: A controller pgpe learned with ``--robust`` (tests/test_robust_stop.py): robust.
 ROBUST_W = (

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from striatal.errors import ParameterError
+from striatal.experiments.robustness import CONDITIONS, Condition, controller_groups, evaluate
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
-from striatal.robustness import CONDITIONS, Condition, controller_groups, evaluate
-from striatal.rollout import Protocol, SensorNoise, TrialOutcome, run_trial, simulate
+from striatal.sim.rollout import Protocol, SensorNoise, TrialOutcome, run_trial, simulate
 
 FINAL = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
 

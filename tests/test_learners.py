@@ -31,7 +31,7 @@ from striatal.params import (
     Plant,
     Simulation,
 )
-from striatal.rollout import Protocol, TrialOutcome, simulate
+from striatal.sim.rollout import Protocol, TrialOutcome, simulate
 
 START = Controller(CHAPTER_INITIAL_W, 0.6)
 RANDOM_START = Controller((0.55, -0.06, 0.39, 0.63, 0.08, 0.03), 0.6)

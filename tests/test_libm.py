@@ -15,9 +15,9 @@ import sys
 import numpy as np
 import pytest
 
-from striatal import kernel
 from striatal.learners import common, pgpe
 from striatal.params import Simulation
+from striatal.sim import kernel
 
 
 def test_exp_and_log10_are_libm_bit_for_bit() -> None:
@@ -60,7 +60,7 @@ def test_pgpe_spread_update_uses_libm_exp(rate: float) -> None:
 
 
 def test_the_ufuncs_compile_at_their_first_call_not_at_import() -> None:
-    # a signature list would compile them at every import of striatal.kernel (0.2 s of
+    # a signature list would compile them at every import of striatal.sim.kernel (0.2 s of
     # LLVM work at the start of every command, and a wider window in which a Ctrl-C
     # has to wait for Numba: striatal.interrupts)
     script = (

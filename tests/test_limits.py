@@ -13,7 +13,7 @@ import pytest
 from striatal.cli import OneLineParser
 from striatal.cli.guards import bounded_float, bounded_int
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import (
+from striatal.io.files import (
     MAX_INPUT_BYTES,
     array_rows,
     check_out_dir,
@@ -179,7 +179,7 @@ def test_import_striatal_is_light_and_still_registers_the_env() -> None:
         "if m in sys.modules); "
         "import gymnasium; "
         "print(heavy, 'striatal/CartPoleSwingUp-v0' in gymnasium.envs.registry, "
-        "striatal.Plant().length, striatal.kernel.__name__)"
+        "striatal.Plant().length, striatal.sim.kernel.__name__)"
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert r.stdout.split() == ["[]", "True", "1.0", "striatal.kernel"]
+    assert r.stdout.split() == ["[]", "True", "1.0", "striatal.sim.kernel"]

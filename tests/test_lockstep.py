@@ -1,7 +1,7 @@
 """The lockstep batch kernel: its polynomial sin/cos, and its trials against the scalar kernel.
 
-:func:`striatal.kernel.run_trials_lockstep` advances all trials of a block together
-with sin/cos from :func:`striatal.kernel.sincos_poly` (no libm call, so the loops
+:func:`striatal.sim.kernel.run_trials_lockstep` advances all trials of a block together
+with sin/cos from :func:`striatal.sim.kernel.sincos_poly` (no libm call, so the loops
 over trials vectorise). It cannot equal the scalar kernel bit for bit; the tolerance
 is stated here: same outcome (reward, end step, fault, early end, switch count) and
 states, traces and statistics within 1e-8, for trials whose closed loop does not
@@ -18,9 +18,9 @@ import math
 import numpy as np
 import pytest
 
-from striatal import kernel
 from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plant, Simulation
-from striatal.rollout import Protocol, batch_args, trial_args
+from striatal.sim import kernel
+from striatal.sim.rollout import Protocol, batch_args, trial_args
 
 SIM = Simulation(duration=35.0)  # past the 30-s check of eq 24
 EXACT = [kernel.OUT_REWARD, kernel.OUT_END_STEP, kernel.OUT_FAULT, kernel.OUT_EARLY]

@@ -11,11 +11,11 @@ from typing import Any
 
 import pytest
 
-from striatal import experiments, kernel
 from striatal.cli import main
 from striatal.errors import ParameterError
+from striatal.experiments import runner as experiments
+from striatal.experiments.lockstep_sweep import BATCH_LEARNERS, execute_batch, unsupported
 from striatal.learners import LearnerConfig, default_config
-from striatal.lockstep_sweep import BATCH_LEARNERS, execute_batch, unsupported
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
     CHAPTER_INITIAL_W,
@@ -23,6 +23,7 @@ from striatal.params import (
     Plant,
     Simulation,
 )
+from striatal.sim import kernel
 
 SHORT = Simulation(duration=20.0)
 SEEDS = experiments.spawn_seeds(0, 4)

@@ -9,12 +9,12 @@ import math
 import numpy as np
 import pytest
 
-from striatal import kernel
 from striatal.cli import main
 from striatal.errors import ParameterError
-from striatal.interpret import balancing_terms, swingup_terms
+from striatal.neural.interpret import balancing_terms, swingup_terms
 from striatal.params import Controller, Plant, Simulation
-from striatal.rollout import simulate
+from striatal.sim import kernel
+from striatal.sim.rollout import simulate
 
 nengo = pytest.importorskip("nengo")
 

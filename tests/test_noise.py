@@ -1,4 +1,4 @@
-"""Noise drawn on threads (striatal.noise, bench.batch_normals): the same numbers as alone."""
+"""Noise drawn on threads (striatal.sim.noise, bench.batch_normals): the same numbers as alone."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numba
 import numpy as np
 import pytest
 
-from striatal import bench, noise
+from striatal.sim import bench, noise
 
 
 def test_parts_on_threads_draw_what_each_generator_draws_alone(

@@ -12,7 +12,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from striatal import kernel, learners, online
+from striatal import learners
 from striatal.errors import ParameterError
 from striatal.learners import learn as train
 from striatal.params import (
@@ -23,7 +23,8 @@ from striatal.params import (
     Plant,
     Simulation,
 )
-from striatal.rollout import Protocol, run_trial, simulate
+from striatal.sim import kernel, online
+from striatal.sim.rollout import Protocol, run_trial, simulate
 
 RANDOM_W = (0.55, -0.06, 0.39, 0.63, 0.08, 0.03)
 RANDOM_START = Controller(RANDOM_W, 0.6)
@@ -328,7 +329,7 @@ def test_ac_learns_within_the_trial_and_its_control_does_not() -> None:
     norms = [dict(rec.extra)["critic_norm"] for rec in c_rows]
     assert norms[0] > 0 and len(set(norms)) == len(norms)
     assert c_rows[0].reward == rows[0].reward and c_rows[0].ended_at == rows[0].ended_at
-    from striatal.experiments import control_note
+    from striatal.experiments.runner import control_note
 
     assert control_note("ac").endswith("the critic still learns (it is not part of the controller)")
     assert "critic" not in control_note("chapter")
@@ -404,7 +405,7 @@ def test_cli_train_ac_writes_its_history(tmp_path: object) -> None:
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout)
     assert result["learner"] == "ac" and result["trials"] == 3
-    from striatal.rundir import read_history
+    from striatal.io.rundir import read_history
 
     h = read_history(f"{out}/history.csv")
     assert len(h) == 3 and "critic_norm" in h.columns
@@ -414,7 +415,7 @@ def test_learning_curves_show_the_ac_columns(tmp_path: object) -> None:
     """striatal curves: a panel for each of ac's columns, holding the history's values."""
     pytest.importorskip("matplotlib")
     import striatal
-    from striatal import plots
+    from striatal.viz import plots
 
     run = striatal.train(learner="ac", init="random", seed=0, max_trials=3, out=f"{tmp_path}/a")
     h = plots.read_history(f"{tmp_path}/a/history.csv")

@@ -12,7 +12,7 @@ from striatal.errors import ParameterError
 from striatal.learners import LearnerState, default_config, initial_state, learning_step
 from striatal.learners.pgpe import PGPE
 from striatal.params import Controller, Plant, Simulation
-from striatal.rollout import Protocol
+from striatal.sim.rollout import Protocol
 
 W0 = (0.6, -0.4, -0.9, 0.9, 0.1, -1.2)
 

@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 
 import striatal
-from striatal import plots
 from striatal.cli import main
-from striatal.control import switch_weights
 from striatal.errors import DataFileError, ParameterError
 from striatal.learn import HISTORY_COLUMNS
 from striatal.params import CHAPTER_FINAL_W, Controller, Plant, Simulation
-from striatal.rollout import Trajectory, simulate
+from striatal.sim.control import switch_weights
+from striatal.sim.rollout import Trajectory, simulate
+from striatal.viz import plots
 
 
 @pytest.fixture(scope="module")
@@ -336,9 +336,9 @@ def _fake_frame(state, plant, *, mode, t, theta_c, width, height, x_limit):  # t
 
 @pytest.fixture
 def fake_render(monkeypatch: pytest.MonkeyPatch) -> None:
-    mod = types.ModuleType("striatal.render")
+    mod = types.ModuleType("striatal.viz.render")
     mod.cartpole_frame = _fake_frame  # type: ignore[attr-defined]
-    monkeypatch.setitem(sys.modules, "striatal.render", mod)
+    monkeypatch.setitem(sys.modules, "striatal.viz.render", mod)
     monkeypatch.setattr(striatal, "render", mod, raising=False)
 
 
@@ -363,7 +363,7 @@ def test_animate_refuses_bad_options(tmp_path: Path, fake_render: None) -> None:
 
 
 def test_gif_with_the_real_renderer(tmp_path: Path) -> None:
-    pytest.importorskip("striatal.render")
+    pytest.importorskip("striatal.viz.render")
     from PIL import Image
 
     out = tmp_path / "run.gif"

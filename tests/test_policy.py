@@ -7,11 +7,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from striatal import kernel
 from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plant, Simulation
-from striatal.policy import eligibilities, log_prob_of, rescaling
-from striatal.reference import reference_trial
-from striatal.rollout import Protocol, run_trial, trial_args
+from striatal.sim import kernel
+from striatal.sim.policy import eligibilities, log_prob_of, rescaling
+from striatal.sim.reference import reference_trial
+from striatal.sim.rollout import Protocol, run_trial, trial_args
 
 
 def fd_score(
@@ -40,8 +40,8 @@ def test_eligibilities_equal_rescaled_finite_difference_score(
     c = Controller(CHAPTER_FINAL_W, 0.9, balance_sign=sign, switch=switch, inhibition=3.0)
     s = np.array(state)
     W = np.array(c.gains)
-    from striatal.control import mean_action
-    from striatal.policy import sigma
+    from striatal.sim.control import mean_action
+    from striatal.sim.policy import sigma
 
     a = float(mean_action(s, c, plant)) + float(sigma(W[5])) * noise
     e = eligibilities(a, s, W, c, plant)

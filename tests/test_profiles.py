@@ -10,16 +10,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from striatal import plots
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError
-from striatal.profiles import (
+from striatal.experiments.profiles import (
     NOTE_TRIALS_FALLBACK,
     performance_profile,
     read_sweep_runs,
     sweep_profiles,
 )
-from striatal.stats import wilson_interval
+from striatal.experiments.stats import wilson_interval
+from striatal.viz import plots
 
 HEADER_OLD = "arm,method,init,seed,alpha,gamma,success,trials,wall_seconds\n"
 HEADER_NEW = "arm,seed,success,trials,simulations,simulated_seconds\n"

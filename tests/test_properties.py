@@ -31,11 +31,11 @@ from hypothesis import strategies as st
 
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import read_csv, read_json
+from striatal.io.files import read_csv, read_json
 from striatal.learners import LearnerConfig
 from striatal.learners.chapter import gain_update
 from striatal.params import MAX_STEPS, Controller, Plant, Simulation, check_seed
-from striatal.rollout import Protocol, SensorNoise, run_trial, simulate
+from striatal.sim.rollout import Protocol, SensorNoise, run_trial, simulate
 
 N = int(os.environ.get("STRIATAL_HYPOTHESIS_EXAMPLES", "0"))
 PROFILE = settings(

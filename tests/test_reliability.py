@@ -41,12 +41,12 @@ import pytest
 
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError, StriatalError
-from striatal.experiments import WATCHDOG_SECONDS
-from striatal.files import read_json
+from striatal.experiments.runner import WATCHDOG_SECONDS
+from striatal.io.files import read_json
 from striatal.learners import LearnerConfig, initial_state, learning_step
 from striatal.learners.chapter import gain_update
 from striatal.params import CHAPTER_INITIAL_W, Controller, Plant, Simulation
-from striatal.rollout import Protocol, SensorNoise, run_trial
+from striatal.sim.rollout import Protocol, SensorNoise, run_trial
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "reliability.md"
@@ -294,7 +294,7 @@ def _folder_result(out: Path) -> None:
 
 def _huge_result(out: Path) -> None:
     """A sparse file one byte over the limit: refused by its size, never read."""
-    from striatal.files import MAX_INPUT_BYTES
+    from striatal.io.files import MAX_INPUT_BYTES
 
     out.mkdir(parents=True)
     with (out / "result.json").open("wb") as fh:
@@ -584,7 +584,7 @@ def resume_mixed(name: str) -> Callable[[Path], tuple[bool, str]]:
 
 def two_trains(tmp: Path) -> tuple[bool, str]:
     """A second train on a folder another process holds (the lock taken here)."""
-    from striatal.rundir import RunDir
+    from striatal.io.rundir import RunDir
 
     out = tmp / "OUT"
     with RunDir(out).lock():
@@ -601,7 +601,7 @@ def locked_out(argv: tuple[str, ...]) -> Callable[[Path], tuple[bool, str]]:
     """``striatal ARGV --out DIR`` while this process holds DIR's lock: refused, no file."""
 
     def run(tmp: Path) -> tuple[bool, str]:
-        from striatal.rundir import RunDir
+        from striatal.io.rundir import RunDir
 
         out = tmp / "OUT"
         with RunDir(out).lock():
@@ -884,7 +884,7 @@ def interrupt_before_history_row(tmp: Path) -> tuple[bool, str]:
     """
     from unittest import mock
 
-    import striatal.rundir as train_cli
+    import striatal.io.rundir as train_cli
 
     real = train_cli.csv_text
     calls = {"rows": 0}
@@ -1198,7 +1198,7 @@ def watchdog_without_pdeathsig(tmp: Path) -> tuple[bool, str]:
     This process forks a parent, which forks the worker (it runs the pool's
     initializer) and then exits at once with no clean-up, as a SIGKILL leaves it.
     """
-    import striatal.experiments as experiments
+    import striatal.experiments.runner as experiments
 
     read_end, write_end = os.pipe()
     parent = os.fork()

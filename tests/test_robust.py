@@ -1,4 +1,4 @@
-"""The robustness set of issue 15 (:mod:`striatal.robust`) and ``--robust`` on the CLI."""
+"""The robustness set of issue 15 (:mod:`striatal.sim.robust`) and ``--robust`` on the CLI."""
 
 from __future__ import annotations
 
@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from striatal.baselines import lqr_controller
 from striatal.cli import main
+from striatal.experiments.baselines import lqr_controller
 from striatal.params import Controller, Hardware, Plant, Simulation
-from striatal.robust import ROBUST_CASES, check_robust, run_case
-from striatal.rollout import simulate
+from striatal.sim.robust import ROBUST_CASES, check_robust, run_case
+from striatal.sim.rollout import simulate
 
 CORNER = "pole mass x1.2, length x0.8"
 
@@ -153,8 +153,8 @@ def test_simulate_hold_force_and_track_options(capsys: pytest.CaptureFixture[str
 def test_pass_probability_runs_its_trials_on_the_hardware_given() -> None:
     """evaluate's trials take the motor and track: a 4-m track fails the mean policy
     (final W reaches |x| = 6 m) and every noisy trial that goes as far."""
-    from striatal.evaluate import pass_probability
-    from striatal.rollout import Protocol
+    from striatal.experiments.evaluate import pass_probability
+    from striatal.sim.rollout import Protocol
 
     free = pass_probability(Plant(), Controller(), Simulation(), Protocol(), 5, 0)
     track = pass_probability(

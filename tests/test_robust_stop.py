@@ -19,12 +19,13 @@ import numpy as np
 import pytest
 
 import striatal
-from striatal import baselines, kernel, rollout
 from striatal.cli import main
 from striatal.errors import ParameterError
+from striatal.experiments import baselines
 from striatal.learners import default_config, learn
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
-from striatal.robust import (
+from striatal.sim import kernel, rollout
+from striatal.sim.robust import (
     ROBUST_CASES,
     ROBUST_HARDWARE,
     STOP_ORDER,
@@ -33,7 +34,7 @@ from striatal.robust import (
     run_case,
     stop_check,
 )
-from striatal.rollout import Protocol, run_trial
+from striatal.sim.rollout import Protocol, run_trial
 
 DT = 0.01
 #: A controller pgpe learned with ``--robust`` (train --learner pgpe --robust --init

@@ -1,4 +1,4 @@
-"""Intervals and tests of striatal.stats against textbook values and edge cases."""
+"""Intervals and tests of striatal.experiments.stats against textbook values and edge cases."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import warnings
 import numpy as np
 import pytest
 
-from striatal import stats
 from striatal.errors import ParameterError
+from striatal.experiments import stats
 
 
 def test_wilson_textbook_value() -> None:

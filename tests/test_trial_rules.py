@@ -1,4 +1,4 @@
-"""The trial rules of eqs 24-25 and the fault test: :func:`striatal.kernel.judge`.
+"""The trial rules of eqs 24-25 and the fault test: :func:`striatal.sim.kernel.judge`.
 
 One compiled function states them; the kernel's trial and the Gymnasium task both
 call it (tests/test_envs.py compares the two on failing and early-ended trials).
@@ -11,9 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from striatal import kernel
 from striatal.params import Controller, Plant, Simulation
-from striatal.rollout import Protocol, protocol_args, simulate
+from striatal.sim import kernel
+from striatal.sim.rollout import Protocol, protocol_args, simulate
 
 ARGS = protocol_args(Protocol(), 0.01, 6000)  # check at step 3000, end at step 6000
 UP = (0.0, 0.0, 0.0, 0.0)

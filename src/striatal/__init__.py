@@ -1,7 +1,7 @@
 """striatal: the chapter's basal-ganglia switching REINFORCE learner on the cart-pole.
 
 The physics, the controllers and the learning step exist once, in
-:mod:`striatal.kernel`; everything else is a front end to it.
+:mod:`striatal.sim.kernel`; everything else is a front end to it.
 
 The names below are loaded on first use (PEP 562), so that ``import striatal``
 costs milliseconds and the command line can start, and be interrupted with
@@ -12,8 +12,8 @@ Ctrl-C, before NumPy and Numba load (docs/reliability.md). The Python API:
 - :func:`check_robust`: the robustness set of ``striatal simulate --robust`` (9 runs,
   the motor force held: :class:`Hardware`);
 - :mod:`striatal.learners`: the learning rules, their presets and the trial loop;
-- :mod:`striatal.rundir`: the files of a run (checkpoint, history.csv, result.json);
-- :mod:`striatal.plots`: ``learning_curves(run.history)``, ``figure5(trajectory)``.
+- :mod:`striatal.io.rundir`: the files of a run (checkpoint, history.csv, result.json);
+- :mod:`striatal.viz.plots`: ``learning_curves(run.history)``, ``figure5(trajectory)``.
 """
 
 from __future__ import annotations
@@ -31,7 +31,10 @@ if TYPE_CHECKING:
     from types import ModuleType
     from typing import Any
 
-    from striatal import learners, plots, rundir
+    from striatal import learners
+    from striatal.experiments.training import Run, simulate, train
+    from striatal.io import rundir
+    from striatal.io.rundir import read_history, read_result
     from striatal.learners import LEARNERS, History, LearnerConfig, default_config
     from striatal.params import (
         CHAPTER_FINAL_THETA_C,
@@ -44,10 +47,9 @@ if TYPE_CHECKING:
         Simulation,
         SuccessTest,
     )
-    from striatal.robust import check_robust
-    from striatal.rollout import Protocol, Trajectory, TrialOutcome, run_trial
-    from striatal.rundir import read_history, read_result
-    from striatal.training import Run, simulate, train
+    from striatal.sim.robust import check_robust
+    from striatal.sim.rollout import Protocol, Trajectory, TrialOutcome, run_trial
+    from striatal.viz import plots
 
 __version__ = "0.1.0"
 
@@ -58,23 +60,23 @@ _FROM = {
     "CHAPTER_INITIAL_W": "striatal.params",
     "Controller": "striatal.params",
     "Hardware": "striatal.params",
-    "check_robust": "striatal.robust",
+    "check_robust": "striatal.sim.robust",
     "Plant": "striatal.params",
     "Simulation": "striatal.params",
     "SuccessTest": "striatal.params",
-    "Protocol": "striatal.rollout",
-    "Trajectory": "striatal.rollout",
-    "TrialOutcome": "striatal.rollout",
-    "run_trial": "striatal.rollout",
+    "Protocol": "striatal.sim.rollout",
+    "Trajectory": "striatal.sim.rollout",
+    "TrialOutcome": "striatal.sim.rollout",
+    "run_trial": "striatal.sim.rollout",
     "LEARNERS": "striatal.learners",
     "History": "striatal.learners",
     "LearnerConfig": "striatal.learners",
     "default_config": "striatal.learners",
-    "read_history": "striatal.rundir",
-    "read_result": "striatal.rundir",
-    "Run": "striatal.training",
-    "simulate": "striatal.training",
-    "train": "striatal.training",
+    "read_history": "striatal.io.rundir",
+    "read_result": "striatal.io.rundir",
+    "Run": "striatal.experiments.training",
+    "simulate": "striatal.experiments.training",
+    "train": "striatal.experiments.training",
 }
 
 

@@ -24,7 +24,7 @@ from striatal import interrupts
 from striatal.cli import config
 from striatal.cli.helpformat import DefaultsHelpFormatter
 from striatal.errors import StriatalError
-from striatal.files import check_no_dangling_link
+from striatal.io.files import check_no_dangling_link
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130

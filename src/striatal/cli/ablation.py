@@ -1,7 +1,7 @@
 """``striatal ablation``: the learner variants side by side from random initial gains.
 
 A thin layer over the sweep: each variant is an arm of one
-:func:`striatal.experiments.sweep` (resume, progress bar, the Ray backend, the
+:func:`striatal.experiments.runner.sweep` (resume, progress bar, the Ray backend, the
 output folder's lock); the table and ablation.json are written from its rows.
 """
 
@@ -13,13 +13,13 @@ import math
 import sys
 from typing import Any
 
-from striatal import experiments
-from striatal.ablation import VARIANT_NAMES, build, markdown_table, table_rows, variant
 from striatal.cli import config, options
 from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
-from striatal.files import atomic_write_text, check_out_dir, dumps_json, write_json
-from striatal.rundir import RunDir
+from striatal.experiments import runner as experiments
+from striatal.experiments.ablation import VARIANT_NAMES, build, markdown_table, table_rows, variant
+from striatal.io.files import atomic_write_text, check_out_dir, dumps_json, write_json
+from striatal.io.rundir import RunDir
 
 COMMAND = "ablation"
 ORDER = 45

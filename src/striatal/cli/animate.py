@@ -10,7 +10,7 @@ from pathlib import Path
 from striatal.cli import options
 from striatal.cli.options import add_gain_source_arguments, controller_and_plant
 from striatal.errors import ParameterError
-from striatal.files import dumps_json
+from striatal.io.files import dumps_json
 from striatal.limits import count_of_steps
 
 COMMAND = "animate"
@@ -18,7 +18,7 @@ ORDER = 42
 HELP = "animate one run of the switching controller as a GIF (or MP4 with ffmpeg)"
 DESCRIPTION = (
     "Simulate one run with the mean policy and write an animation: a frame every "
-    "speed / fps seconds of simulated time, drawn by striatal.render.cartpole_frame. "
+    "speed / fps seconds of simulated time, drawn by striatal.viz.render.cartpole_frame. "
     "A .gif is written with Pillow; a .mp4 needs ffmpeg on PATH. Gains as for "
     "striatal figure."
 )
@@ -44,8 +44,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from striatal import plots
-    from striatal.rollout import simulate
+    from striatal.sim.rollout import simulate
+    from striatal.viz import plots
 
     out = plots.check_image_path(args.out, (".gif", ".mp4"))
     if out.suffix.lower() == ".mp4" and plots.ffmpeg_path() is None:

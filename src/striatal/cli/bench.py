@@ -11,10 +11,10 @@ from dataclasses import replace
 from types import ModuleType
 from typing import Any
 
-from striatal.bench import load_harness
 from striatal.cli.guards import bounded_float, bounded_int
-from striatal.files import dumps_json
+from striatal.io.files import dumps_json
 from striatal.params import check_seed
+from striatal.sim.bench import load_harness
 
 COMMAND = "bench"
 ORDER = 90

@@ -7,10 +7,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from striatal import experiments
 from striatal.cli import options
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import dumps_json, read_json, write_json
+from striatal.experiments import runner as experiments
+from striatal.io.files import dumps_json, read_json, write_json
 
 COMMAND = "compare"
 ORDER = 41

@@ -121,7 +121,7 @@ def read_toml(path: Path) -> dict[str, Any]:
 
 def read_summary_options(path: Path, command: str) -> dict[str, Any]:
     """The options recorded in ``path`` (a summary.json or its folder) by ``command``."""
-    from striatal.files import read_json
+    from striatal.io.files import read_json
 
     p = path / "summary.json" if path.is_dir() else path
     data = read_json(p, what="summary")

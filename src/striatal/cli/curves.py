@@ -8,8 +8,8 @@ from pathlib import Path
 
 from striatal.cli import options
 from striatal.errors import ParameterError
-from striatal.files import dumps_json
-from striatal.rundir import read_history
+from striatal.io.files import dumps_json
+from striatal.io.rundir import read_history
 
 COMMAND = "curves"
 ORDER = 41
@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from striatal import plots
+    from striatal.viz import plots
 
     out = plots.check_image_path(args.out, (".png", ".pdf", ".svg"))
     if args.window < 1:

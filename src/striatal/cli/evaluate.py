@@ -7,9 +7,9 @@ import sys
 
 from striatal.cli import options, progress
 from striatal.errors import ParameterError
-from striatal.files import dumps_json
+from striatal.io.files import dumps_json
 from striatal.params import Controller, Plant, Simulation
-from striatal.rollout import Protocol
+from striatal.sim.rollout import Protocol
 
 COMMAND = "evaluate"
 ORDER = 15
@@ -54,7 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from striatal.evaluate import check_draws, pass_probability
+    from striatal.experiments.evaluate import check_draws, pass_probability
     from striatal.params import check_seed
 
     check_draws(args.draws)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from striatal.cli import options
 from striatal.errors import ParameterError
-from striatal.files import dumps_json
+from striatal.io.files import dumps_json
 from striatal.limits import count_of_steps
 
 COMMAND = "figure"
@@ -42,8 +42,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from striatal import plots
-    from striatal.rollout import simulate
+    from striatal.sim.rollout import simulate
+    from striatal.viz import plots
 
     out = plots.check_image_path(args.out, (".png", ".pdf", ".svg"))
     controller, plant = options.controller_and_plant(args)

@@ -9,9 +9,9 @@ from typing import Any
 
 from striatal.cli import options
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import dumps_json
+from striatal.io.files import dumps_json
+from striatal.io.rundir import read_history, read_result
 from striatal.params import Plant
-from striatal.rundir import read_history, read_result
 
 COMMAND = "interpret"
 ORDER = 45
@@ -49,7 +49,7 @@ def _from_result(path: Path) -> tuple[list[float], float, str, Plant, str]:
 
 def build(args: argparse.Namespace) -> dict[str, Any]:
     """The JSON reading for the parsed command line (validates everything first)."""
-    from striatal import interpret
+    from striatal.neural import interpret
 
     learner = "chapter"
     if args.result is not None:

@@ -108,10 +108,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from striatal.cli import options
-    from striatal.files import check_out_dir, dumps_json, write_csv, write_json
-    from striatal.kernel import wrap_angle
+    from striatal.io.files import check_out_dir, dumps_json, write_csv, write_json
     from striatal.neural.network import NetworkConfig, require_nengo
     from striatal.neural.run import NEURAL_TRAJ_COLUMNS, run_network
+    from striatal.sim.kernel import wrap_angle
 
     controller, plant = options.controller_and_plant(args)
     if not args.learn and args.alpha is not None:
@@ -130,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         check_out_dir(args.out)
     if args.circuit_figure is not None:
-        from striatal.plots import check_image_path
+        from striatal.viz.plots import check_image_path
 
         check_image_path(args.circuit_figure, (".png", ".svg", ".pdf"))
     require_nengo()
@@ -182,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
     }
     if args.out is not None:
         from striatal.neural.figures import activity_figure
-        from striatal.plots import save_figure
+        from striatal.viz.plots import save_figure
 
         write_csv(args.out / "trajectory.csv", NEURAL_TRAJ_COLUMNS, result.data.tolist())
         t = [(i + 1) * sim.dt for i in range(result.rates.shape[0])]
@@ -195,7 +195,7 @@ def run(args: argparse.Namespace) -> int:
         save_figure(activity_figure(result, controller.theta_c), args.out / "activity.png")
     if args.circuit_figure is not None:
         from striatal.neural.figures import circuit_figure
-        from striatal.plots import save_figure
+        from striatal.viz.plots import save_figure
 
         save_figure(circuit_figure(controller, plant, config.selection), args.circuit_figure)
     if args.json:
@@ -235,7 +235,7 @@ def run_learning(
     seed: int,
 ) -> int:
     """``--learn``: the dopamine stage over trials; one line per trial, or one JSON object."""
-    from striatal.files import dumps_json, write_csv, write_json
+    from striatal.io.files import dumps_json, write_csv, write_json
     from striatal.neural.learn import NeuralTrial, learn_network
 
     if args.circuit_figure is not None:

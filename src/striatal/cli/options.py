@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from striatal.errors import ParameterError
+from striatal.io.rundir import read_result
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -21,7 +22,6 @@ from striatal.params import (
     Simulation,
     check_gains,
 )
-from striatal.rundir import read_result
 
 
 def out_path(text: str) -> Path:

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from striatal.errors import ParameterError
-from striatal.files import dumps_json
+from striatal.io.files import dumps_json
 
 COMMAND = "profile"
 ORDER = 41
@@ -35,8 +35,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from striatal import plots
-    from striatal.profiles import X_LABELS, sweep_profiles
+    from striatal.experiments.profiles import X_LABELS, sweep_profiles
+    from striatal.viz import plots
 
     out = plots.check_image_path(args.out, (".png", ".pdf", ".svg"))
     if not 10 <= args.dpi <= 1000:

@@ -6,13 +6,13 @@ import argparse
 import sys
 from pathlib import Path
 
-from striatal import baselines
 from striatal.cli import lists, options
 from striatal.cli.lists import CommaList
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import atomic_write_text, dumps_json, read_json
+from striatal.experiments import baselines
+from striatal.experiments.robustness import CONDITIONS, controller_groups, robustness_table
+from striatal.io.files import atomic_write_text, dumps_json, read_json
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant
-from striatal.robustness import CONDITIONS, controller_groups, robustness_table
 
 COMMAND = "robustness"
 ORDER = 50

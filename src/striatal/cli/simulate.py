@@ -7,11 +7,11 @@ import sys
 
 from striatal.cli import options
 from striatal.errors import ParameterError
-from striatal.files import array_rows, check_out_dir, dumps_json, write_csv, write_json
-from striatal.kernel import TRAJ_COLUMNS
+from striatal.io.files import array_rows, check_out_dir, dumps_json, write_csv, write_json
 from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
-from striatal.robust import RobustReport, check_robust
-from striatal.rollout import Trajectory, simulate
+from striatal.sim.kernel import TRAJ_COLUMNS
+from striatal.sim.robust import RobustReport, check_robust
+from striatal.sim.rollout import Trajectory, simulate
 
 COMMAND = "simulate"
 ORDER = 10

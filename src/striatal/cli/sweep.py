@@ -6,14 +6,15 @@ import argparse
 import sys
 from typing import Any
 
-from striatal import baselines, experiments
 from striatal.cli import config, learner_options, options
 from striatal.cli.config import SEEDS, WORKERS
 from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
-from striatal.files import check_out_dir, dumps_json
+from striatal.experiments import baselines
+from striatal.experiments import runner as experiments
+from striatal.io.files import check_out_dir, dumps_json
 from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W, Simulation
-from striatal.rollout import Protocol
+from striatal.sim.rollout import Protocol
 
 COMMAND = "sweep"
 ORDER = 40

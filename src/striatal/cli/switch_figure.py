@@ -8,7 +8,7 @@ from pathlib import Path
 
 from striatal.cli import options
 from striatal.cli.lists import CommaList
-from striatal.files import dumps_json
+from striatal.io.files import dumps_json
 from striatal.params import CHAPTER_FINAL_THETA_C, check_theta_c
 
 COMMAND = "switch-figure"
@@ -49,8 +49,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from striatal import plots
     from striatal.errors import ParameterError
+    from striatal.viz import plots
 
     out = plots.check_image_path(args.out, (".png", ".pdf", ".svg"))
     theta_c = check_theta_c(args.theta_c)

@@ -16,11 +16,11 @@ import numpy as np
 from striatal import interrupts
 from striatal.cli import EXIT_INTERRUPTED, learner_options, options
 from striatal.errors import ParameterError
-from striatal.files import check_out_dir, dumps_json
+from striatal.experiments.training import DEFAULT_CHECKPOINT_EVERY, train
+from striatal.io.files import check_out_dir, dumps_json
+from striatal.io.rundir import RunDir
 from striatal.learners import LearnerState, TrialRecord, default_config
 from striatal.params import CHAPTER_INITIAL_THETA_C, Plant, Simulation
-from striatal.rundir import RunDir
-from striatal.training import DEFAULT_CHECKPOINT_EVERY, train
 
 COMMAND = "train"
 ORDER = 20

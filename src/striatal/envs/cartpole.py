@@ -1,7 +1,7 @@
 """``striatal/CartPoleSwingUp-v0``: the chapter's cart-pole as a Gymnasium environment.
 
-One env step is one :func:`striatal.kernel.rk4_step` of length dt with the
-commanded cart acceleration u held, exactly as :func:`striatal.kernel.run_trial`
+One env step is one :func:`striatal.sim.kernel.rk4_step` of length dt with the
+commanded cart acceleration u held, exactly as :func:`striatal.sim.kernel.run_trial`
 advances a trial, so a policy that returns the kernel's mean action reproduces
 ``striatal simulate`` step for step.
 """
@@ -17,10 +17,10 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.wrappers import TimeLimit
 
-from striatal import kernel
 from striatal.envs.task import SwingUpTask, observe, outcome, start_state
 from striatal.errors import MissingExtraError, ParameterError
-from striatal.render import cartpole_frame, follow_camera
+from striatal.sim import kernel
+from striatal.viz.render import cartpole_frame, follow_camera
 
 __all__ = [
     "RENDER_HEIGHT",

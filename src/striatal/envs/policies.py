@@ -1,6 +1,6 @@
 """The chapter's switching controller as a policy for the Gymnasium environments.
 
-The action is the kernel's mean action :func:`striatal.kernel.policy_mean` (eq 22
+The action is the kernel's mean action :func:`striatal.sim.kernel.policy_mean` (eq 22
 balancing, eq 23 swing-up, switched at theta_c, eq 21), optionally with the
 Gaussian exploration of eq 5.
 """
@@ -12,7 +12,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from striatal import kernel
 from striatal.envs.task import ObservationKind
 from striatal.errors import ParameterError
 from striatal.params import (
@@ -23,6 +22,7 @@ from striatal.params import (
     Plant,
     SwitchKind,
 )
+from striatal.sim import kernel
 
 __all__ = [
     "SwitchingController",

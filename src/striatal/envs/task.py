@@ -1,7 +1,7 @@
 """The swing-up task shared by the scalar and the vector environment.
 
-Settings, observations and rewards only: the physics is :func:`striatal.kernel.rk4_step`
-(scalar env) and :func:`striatal.kernel.step_batch` (vector env). Every function
+Settings, observations and rewards only: the physics is :func:`striatal.sim.kernel.rk4_step`
+(scalar env) and :func:`striatal.sim.kernel.step_batch` (vector env). Every function
 here works on batches (leading axis B) so that both environments compute their
 observations and rewards with the very same NumPy calls.
 """
@@ -15,7 +15,6 @@ from typing import Any, Literal
 
 import numpy as np
 
-from striatal import kernel
 from striatal.errors import ParameterError
 from striatal.params import (
     CHAPTER_THETA0,
@@ -25,7 +24,8 @@ from striatal.params import (
     require_finite,
     require_finite_positive,
 )
-from striatal.rollout import Protocol, protocol_args
+from striatal.sim import kernel
+from striatal.sim.rollout import Protocol, protocol_args
 
 __all__ = [
     "DEFAULT_U_MAX",
@@ -163,7 +163,7 @@ RESET_OPTIONS = ("initial_state", "perturbation")
 def check_perturbation(value: float) -> float:
     """A perturbation half-width in [0, 1e8) [state units], or ParameterError.
 
-    1e8 is the kernel's blow-up bound (:data:`striatal.kernel.BLOW_UP`): a start
+    1e8 is the kernel's blow-up bound (:data:`striatal.sim.kernel.BLOW_UP`): a start
     beyond it would end the episode as a fault on its first step.
     """
     p = require_finite("perturbation", value)
@@ -194,7 +194,7 @@ def check_reset_options(
 
 def check_state(state: object) -> tuple[float, float, float, float]:
     """A finite start state [x, x_dot, theta, theta_dot], each |component| < 1e8
-    (:data:`striatal.kernel.BLOW_UP`), or ParameterError."""
+    (:data:`striatal.sim.kernel.BLOW_UP`), or ParameterError."""
     try:
         s = np.asarray(state, dtype=float).ravel()
     except (TypeError, ValueError):
@@ -232,7 +232,7 @@ def start_state(
 
 
 def wrap(theta: np.ndarray) -> np.ndarray:
-    """Angles wrapped to (-pi, pi]: :func:`striatal.kernel.wrap_angle` over an array."""
+    """Angles wrapped to (-pi, pi]: :func:`striatal.sim.kernel.wrap_angle` over an array."""
     result: np.ndarray = kernel.wrap_angles(np.asarray(theta, dtype=float))
     return result
 
@@ -277,9 +277,9 @@ def outcome(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(reward, terminated, truncated, fault) for states (B, 4) just reached after ``steps`` steps.
 
-    The trial rules are the kernel's own compiled :func:`striatal.kernel.judge`
+    The trial rules are the kernel's own compiled :func:`striatal.sim.kernel.judge`
     (eqs 24-25, docs/paper-notes.md section 5), the function
-    :func:`striatal.kernel.run_trial` applies after every step: a non-finite or
+    :func:`striatal.sim.kernel.run_trial` applies after every step: a non-finite or
     blown-up state ends the episode (termination, failure reward); at the check step
     (t = 30 s) the eq-24 test |x| > check_x or |theta| > check_theta terminates with
     the failure reward; at the last step the time limit truncates and the chapter

@@ -14,7 +14,6 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from striatal import kernel
 from striatal.envs.cartpole import (
     action_space,
     check_render_mode,
@@ -31,6 +30,7 @@ from striatal.envs.task import (
     start_state,
 )
 from striatal.errors import ParameterError
+from striatal.sim import kernel
 
 __all__ = [
     "CartPoleSwingUpVectorEnv",

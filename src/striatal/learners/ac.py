@@ -13,7 +13,7 @@ v <- v + beta delta(t) z(t). With ``normalise`` the actor's factor is delta over
 running rms (mean square tracked at ``rpe_rate`` per step, carried across trials, memory
 "rpe_square"), so that alpha does not depend on the reward's scale. W changes within the
 trial; the compiled loop is
-:func:`striatal.online.run_online_trial`, on the kernel's functions.
+:func:`striatal.sim.online.run_online_trial`, on the kernel's functions.
 
 Between trials: the critic v carries over; theta_c follows eq 21 (``theta_c_rule``)
 as in the chapter; D is reset (or carried, ``reset_trace``). The success test
@@ -34,15 +34,22 @@ from typing import Any
 
 import numpy as np
 
-from striatal.kernel import sigma_of
 from striatal.learners.chapter import finite_trace, policy_plan
 from striatal.learners.common import theta_c_rule
 from striatal.learners.config import Eligibility, LearnerConfig, ThetaCRule, pick
 from striatal.learners.rule import Rule, TrialPlan, Update
 from striatal.learners.state import LearnerState
-from striatal.online import N_FEATURES, N_STATS, STAT_N, STAT_RETURN, STAT_SUM_DELTA, online_trial
 from striatal.params import Plant
-from striatal.rollout import TrialOutcome
+from striatal.sim.kernel import sigma_of
+from striatal.sim.online import (
+    N_FEATURES,
+    N_STATS,
+    STAT_N,
+    STAT_RETURN,
+    STAT_SUM_DELTA,
+    online_trial,
+)
+from striatal.sim.rollout import TrialOutcome
 
 __all__ = ["AC", "AcConfig", "AcRule", "initial_critic"]
 
@@ -119,7 +126,7 @@ class AcRule(Rule):
         )
 
     def run(self, config: LearnerConfig, plan: TrialPlan, trial: Mapping[str, Any]) -> TrialOutcome:
-        """The online trial (:func:`striatal.online.online_trial`); the gains at its end
+        """The online trial (:func:`striatal.sim.online.online_trial`); the gains at its end
         and its statistics go to the plan's scratch, the critic is updated there."""
         c = pick(AcConfig, config)
         result = online_trial(

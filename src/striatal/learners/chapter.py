@@ -15,13 +15,13 @@ from types import MappingProxyType
 
 import numpy as np
 
-from striatal.kernel import sigma_of
 from striatal.learners.common import theta_c_rule
 from striatal.learners.config import Eligibility, LearnerConfig, ThetaCRule, pick
 from striatal.learners.rule import Rule, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Plant
-from striatal.rollout import TrialOutcome
+from striatal.sim.kernel import sigma_of
+from striatal.sim.rollout import TrialOutcome
 
 __all__ = ["CHAPTER", "ChapterConfig", "ChapterRule", "gain_update", "policy_plan", "policy_trace"]
 
@@ -140,7 +140,7 @@ class ChapterRule(Rule):
         )
 
     def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
-        """sigma = exp(W6)-like policy std of eq 5 (:func:`striatal.kernel.sigma_of`)."""
+        """sigma = exp(W6)-like policy std of eq 5 (:func:`striatal.sim.kernel.sigma_of`)."""
         return (("sigma", float(sigma_of(plan.W[5]))),)
 
 

@@ -10,8 +10,6 @@ import math
 
 import numpy as np
 
-from striatal import kernel
-from striatal.dynamics import energy_error, wrap_angle
 from striatal.learners.config import W1_FLOOR, ThetaCRule
 from striatal.learners.state import LearnerState
 from striatal.params import (
@@ -23,7 +21,9 @@ from striatal.params import (
     check_seed,
     check_theta_c,
 )
-from striatal.rollout import Protocol, TrialOutcome, run_trial
+from striatal.sim import kernel
+from striatal.sim.dynamics import energy_error, wrap_angle
+from striatal.sim.rollout import Protocol, TrialOutcome, run_trial
 
 __all__ = [
     "CLOSENESS_DECADES",

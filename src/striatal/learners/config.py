@@ -87,7 +87,7 @@ class LearnerConfig:
     robust : the robust stop rule (issue 15, any rule): every trial and check holds the
         motor force of eq 12 over each step (ac's own online trial still holds u), and
         a controller that passes the success test must also pass the robustness set
-        (:func:`striatal.robust.stop_check`, every run counted) for the run to stop.
+        (:func:`striatal.sim.robust.stop_check`, every run counted) for the run to stop.
     critic_rate : rate beta of the critic's weights, v <- v + beta delta z (ac).
     td_discount : discount gamma_v per control step of the TD error
         delta = r + gamma_v V(s') - V(s) (ac); 1 - dt / tau for a value horizon tau.

@@ -10,13 +10,13 @@ the learning trial and each success check that needs a trial of its own. A rule
 with ``judges_candidate`` (pgpe) is judged on the controller its trial ran; when
 that trial already was the noise-free run on the nominal plant, it is the check.
 With ``config.robust`` (any rule) every trial and check holds the motor force
-(``striatal.robust.ROBUST_HARDWARE``), the jitter corners are not checked, and a
+(``striatal.sim.robust.ROBUST_HARDWARE``), the jitter corners are not checked, and a
 controller that passes the success test must also pass the robustness set
-(:func:`striatal.robust.stop_check`, each of its runs counted; the nominal case is
+(:func:`striatal.sim.robust.stop_check`, each of its runs counted; the nominal case is
 not rerun when the success test's noise-free nominal run already was it). With a
 jittered plant, a rule judged on its noise-free candidate is first filtered by its
 own trial on that plant (no nominal rerun); the set then decides. A rule that runs its
-trial itself (``runs_trial``: ac's online loop, ``striatal.online``) runs it with u
+trial itself (``runs_trial``: ac's online loop, ``striatal.sim.online``) runs it with u
 held even then; its success checks and the set hold the force. ``config.max_force``
 and ``config.track`` (:attr:`LearnerConfig.hardware`) apply to every trial, check and
 case of the set.
@@ -43,8 +43,8 @@ from striatal.learners.rpe import RPE
 from striatal.learners.rule import Rule, Update
 from striatal.learners.state import LearnerState, TrainResult, TrialRecord
 from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Plant, Simulation
-from striatal.robust import nominal_is_the_case, stop_check
-from striatal.rollout import Protocol, TrialOutcome, recorded_trial, run_trial
+from striatal.sim.robust import nominal_is_the_case, stop_check
+from striatal.sim.rollout import Protocol, TrialOutcome, recorded_trial, run_trial
 
 __all__ = ["LEARNERS", "RULES", "check_config", "learn", "learning_step", "rule_of"]
 

@@ -34,7 +34,6 @@ from types import MappingProxyType
 
 import numpy as np
 
-from striatal import kernel
 from striatal.errors import ParameterError
 from striatal.learners.common import (
     baseline_memory,
@@ -47,7 +46,8 @@ from striatal.learners.config import LearnerConfig, RewardKind, ThetaCRule, pick
 from striatal.learners.rule import Rule, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Plant
-from striatal.rollout import TrialOutcome
+from striatal.sim import kernel
+from striatal.sim.rollout import TrialOutcome
 
 __all__ = [
     "EXPLORE_RANGE",

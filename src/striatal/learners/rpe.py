@@ -16,7 +16,6 @@ from types import MappingProxyType
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.kernel import sigma_of
 from striatal.learners.chapter import finite_trace, policy_plan
 from striatal.learners.common import (
     baseline_memory,
@@ -28,7 +27,8 @@ from striatal.learners.config import Eligibility, LearnerConfig, RewardKind, The
 from striatal.learners.rule import Rule, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import Plant
-from striatal.rollout import TrialOutcome
+from striatal.sim.kernel import sigma_of
+from striatal.sim.rollout import TrialOutcome
 
 __all__ = ["RPE", "RpeConfig", "RpeRule"]
 
@@ -104,7 +104,7 @@ class RpeRule(Rule):
         )
 
     def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
-        """sigma of eq 5's per-step policy (:func:`striatal.kernel.sigma_of` of W6)."""
+        """sigma of eq 5's per-step policy (:func:`striatal.sim.kernel.sigma_of` of W6)."""
         return (("sigma", float(sigma_of(plan.W[5]))),)
 
 

@@ -23,7 +23,7 @@ from striatal.errors import ParameterError
 from striatal.learners.config import LearnerConfig
 from striatal.learners.state import LearnerState, Memory
 from striatal.params import Plant
-from striatal.rollout import TrialOutcome
+from striatal.sim.rollout import TrialOutcome
 
 __all__ = ["LOOP_OPTIONS", "Rule", "TrialPlan", "Update"]
 
@@ -99,7 +99,7 @@ class Rule:
     #: Then, on success, :meth:`update` must return the plan's W and theta_c.
     judges_candidate: ClassVar[bool] = False
     #: Whether the rule runs its trial itself (:meth:`run`): a rule that changes W within
-    #: the trial (ac). Otherwise the loop runs the plan with :mod:`striatal.rollout`.
+    #: the trial (ac). Otherwise the loop runs the plan with :mod:`striatal.sim.rollout`.
     runs_trial: ClassVar[bool] = False
 
     @property
@@ -137,7 +137,7 @@ class Rule:
 
     def run(self, config: LearnerConfig, plan: TrialPlan, trial: Mapping[str, Any]) -> TrialOutcome:
         """Run ``plan``'s trial (rules with :attr:`runs_trial` only); ``trial``: the loop's
-        keyword arguments of :func:`striatal.rollout.run_trial` (plant, controller, sim,
+        keyword arguments of :func:`striatal.sim.rollout.run_trial` (plant, controller, sim,
         protocol, gains, rng, trace, gamma, action_every, chapter_eligibility, model). The
         trial's sparse reward (eqs 24-25) is the outcome's."""
         raise NotImplementedError

@@ -6,9 +6,9 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from striatal import kernel
-from striatal.interpret import balancing_terms, swingup_terms
+from striatal.neural.interpret import balancing_terms, swingup_terms
 from striatal.params import Controller, Plant
+from striatal.sim import kernel
 
 __all__ = [
     "EXCITATORY",
@@ -85,7 +85,7 @@ def circuit_figure(controller: Controller, plant: Plant, selection: str = "cereb
     Green arrows are excitatory projections (direct pathway, positive coefficient),
     red bars inhibitory ones (indirect pathway, negative coefficient, and the gates);
     each projection into mu_1 or mu_2 is labelled with its coefficient from
-    :mod:`striatal.interpret`.
+    :mod:`striatal.neural.interpret`.
     """
     from matplotlib.patches import FancyBboxPatch
 

@@ -46,17 +46,17 @@ from typing import Any
 
 import numpy as np
 
-from striatal import kernel
 from striatal.errors import ParameterError
-from striatal.interpret import balancing_terms, swingup_terms
 from striatal.learners import default_config
 from striatal.learners.chapter import gain_update
 from striatal.learners.common import theta_c_rule
 from striatal.learners.config import LearnerConfig
+from striatal.neural.interpret import balancing_terms, swingup_terms
 from striatal.neural.network import NetworkConfig
 from striatal.neural.run import NeuralRun, run_network
 from striatal.params import Controller, Plant, Simulation, check_gains, check_seed
-from striatal.rollout import Protocol, TrialOutcome
+from striatal.sim import kernel
+from striatal.sim.rollout import Protocol, TrialOutcome
 
 __all__ = [
     "N_PATHWAYS",
@@ -87,7 +87,7 @@ N_PATHWAYS = len(PATHWAYS)
 
 
 def pathway_coefficients(W: object, plant: Plant, sign: float = 1.0) -> np.ndarray:
-    """c(W), the seven pathway coefficients of eqs 22-23 (:mod:`striatal.interpret`), (7,)."""
+    """c(W), the seven pathway coefficients of eqs 22-23 (:mod:`.interpret`), (7,)."""
     w = check_gains(W)
     terms = (*balancing_terms(w, plant, sign), *swingup_terms(w))
     return np.array([t.coefficient for t in terms])

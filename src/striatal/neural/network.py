@@ -2,7 +2,7 @@
 
 Cortex encodes the sensed state; two striatal channels decode the balancing mean
 mu_1 (eq 22) and the swing-up mean mu_2 (eq 23) through one connection per term of
-:mod:`striatal.interpret`, excitatory (direct pathway) for a positive coefficient and
+:mod:`striatal.neural.interpret`, excitatory (direct pathway) for a positive coefficient and
 inhibitory (indirect pathway) for a negative one; a gate population per channel
 silences it: Purkinje-like populations inhibited by suppressor parallel fibres that
 carry the criterion theta_c - |theta| (the cerebellar switch of section 4,
@@ -20,7 +20,7 @@ from typing import Any, Literal
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.interpret import Term, balancing_terms, swingup_terms
+from striatal.neural.interpret import Term, balancing_terms, swingup_terms
 from striatal.params import Controller, Plant
 
 __all__ = [

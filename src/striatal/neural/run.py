@@ -10,10 +10,10 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from striatal import kernel
 from striatal.errors import ParameterError
 from striatal.neural.network import NetworkConfig, build, require_nengo
 from striatal.params import Controller, Plant, Simulation, check_seed
+from striatal.sim import kernel
 
 __all__ = [
     "NEURAL_TRAJ_COLUMNS",
@@ -40,7 +40,7 @@ class KernelPlant:
     """The plant as a nengo Node function: one RK4 step of the kernel per network step.
 
     The commanded cart acceleration u (the filtered motor output) is held over the
-    network step ``dt`` (eqs 13-14 through :func:`striatal.kernel.rk4_step`). Returns
+    network step ``dt`` (eqs 13-14 through :func:`striatal.sim.kernel.rk4_step`). Returns
     the sensed state (x, x_dot, sin theta, cos theta, theta_dot). A state that blows up
     is frozen and flagged as a fault.
     """

@@ -3,7 +3,7 @@
 Every figure function returns a :class:`matplotlib.figure.Figure` built on the Agg
 backend (no display needed) so tests can inspect its artists; :func:`save_figure`
 and :func:`save_animation` write files atomically (temp file in the same folder,
-then ``os.replace``). Trajectories come from :func:`striatal.rollout.simulate`.
+then ``os.replace``). Trajectories come from :func:`striatal.sim.rollout.simulate`.
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
+from striatal.io.rundir import read_history as read_history
 from striatal.learners import History
 from striatal.limits import count_of_steps
-from striatal.rundir import read_history as read_history
 
 __all__ = [
     "BALANCING_COLOUR",
@@ -61,8 +61,8 @@ __all__ = [
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from striatal.profiles import Profile
-    from striatal.rollout import Trajectory
+    from striatal.experiments.profiles import Profile
+    from striatal.sim.rollout import Trajectory
 
 #: The chapter: "each motion snapshot was recorded in every 0.2 second" (section 3).
 SNAPSHOT_EVERY = 0.2
@@ -95,7 +95,7 @@ def _figure(width: float, height: float) -> Figure:
 
 def _atomic(path: Path, write: Callable[[Path], None]) -> None:
     """Call ``write(tmp)`` on a temp file beside ``path``, then rename it onto ``path``."""
-    from striatal.files import check_no_dangling_link, replace_into
+    from striatal.io.files import check_no_dangling_link, replace_into
 
     target = Path(path)
     check_no_dangling_link(target.parent)
@@ -130,7 +130,7 @@ def check_image_path(path: Path, allowed: Sequence[str]) -> Path:
         )
     if p.is_dir():
         raise DataFileError(f"output {p} is a folder")
-    from striatal.files import check_out_dir
+    from striatal.io.files import check_out_dir
 
     check_out_dir(p.parent if str(p.parent) else Path("."))
     return p
@@ -520,7 +520,7 @@ def switch_figure(theta_c: float, gammas: Sequence[float], *, theta_max: float =
     below 1 in a dead zone of half-width 1/gamma around theta_c (shaded) where neither
     pathway fully drives the cart.
     """
-    from striatal.control import switch_weights
+    from striatal.sim.control import switch_weights
 
     if not gammas:
         raise ParameterError("give at least one inhibition strength gamma")
@@ -595,8 +595,8 @@ MAX_TRACK = 20.0
 def animation_frames(
     traj: Trajectory, *, fps: float, speed: float, width: int = 720, height: int = 320
 ) -> list[np.ndarray]:
-    """(H, W, 3) uint8 frames of ``traj`` from :func:`striatal.render.cartpole_frame`."""
-    from striatal import render
+    """(H, W, 3) uint8 frames of ``traj`` from :func:`striatal.viz.render.cartpole_frame`."""
+    from striatal.viz import render
 
     times = frame_times(float(traj.t[-1]), fps, speed)
     idx = np.minimum(np.rint(times / traj.sim.dt).astype(int), len(traj.t) - 1)
@@ -699,7 +699,7 @@ def performance_profiles(
 ) -> Figure:
     """Fraction of seeds solved against budget, one step line per arm with its 95 % band.
 
-    ``profiles`` from :func:`striatal.profiles.sweep_profiles`; the band is the
+    ``profiles`` from :func:`striatal.experiments.profiles.sweep_profiles`; the band is the
     pointwise Wilson interval. ``note`` (e.g. the trials fallback) is printed
     under the axes.
     """

@@ -1,6 +1,6 @@
 """Sweeps in lockstep (``striatal sweep --engine batch|simd``): an arm's seeds as one batch.
 
-The process engine (:func:`striatal.experiments.execute`) runs each (arm, init, seed)
+The process engine (:func:`striatal.experiments.runner.execute`) runs each (arm, init, seed)
 as its own :func:`striatal.learners.learn` loop. Here the runs of the arms that
 differ only in their learning rate (``alpha``; for pgpe also ``sigma_rate``: a
 learner and its no-learning control, an alpha grid) advance together: trial k of
@@ -8,23 +8,23 @@ every unfinished run is one batched kernel call, the learning updates (eqs 3-4 a
 eq 21 for chapter; the prediction error, decay and floors for rpe and pgpe) are
 NumPy operations over the run axis, and finished runs are masked out. A run that
 stops (success or ``max_trials``) is evaluated as
-:func:`striatal.experiments.run_one` does (the noise-free re-simulation of its final
+:func:`striatal.experiments.runner.run_one` does (the noise-free re-simulation of its final
 gains, the pass probabilities of W(0) and of the final gains, each a batch of its
 noise draws) and its row is yielded at once, so the sweep writes it to runs.csv and
 a rerun skips it. The W(0) evaluation that runs share (a learner and its control:
 the same W(0), seed and draws) is run once; every row still counts it.
 
 ``trial_kernel`` "exact" (``--engine batch``): the same rows as the process engine,
-bit for bit (apart from ``wall_seconds``). :func:`striatal.kernel.run_trials_batch` is
+bit for bit (apart from ``wall_seconds``). :func:`striatal.sim.kernel.run_trials_batch` is
 a parallel loop over the scalar kernel and equals it bit for bit; every run keeps its
 own generator (``default_rng(seed)``) and draws from it what the loop draws, in the
-same order (rows filled on threads, :mod:`striatal.noise`: the same numbers); and
+same order (rows filled on threads, :mod:`striatal.sim.noise`: the same numbers); and
 every update does the scalar code's floating-point operations in the scalar code's
 order, elementwise over runs (IEEE arithmetic gives the same result).
 tests/test_lockstep_sweep.py compares whole sweeps.
 
 ``trial_kernel`` "lockstep" (``--engine simd``): every trial, the evaluation too, on
-the SIMD kernel :func:`striatal.kernel.run_trials_lockstep`, several times faster per
+the SIMD kernel :func:`striatal.sim.kernel.run_trials_lockstep`, several times faster per
 core. Its trials equal the scalar kernel's only within round-off (its polynomial
 sin/cos are within 1 ulp of libm's), and a chaotic swing-up and learning over many
 trials amplify that, so its rows are a different sample of the same experiment:
@@ -53,16 +53,16 @@ from typing import Any
 import numba
 import numpy as np
 
-from striatal import kernel
 from striatal.errors import ParameterError
-from striatal.evaluate import check_draws
-from striatal.experiments import RunSpec, initial_gains
+from striatal.experiments.evaluate import check_draws
+from striatal.experiments.runner import RunSpec, initial_gains
 from striatal.learners import check_config, rule_of
 from striatal.learners.common import THETA_C_FLOOR, THETA_C_RESET_ABOVE, THETA_C_RESET_TO
 from striatal.learners.pgpe import EXPLORE_RANGE, THETA_C_LEARNED_RANGE, initial_explore
-from striatal.noise import row_parts, run_parts
 from striatal.params import N_GAINS, Simulation, check_seed, check_theta_c
-from striatal.rollout import Protocol, batch_args
+from striatal.sim import kernel
+from striatal.sim.noise import row_parts, run_parts
+from striatal.sim.rollout import Protocol, batch_args
 
 __all__ = [
     "BATCH_LEARNERS",
@@ -81,7 +81,7 @@ TRIAL_KERNELS: tuple[str, ...] = ("exact", "lockstep")
 #: Trials a kernel thread takes at a time (numba.set_parallel_chunksize).
 CHUNK = 2
 #: From this many normals in one draw (runs x draws each), the runs' rows are filled on
-#: threads (:func:`striatal.noise.run_parts`); fewer are drawn in turn.
+#: threads (:func:`striatal.sim.noise.run_parts`); fewer are drawn in turn.
 PARALLEL_NORMALS = 50_000
 
 
@@ -146,11 +146,11 @@ def execute_batch(
 ) -> Iterator[dict[str, Any]]:
     """Rows of ``specs`` (RUN_COLUMNS), each yielded when its run is finished and evaluated.
 
-    The rows equal :func:`striatal.experiments.run_one`'s for the same specs except
+    The rows equal :func:`striatal.experiments.runner.run_one`'s for the same specs except
     ``wall_seconds``. ParameterError if :func:`unsupported` says so.
 
     ``trial_kernel`` "lockstep" (``--engine simd``) runs every trial, the evaluation
-    included, on :func:`striatal.kernel.run_trials_lockstep` instead: its trials equal
+    included, on :func:`striatal.sim.kernel.run_trials_lockstep` instead: its trials equal
     the scalar kernel's only within round-off, so its rows are not the process
     engine's, only the same experiment (module docstring).
     """
@@ -333,7 +333,7 @@ class _Batch:
         """Row j: the next ``n`` standard normals of run idx[j]'s generator.
 
         Each run draws from its own generator, so the rows are filled on threads
-        (:func:`striatal.noise.run_parts`): the same numbers.
+        (:func:`striatal.sim.noise.run_parts`): the same numbers.
         """
         out = np.empty((len(idx), n))
 

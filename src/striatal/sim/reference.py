@@ -1,4 +1,4 @@
-"""A plain-NumPy, step-by-step reference of :func:`striatal.kernel.run_trial`.
+"""A plain-NumPy, step-by-step reference of :func:`striatal.sim.kernel.run_trial`.
 
 Slow and readable; the tests check that the compiled kernel equals it under the
 same noise. It supports the exact-linearization plant without sensor noise.
@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from striatal.control import mean_action
-from striatal.dynamics import force, rk4_step, wrap_angle
 from striatal.params import Controller, Plant, Simulation
-from striatal.policy import eligibilities, sigma
-from striatal.rollout import Protocol
+from striatal.sim.control import mean_action
+from striatal.sim.dynamics import force, rk4_step, wrap_angle
+from striatal.sim.policy import eligibilities, sigma
+from striatal.sim.rollout import Protocol
 
 __all__ = [
     "reference_trial",

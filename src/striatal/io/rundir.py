@@ -11,7 +11,7 @@ One place owns the file formats of a run, so ``striatal train``, the Python API
 - ``result.json``: the run's outcome, its settings and run id (:func:`read_result`
   is the one reader).
 
-Every file is written atomically (:mod:`striatal.files`); the settings carry a
+Every file is written atomically (:mod:`striatal.io.files`); the settings carry a
 schema version (:data:`SETTINGS_SCHEMA`). A run's id (:func:`run_id`, a hash of its
 starting settings) is stored in checkpoint.json and result.json, and the checkpoint
 holds the hash of the history rows it covers, so a resume proves that the three
@@ -33,7 +33,14 @@ from pathlib import Path
 from typing import Any
 
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import atomic_write_text, csv_text, read_csv, read_json, read_text, write_json
+from striatal.io.files import (
+    atomic_write_text,
+    csv_text,
+    read_csv,
+    read_json,
+    read_text,
+    write_json,
+)
 from striatal.learners import (
     RULES,
     History,
@@ -45,7 +52,7 @@ from striatal.learners import (
 )
 from striatal.learners.state import history_columns
 from striatal.params import Controller, Plant, Simulation, check_seed
-from striatal.rollout import Protocol
+from striatal.sim.rollout import Protocol
 
 __all__ = [
     "CHECKPOINT",

@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from striatal import kernel
 from striatal.errors import ParameterError
 from striatal.params import (
     CHAPTER_HARDWARE,
@@ -23,6 +22,7 @@ from striatal.params import (
     require_finite,
     require_finite_positive,
 )
+from striatal.sim import kernel
 
 __all__ = [
     "NO_PROTOCOL",
@@ -306,7 +306,7 @@ def trial_args(
     record: bool = False,
     hardware: Hardware = CHAPTER_HARDWARE,
 ) -> TrialArgs:
-    """The arguments of :func:`striatal.kernel.run_trial`, in its order.
+    """The arguments of :func:`striatal.sim.kernel.run_trial`, in its order.
 
     ``noise``: standard normals of the action draws (None: the mean policy);
     ``sensor_noise`` (n_steps, 2): standard normals scaled by ``sensor``'s stds;
@@ -356,7 +356,7 @@ def batch_args(
     traces: np.ndarray | None = None,
     hardware: Hardware = CHAPTER_HARDWARE,
 ) -> BatchArgs:
-    """The arguments of :func:`striatal.kernel.run_trials_batch`, in its order.
+    """The arguments of :func:`striatal.sim.kernel.run_trials_batch`, in its order.
 
     B trials: ``gains`` (B, 6) and ``theta_c`` (B,) per trial; ``noise`` (B, n_draws)
     action normals (None: the mean policy); ``states0`` (B, 4) (default: the

@@ -15,14 +15,14 @@ step, in the manner of Doya (2000, continuous-time actor-critic) and Frémaux et
   trial that leaves the track or faults ends in a terminal state worth
   :func:`failure_value`;
 - the actor's eligibility trace D of eq 3, updated at every draw by the kernel's own
-  :func:`striatal.kernel.trace_step`, and W <- W + clip(alpha delta_k D_k, +-max_step)
+  :func:`striatal.sim.kernel.trace_step`, and W <- W + clip(alpha delta_k D_k, +-max_step)
   at every step (W1 floored), delta optionally divided by its running rms;
 - the critic's trace z <- gamma_v lambda z + phi(s_k) and v <- v + beta delta_k z.
 
 The plant, the controllers and the eligibilities are the kernel's njit functions
-(:func:`striatal.kernel.plant_step`, ``_policy_wrapped``, ``trace_step``, ``judge``,
+(:func:`striatal.sim.kernel.plant_step`, ``_policy_wrapped``, ``trace_step``, ``judge``,
 ``write_summary``): no physics is written here. With alpha = beta = 0 the trial is
-:func:`striatal.kernel.run_trial`'s bit for bit (tests/test_online.py).
+:func:`striatal.sim.kernel.run_trial`'s bit for bit (tests/test_online.py).
 """
 
 from __future__ import annotations
@@ -34,7 +34,8 @@ import numpy as np
 from numba import njit
 
 from striatal.errors import ParameterError
-from striatal.kernel import (
+from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
+from striatal.sim.kernel import (
     MODE_BALANCE,
     MODE_SWINGUP,
     STATUS_FAULT,
@@ -57,8 +58,7 @@ from striatal.kernel import (
     wrap_angle,
     write_summary,
 )
-from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
-from striatal.rollout import Protocol, TrialOutcome, trial_args
+from striatal.sim.rollout import Protocol, TrialOutcome, trial_args
 
 __all__ = [
     "COST_WEIGHTS",
@@ -204,8 +204,8 @@ def run_online_trial(
 ) -> None:
     """One trial with the online actor-critic update at every step (module docstring).
 
-    The arguments are :func:`striatal.kernel.run_trial`'s (build them with
-    :func:`striatal.rollout.trial_args`; no sensor noise, nothing recorded) plus
+    The arguments are :func:`striatal.sim.kernel.run_trial`'s (build them with
+    :func:`striatal.sim.rollout.trial_args`; no sensor noise, nothing recorded) plus
     ``critic``. ``gains.W`` (6,) is updated in place: it holds the gains at the
     trial's end. ``learning.trace`` (eq 3) and ``critic.weights`` / ``critic.trace``
     are updated in place; ``out`` (N_OUT,) gets the summary row (layout OUT_*) and
@@ -432,7 +432,7 @@ def online_trial(
 ) -> OnlineTrial:
     """One online actor-critic trial (:func:`run_online_trial`) from ``gains``.
 
-    ``rng`` draws the action noise exactly as :func:`striatal.rollout.run_trial` does
+    ``rng`` draws the action noise exactly as :func:`striatal.sim.rollout.run_trial` does
     (None: the mean policy, then D and W stay); ``trace`` (6,), ``critic`` and
     ``critic_trace`` (N_FEATURES,) are updated in place; ``gains`` is not. ``state0``
     [x, x_dot, theta, theta_dot] overrides the simulation's start at rest.

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from striatal.control import mean_action
 from striatal.params import Controller, Plant
+from striatal.sim.control import mean_action
 
 __all__ = [
     "eligibilities",
@@ -56,8 +56,8 @@ def mean_gradient(
     ``chapter_form`` replaces the W1 entry by the chapter's printed
     -l (g theta - sqrt(g / W1) theta_dot) (docs/paper-notes.md section 2).
     """
-    from striatal.control import switch_weights
-    from striatal.dynamics import energy_error, wrap_angle
+    from striatal.sim.control import switch_weights
+    from striatal.sim.dynamics import energy_error, wrap_angle
 
     s = np.asarray(state, dtype=float)
     l, g = plant.length, plant.gravity

@@ -8,9 +8,9 @@ Ray cluster give the same rows for the same specs. ``striatal sweep`` and
 ``striatal ablation`` (whose variants are arms) both run through :func:`sweep`.
 
 Robust (``LearnerConfig.robust``, ``sweep --robust``): every arm stops only on a
-controller that passes the robustness set (:func:`striatal.robust.stop_check`), and
+controller that passes the robustness set (:func:`striatal.sim.robust.stop_check`), and
 the row's ``robust`` column re-checks the final gains with
-:func:`striatal.robust.check_robust` (all nine cases, counted in ``eval_simulations``;
+:func:`striatal.sim.robust.check_robust` (all nine cases, counted in ``eval_simulations``;
 empty in a sweep without ``--robust``).
 
 Budget: every row counts every simulated trial its arm ran to learn or search,
@@ -35,7 +35,7 @@ Resume: rows are appended and flushed to runs.csv as runs finish; a rerun with t
 same output folder reads the rows back (dropping a last line a kill cut short) and
 runs only the missing (arm, init, seed); a row whose (arm, init, seed) is already
 there is dropped, never counted twice. The output folder is locked
-(:meth:`striatal.rundir.RunDir.lock`) while a sweep runs in it. The summary is
+(:meth:`striatal.io.rundir.RunDir.lock`) while a sweep runs in it. The summary is
 computed from the rows sorted by (arm, init, seed), so it does not depend on
 completion order; its bootstrap intervals are seeded by the arm and init.
 """
@@ -62,10 +62,11 @@ from typing import Any, Literal, TextIO
 
 import numpy as np
 
-from striatal import baselines, stats
 from striatal.errors import DataFileError, ParameterError
-from striatal.evaluate import pass_probability
-from striatal.files import atomic_write_text, csv_text, read_text
+from striatal.experiments import baselines, stats
+from striatal.experiments.evaluate import pass_probability
+from striatal.io.files import atomic_write_text, csv_text, read_text
+from striatal.io.rundir import RunDir
 from striatal.learners import LearnerConfig, learn, random_initial_gains, rule_of
 from striatal.params import (
     CHAPTER_INITIAL_W,
@@ -74,9 +75,8 @@ from striatal.params import (
     Plant,
     Simulation,
 )
-from striatal.robust import check_robust
-from striatal.rollout import Protocol, simulate
-from striatal.rundir import RunDir
+from striatal.sim.robust import check_robust
+from striatal.sim.rollout import Protocol, simulate
 
 __all__ = [
     "CONNECT_TIMEOUT",
@@ -170,7 +170,7 @@ NOTE_BUDGET = (
 
 NOTE_ROBUST = (
     "robust stop rule: every arm's trials hold the motor force of eq 12; a controller "
-    "that passes the success test must also pass the robustness set (striatal.robust, "
+    "that passes the success test must also pass the robustness set (striatal.sim.robust, "
     "9 mean-policy runs of 60 s, run up to the first failing case, each counted in "
     "simulations) for the run to stop; the robust column re-checks the final gains on "
     "all 9 cases (eval_simulations)"
@@ -324,7 +324,7 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
 
     After the search: one noise-free re-simulation of the final gains
     (``mean_policy_success``) and, with ``spec.eval_draws`` > 0, the pass probability
-    (:func:`striatal.evaluate.pass_probability`, noise from ``default_rng(seed)``) of
+    (:func:`striatal.experiments.evaluate.pass_probability`, noise from ``default_rng(seed)``) of
     W(0) and of the final gains; their trials are ``eval_simulations``, apart from the
     arm's budget ``simulations``.
     """
@@ -694,7 +694,7 @@ def arm_statistics(
 ) -> dict[str, Any]:
     """The statistics of one arm's rows (one per seed).
 
-    From :func:`striatal.stats.arm_summary`: ``success_rate`` with its Wilson interval
+    From :func:`striatal.experiments.stats.arm_summary`: ``success_rate`` with its Wilson interval
     ``success_rate_ci``, and over the solved seeds the median and IQM of
     ``simulations``, ``simulated_seconds`` and ``trials`` with seeded bootstrap
     intervals (``simulations_median_ci``, ``simulations_iqm_ci``, ...). Besides:
@@ -997,9 +997,9 @@ def sweep(
     then write ``out``/summary.json (atomically) from all rows.
 
     ``engine`` "processes": :func:`execute` (one learning loop per run, on ``backend``);
-    "batch": :func:`striatal.lockstep_sweep.execute_batch` (the runs of an arm advance
+    "batch": :func:`striatal.experiments.lockstep_sweep.execute_batch` (the runs of an arm advance
     in lockstep in this process; the same rows but wall_seconds); "simd": the same on
-    the SIMD kernel (:func:`striatal.kernel.run_trials_lockstep`), rows equal only
+    the SIMD kernel (:func:`striatal.sim.kernel.run_trials_lockstep`), rows equal only
     within round-off (docs/performance.md), so ``settings`` gets ``trial_kernel``
     (:data:`NOTE_SIMD`) and a folder is never resumed across the two kinds.
 
@@ -1013,7 +1013,7 @@ def sweep(
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
     if engine != "processes":
-        from striatal.lockstep_sweep import check_specs
+        from striatal.experiments.lockstep_sweep import check_specs
 
         check_specs(specs, engine)
     if engine == "simd":
@@ -1050,7 +1050,7 @@ def _sweep(
 ) -> SweepResult:
     from tqdm import tqdm
 
-    from striatal.files import read_json, write_json
+    from striatal.io.files import read_json, write_json
 
     rows: list[dict[str, Any]] = []
     stream: TextIO | None = None
@@ -1083,7 +1083,7 @@ def _sweep(
     bar = tqdm(total=len(specs), initial=len(specs) - len(todo), unit="run", disable=not progress)
     try:
         if engine != "processes":
-            from striatal.lockstep_sweep import execute_batch
+            from striatal.experiments.lockstep_sweep import execute_batch
 
             rows_in = execute_batch(todo, trial_kernel="lockstep" if engine == "simd" else "exact")
         else:
@@ -1116,6 +1116,6 @@ def json_roundtrip(obj: Any) -> Any:
     """``obj`` as it reads back from JSON (tuples become lists, non-finite floats None)."""
     import json
 
-    from striatal.files import dumps_json
+    from striatal.io.files import dumps_json
 
     return json.loads(dumps_json(obj))

@@ -21,11 +21,11 @@ from types import ModuleType
 
 import numpy as np
 
-from striatal import kernel, rollout
 from striatal.errors import ParameterError
-from striatal.noise import row_parts, run_parts
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
-from striatal.rollout import Protocol
+from striatal.sim import kernel, rollout
+from striatal.sim.noise import row_parts, run_parts
+from striatal.sim.rollout import Protocol
 
 __all__ = [
     "BENCHMARKS_ENV",
@@ -107,8 +107,8 @@ def run_batch_trials(
 ) -> int:
     """``batch_size`` stochastic trials on all cores, noise drawn here; returns steps run.
 
-    ``lockstep``: :func:`striatal.kernel.run_trials_lockstep` (vectorised over trials);
-    else :func:`striatal.kernel.run_trials_batch` (one scalar trial per core at a time).
+    ``lockstep``: :func:`striatal.sim.kernel.run_trials_lockstep` (vectorised over trials);
+    else :func:`striatal.sim.kernel.run_trials_batch` (one scalar trial per core at a time).
     """
     B = batch_size
     noise = batch_normals(rng, B, setup.n_steps) if stochastic else np.empty((B, 0))
@@ -132,7 +132,7 @@ def batch_normals(rng: np.random.Generator, rows: int, n: int) -> np.ndarray:
 
     The rows are split into one contiguous part per thread, each part drawn from its own
     child of ``rng`` (``rng.spawn``), so the numbers do not depend on the threads' timing
-    (:func:`striatal.noise.run_parts`).
+    (:func:`striatal.sim.noise.run_parts`).
     """
     out = np.empty((rows, n))
     parts = row_parts(rows)

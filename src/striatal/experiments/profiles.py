@@ -7,7 +7,7 @@ For an arm run on n seeds, the profile at budget b is
 a step function that rises from 0 to the arm's success rate at the largest cost
 any of its seeds used. Unsolved seeds stay in n, so F is an honest
 solved-within-budget rate, never a rate among the solved. Each point carries
-its Wilson 95 % interval (:func:`striatal.stats.wilson_interval`; a pointwise
+its Wilson 95 % interval (:func:`striatal.experiments.stats.wilson_interval`; a pointwise
 band, not a simultaneous one).
 
 The cost is read from a sweep folder's ``runs.csv``: ``simulations`` (every
@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import read_text
-from striatal.stats import wilson_interval
+from striatal.experiments.stats import wilson_interval
+from striatal.io.files import read_text
 
 __all__ = [
     "NOTE_TRIALS_FALLBACK",

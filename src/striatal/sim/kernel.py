@@ -2,11 +2,11 @@
 
 This is the one physics kernel of the project. ``simulate``, the learner, the
 Gymnasium environments, the sweeps and the benchmarks all call these functions;
-:mod:`striatal.reference` re-implements them in plain NumPy for the tests.
+:mod:`striatal.sim.reference` re-implements them in plain NumPy for the tests.
 
 Everything here takes plain floats, float64 arrays and, for the trial loops,
 the frozen NamedTuples below (Gains, PlantArgs, ControlArgs, ProtocolArgs,
-NoiseArgs, TraceArgs, Buffers), which :mod:`striatal.rollout` builds
+NoiseArgs, TraceArgs, Buffers), which :mod:`striatal.sim.rollout` builds
 (``trial_args``, ``batch_args``). Plant arrays are ``[M, m, l, g]``. States are
 ``[x, x_dot, theta, theta_dot]`` in ``[m, m/s, rad, rad/s]``, theta = 0 upright,
 clockwise (pole tip at x + l sin theta).
@@ -121,7 +121,7 @@ STATUS_TRACK = 5
 
 
 # The kernel's arguments, grouped (frozen, Numba-compatible NamedTuples). Build them
-# with the functions of :mod:`striatal.rollout` (trial_args, batch_args, ...), never
+# with the functions of :mod:`striatal.sim.rollout` (trial_args, batch_args, ...), never
 # by hand, so that every call site names what it passes.
 
 
@@ -1095,7 +1095,7 @@ def run_trial(
 ) -> None:
     """Run one trial of the chapter's protocol (eqs 1-5, 13-14, 21-25) in place.
 
-    Build the arguments with :func:`striatal.rollout.trial_args`. A new action
+    Build the arguments with :func:`striatal.sim.rollout.trial_args`. A new action
     a = mu + sigma * noise.action[j] is drawn every ``control.action_every`` steps
     (eq 5) and held; at each draw the eligibility e (score of the Gaussian policy
     with the chapter's rescaling, docs/paper-notes.md section 2) enters the trace
@@ -1302,7 +1302,7 @@ def run_trials_batch(
 ) -> None:
     """:func:`run_trial` for B independent trials at once, parallel over cores.
 
-    Build the arguments with :func:`striatal.rollout.batch_args`. Row b of
+    Build the arguments with :func:`striatal.sim.rollout.batch_args`. Row b of
     ``states0`` (B, 4), ``gains.W`` (B, 6), ``gains.theta_c`` (B,), ``noise``
     (B, n_draws) (or (B, 0) for the mean policy), ``learning.trace`` (B, 6) and
     ``outs`` (B, N_OUT) belongs to trial b; no sensor noise, nothing recorded.
@@ -1700,7 +1700,7 @@ def run_trials_lockstep(
 ) -> None:
     """:func:`run_trials_batch` with all trials of a block advancing step k together.
 
-    Same arguments (build them with :func:`striatal.rollout.batch_args`) and outputs.
+    Same arguments (build them with :func:`striatal.sim.rollout.batch_args`) and outputs.
     State, trace and statistics are arrays over the trials of a block of
     :data:`LOCKSTEP_BLOCK`; the loops over trials call no libm function (sin/cos by
     :func:`sincos_poly`), so they vectorise; blocks run in parallel over cores. An

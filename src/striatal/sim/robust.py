@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from striatal.params import CHAPTER_THETA0, N_GAINS, Controller, Hardware, Plant, Simulation
-from striatal.rollout import NO_PROTOCOL, run_trial, simulate
+from striatal.sim.rollout import NO_PROTOCOL, run_trial, simulate
 
 __all__ = [
     "ROBUST_CASES",

@@ -2,15 +2,15 @@
 (eqs 18-20, 22), hard and soft (cerebellar, section 4) switching.
 
 Vectorised over leading axes of ``state`` (..., 4). The compiled twin is
-:func:`striatal.kernel.policy_mean`.
+:func:`striatal.sim.kernel.policy_mean`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from striatal.dynamics import energy_error, wrap_angle
 from striatal.params import Controller, Plant
+from striatal.sim.dynamics import energy_error, wrap_angle
 
 __all__ = [
     "balancing_gain_matrix",

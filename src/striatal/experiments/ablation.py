@@ -5,7 +5,7 @@ drawn exactly as ``striatal train --init random --seed S`` draws them, with the
 policy noise seeded by S, so any row of the table can be rerun on its own with
 ``striatal train --init random --seed S --learner ... --success-on mean``.
 Success is the chapter's success test on the mean policy. The variants are arms of
-one sweep (:func:`striatal.experiments.sweep`: resume, progress, the Ray backend,
+one sweep (:func:`striatal.experiments.runner.sweep`: resume, progress, the Ray backend,
 the output folder's lock), with seeds S..S+N-1 and init "random". "trials" counts
 the learner's 60-s trials; "simulations" every simulated trial, the mean-policy
 checks of ``--success-on mean`` included (pgpe judges the candidate its trial ran,
@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from striatal import experiments
 from striatal.errors import ParameterError
+from striatal.experiments import runner as experiments
 from striatal.learners import LearnerConfig, control_config, default_config
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
@@ -82,7 +82,9 @@ class Variant:
     def options(self) -> str:
         """The train/sweep options that select this variant."""
         if self.kind != "learner":
-            return f"(striatal.baselines.{self.kind.replace('-', '_')}, success on mean)"
+            return (
+                f"(striatal.experiments.baselines.{self.kind.replace('-', '_')}, success on mean)"
+            )
         parts = [f"--learner {self.learner}"]
         changes = dict(self.changes)
         if self.control:

@@ -1,8 +1,8 @@
 """Baselines on the learner's plant, protocol and success test (docs/results.md).
 
 Every baseline is judged like the learner: one evaluation of a candidate
-(W1..W6, theta_c) is one 60-s trial of the chapter's :class:`~striatal.rollout.Protocol`
-(:func:`striatal.rollout.run_trial`), and the trial passes with the same reading
+(W1..W6, theta_c) is one 60-s trial of the chapter's :class:`~striatal.sim.rollout.Protocol`
+(:func:`striatal.sim.rollout.run_trial`), and the trial passes with the same reading
 ``success_on`` as the learner: "noisy" (the chapter) judges the noisy trial
 (policy noise sigma(W6), eqs 22-23) drawn from the seed's generator; "mean" a
 noise-free trial of the mean policy. Each baseline reports the trials (60-s
@@ -10,11 +10,11 @@ episodes) to its first success, at most ``max_trials``.
 
 lqr
     The linear-quadratic regulator of the upright linearization (eq 18,
-    :func:`striatal.dynamics.linearization`), Q = diag(1, 1, 1, 1), R = 1,
+    :func:`striatal.sim.dynamics.linearization`), Q = diag(1, 1, 1, 1), R = 1,
     K = R^-1 B^T P with P from the continuous algebraic Riccati equation
     (:func:`scipy.linalg.solve_continuous_are`). The kernel only runs the chapter's
     balancing law mu_1 = -K_W s with K_W = [W2, W3, -(1 + W1 l) g, -2 l sqrt(W1 g)]
-    (eq 22, :func:`striatal.control.balancing_gain_matrix`): three gains for four
+    (eq 22, :func:`striatal.sim.control.balancing_gain_matrix`): three gains for four
     coefficients. So the arm runs the least-squares fit of W1..W3 to K (W2, W3 match
     K exactly; W1 fits the two theta coefficients), with the chapter's learned swing-up
     W4, W5, noise W6 and theta_c. :func:`lqr_fit` reports K, the fitted K_W and the
@@ -40,9 +40,9 @@ cmaes
 
 Robust (``robust=True``, ``sweep --baselines random,cmaes --robust``): the protocol of
 the learner's robust stop rule. Every trial holds the motor force of eq 12
-(``striatal.robust.ROBUST_HARDWARE``; ``hardware=``: with a force limit or a track, as
+(``striatal.sim.robust.ROBUST_HARDWARE``; ``hardware=``: with a force limit or a track, as
 ``LearnerConfig.hardware`` gives them), and a candidate whose trial passes the success
-test is run through the robustness set (:func:`striatal.robust.stop_check`, up to the
+test is run through the robustness set (:func:`striatal.sim.robust.stop_check`, up to the
 first failing case; the nominal case is the trial itself for a noise-free 60-s trial
 from the chapter's start); only a robust candidate ends the search. Each of those runs
 is counted in ``simulations`` and ``simulated_seconds``; ``trials`` counts candidates.
@@ -68,8 +68,6 @@ from typing import Any
 
 import numpy as np
 
-from striatal.control import balancing_gain_matrix
-from striatal.dynamics import linearization
 from striatal.learners.common import shaped_reward
 from striatal.learners.config import W1_FLOOR, SuccessOn
 from striatal.learners.pgpe import THETA_C_LEARNED_RANGE
@@ -83,8 +81,10 @@ from striatal.params import (
     Plant,
     Simulation,
 )
-from striatal.robust import nominal_is_the_case, robust_hardware, stop_check
-from striatal.rollout import Protocol, recorded_trial, run_trial
+from striatal.sim.control import balancing_gain_matrix
+from striatal.sim.dynamics import linearization
+from striatal.sim.robust import nominal_is_the_case, robust_hardware, stop_check
+from striatal.sim.rollout import Protocol, recorded_trial, run_trial
 
 __all__ = [
     "BASELINES",

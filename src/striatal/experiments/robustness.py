@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
+from striatal.io.rundir import result_of
 from striatal.params import N_GAINS, Controller, Plant, Simulation, check_seed
-from striatal.rollout import Protocol, SensorNoise, run_trial
-from striatal.rundir import result_of
+from striatal.sim.rollout import Protocol, SensorNoise, run_trial
 
 __all__ = [
     "CONDITIONS",
@@ -73,7 +73,7 @@ def evaluate(
 
     Each controller runs once without sensor noise, or ``repeats`` times with
     independent sensor noise (streams spawned from ``seed``). Every run is one
-    :func:`striatal.rollout.run_trial` with ``mean_policy=True`` on the true plant,
+    :func:`striatal.sim.rollout.run_trial` with ``mean_policy=True`` on the true plant,
     the controller believing ``nominal`` (the generator draws only the sensor noise).
     """
     if not controllers:

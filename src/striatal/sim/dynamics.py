@@ -1,6 +1,6 @@
 """Plant equations in plain NumPy (vectorised over leading axes): eqs 7-14.
 
-The compiled kernel (:mod:`striatal.kernel`) is what runs; these are the
+The compiled kernel (:mod:`striatal.sim.kernel`) is what runs; these are the
 readable reference forms, the linearization and the energy used by tests,
 baselines and figures. ``state``: (..., 4) [m, m/s, rad, rad/s].
 """
@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from striatal import kernel
 from striatal.params import Plant
+from striatal.sim import kernel
 
 __all__ = [
     "accelerations",
@@ -90,7 +90,7 @@ def energy_error(state: np.ndarray, plant: Plant) -> np.ndarray:
 
 
 def wrap_angle(theta: np.ndarray | float) -> np.ndarray:
-    """Angle wrapped to (-pi, pi]: :func:`striatal.kernel.wrap_angle` over any shape."""
+    """Angle wrapped to (-pi, pi]: :func:`striatal.sim.kernel.wrap_angle` over any shape."""
     result: np.ndarray = kernel.wrap_angles(np.asarray(theta, dtype=float))
     return result
 

@@ -6,7 +6,7 @@ trial counts as solved when its final state passes the test at T_f (end of
 section 2.4). With fixed gains that is a Bernoulli draw; :func:`pass_probability`
 estimates its probability over many independent noise draws, with a Wilson 95 %
 interval, beside the deterministic verdict of the mean policy. Every trial is a
-call of :func:`striatal.rollout.run_trial`, the one the learner makes, so the
+call of :func:`striatal.sim.rollout.run_trial`, the one the learner makes, so the
 test is the same.
 """
 
@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import ParameterError
+from striatal.experiments.stats import wilson_interval
 from striatal.params import (
     CHAPTER_HARDWARE,
     N_GAINS,
@@ -28,8 +29,7 @@ from striatal.params import (
     Simulation,
     check_seed,
 )
-from striatal.rollout import Protocol, SensorNoise, run_trial
-from striatal.stats import wilson_interval
+from striatal.sim.rollout import Protocol, SensorNoise, run_trial
 
 __all__ = [
     "MAX_DRAWS",
@@ -112,12 +112,12 @@ def pass_probability(
     Runs ``draws`` trials of the protocol under the Gaussian policy of eq 5
     (sigma from W6, eqs 22-23), all from one ``np.random.default_rng(seed)`` in
     sequence, and one with the mean policy. Each noisy trial's success is
-    :attr:`striatal.rollout.TrialOutcome.success`, the one the learner uses when
+    :attr:`striatal.sim.rollout.TrialOutcome.success`, the one the learner uses when
     success is judged on the noisy trial (docs/paper-notes.md, table row 8 and
     section 8). ``sensor``: noise on what the controller sees (default none);
     ``hardware``: the motor's hold and limit and the track (default: the chapter's
     idealisation; docs/paper-notes.md section 9). Same seed, same result. For the
-    robustness set see :func:`striatal.robust.check_robust`. ``on_draw(k)`` is called
+    robustness set see :func:`striatal.sim.robust.check_robust`. ``on_draw(k)`` is called
     after the k-th noisy trial (a progress bar); it does not touch the draws.
     """
     n = check_draws(draws)

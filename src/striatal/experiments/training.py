@@ -17,7 +17,16 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
-from striatal.files import check_out_dir
+from striatal.io.files import check_out_dir
+from striatal.io.rundir import (
+    RUN_FILES,
+    RunDir,
+    Setup,
+    rule_columns,
+    run_id,
+    run_settings,
+    setup_of,
+)
 from striatal.learners import (
     W1_FLOOR,
     History,
@@ -40,10 +49,9 @@ from striatal.params import (
     check_gains,
     check_seed,
 )
-from striatal.robust import check_robust
-from striatal.rollout import Trajectory
-from striatal.rollout import simulate as _simulate
-from striatal.rundir import RUN_FILES, RunDir, Setup, rule_columns, run_id, run_settings, setup_of
+from striatal.sim.robust import check_robust
+from striatal.sim.rollout import Trajectory
+from striatal.sim.rollout import simulate as _simulate
 
 __all__ = [
     "DEFAULT_CHECKPOINT_EVERY",
@@ -66,7 +74,7 @@ class Run:
     ``settings``: the run's settings as stored in result.json; :meth:`to_dict` is
     result.json itself. ``mean_policy_success``: the learned controller re-simulated
     (with the force held in a robust run); ``robust_report``: in a robust run, the
-    learned controller's :func:`striatal.robust.check_robust` report (result.json's
+    learned controller's :func:`striatal.sim.robust.check_robust` report (result.json's
     "robust"), both outside the run's counted simulations.
     """
 
@@ -453,7 +461,7 @@ def simulate(
 
     Defaults: the chapter's plant, its learned W and theta_c (``--chapter-final``),
     60 s from theta = 3.12 at rest, the mean policy. ``kwargs`` go to
-    :func:`striatal.rollout.simulate` (protocol, rng, model, sensor, action_every,
+    :func:`striatal.sim.rollout.simulate` (protocol, rng, model, sensor, action_every,
     hardware: the motor's hold and limit and the track, docs/paper-notes.md section 10).
     """
     return _simulate(
