@@ -182,7 +182,7 @@ def timed(run: Callable[[], int], calls: int) -> tuple[int, float]:
 def benchmarks_dir() -> Path:
     """The benchmarks/ folder: ``$STRIATAL_BENCHMARKS``, else the one beside src/ (a checkout)."""
     env = os.environ.get(BENCHMARKS_ENV)
-    here = Path(__file__).resolve().parents[2] / "benchmarks"
+    here = Path(__file__).resolve().parents[3] / "benchmarks"
     for folder in ([Path(env)] if env else []) + [here]:
         if (folder / "harness.py").is_file():
             return folder
