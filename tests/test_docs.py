@@ -75,7 +75,7 @@ def test_api_reference_builds_in_strict_mode(tmp_path: Path) -> None:
     for module in ("config", "state", "rule", "loop", "chapter", "rpe", "pgpe"):
         assert f'id="striatal.learners.{module}"' in learning, module
     for module in ("stats", "evaluate", "profiles"):
-        assert f'id="striatal.{module}"' in learning, module
+        assert f'id="striatal.experiments.{module}"' in learning, module
     training = (site / "api" / "training" / "index.html").read_text(encoding="utf-8")
     assert (
         'id="striatal.experiments.training.train"' in training

@@ -64,7 +64,7 @@ def test_the_ufuncs_compile_at_their_first_call_not_at_import() -> None:
     # LLVM work at the start of every command, and a wider window in which a Ctrl-C
     # has to wait for Numba: striatal.interrupts)
     script = (
-        "from striatal import kernel\n"
+        "from striatal.sim import kernel\n"
         "print([len(f.types) for f in (kernel.wrap_angles, kernel.exp_libm, kernel.log10_libm)])\n"
         "kernel.exp_libm(1.0)\n"
         "print(kernel.exp_libm.types)\n"

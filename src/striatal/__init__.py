@@ -80,7 +80,15 @@ _FROM = {
 }
 
 
+# public submodules of subpackages, named at the top
+_MODULES = {"plots": "striatal.viz.plots", "rundir": "striatal.io.rundir"}
+
+
 def __getattr__(name: str) -> Any:
+    if name in _MODULES:
+        module = importlib.import_module(_MODULES[name])
+        globals()[name] = module
+        return module
     if name in _FROM:
         value = getattr(importlib.import_module(_FROM[name]), name)
         globals()[name] = value
@@ -95,7 +103,7 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *_FROM})
+    return sorted({*globals(), *_FROM, *_MODULES})
 
 
 def _register_env() -> None:
