@@ -55,7 +55,7 @@ import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.experiments.evaluate import check_draws
-from striatal.experiments.runner import RunSpec, initial_gains
+from striatal.experiments.spec import RunSpec, initial_gains
 from striatal.learners import check_config, rule_of
 from striatal.learners.common import THETA_C_FLOOR, THETA_C_RESET_ABOVE, THETA_C_RESET_TO
 from striatal.learners.pgpe import EXPLORE_RANGE, THETA_C_LEARNED_RANGE, initial_explore

@@ -65,11 +65,11 @@ import numpy as np
 from striatal.errors import DataFileError, ParameterError
 from striatal.experiments import baselines, stats
 from striatal.experiments.evaluate import pass_probability
+from striatal.experiments.spec import Init, RunSpec, initial_gains, spawn_seeds
 from striatal.io.files import atomic_write_text, csv_text, read_text
 from striatal.io.rundir import RunDir
-from striatal.learners import LearnerConfig, learn, random_initial_gains, rule_of
+from striatal.learners import LearnerConfig, learn, rule_of
 from striatal.params import (
-    CHAPTER_INITIAL_W,
     N_GAINS,
     Controller,
     Plant,
@@ -119,7 +119,6 @@ __all__ = [
     "wait_for_address",
 ]
 
-Init = Literal["chapter", "random"]
 Backend = Literal["local", "ray"]
 Engine = Literal["processes", "batch", "simd"]
 #: How a sweep runs its specs: one learning loop per run, or the runs of an arm in lockstep
@@ -202,48 +201,6 @@ def control_note(learner: str) -> str:
 
 
 NOTE_CONTROL = control_note("chapter")
-
-
-@dataclass(frozen=True)
-class RunSpec:
-    """One run: an arm (learner settings or a baseline), a start and a seed.
-
-    ``template`` carries theta_c(0) and the readings (balance sign, switch,
-    inhibition); its gains are replaced by W(0) of ``init``.
-    """
-
-    arm: str
-    method: str
-    init: Init
-    seed: int
-    config: LearnerConfig
-    template: Controller
-    plant: Plant
-    sim: Simulation
-    role: str = "learner"
-    eval_draws: int = 0
-
-    @property
-    def key(self) -> tuple[str, str, int]:
-        return (self.arm, self.init, self.seed)
-
-
-def spawn_seeds(root: int, n: int) -> tuple[int, ...]:
-    """The n integer run seeds of root seed ``root``: SeedSequence(root).spawn(n)[i]."""
-    if n < 1:
-        raise ParameterError(f"the number of seeds must be >= 1, got {n}")
-    if root < 0:
-        raise ParameterError(f"the root seed must be >= 0, got {root}")
-    return tuple(int(child.generate_state(1)[0]) for child in np.random.SeedSequence(root).spawn(n))
-
-
-def initial_gains(init: Init, seed: int) -> tuple[float, ...]:
-    """W(0): the chapter's, or uniform in [-1, 1]^6 drawn as ``striatal train --init random``."""
-    if init == "chapter":
-        return CHAPTER_INITIAL_W
-    if init == "random":
-        return random_initial_gains(np.random.default_rng([seed, 1]))
-    raise ParameterError(f"init must be 'chapter' or 'random', got {init!r}")
 
 
 def learning_run(
