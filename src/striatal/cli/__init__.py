@@ -1,7 +1,10 @@
 """The ``striatal`` command: a thin layer that parses, calls the library and prints.
 
-Subcommands are the modules of this package that define ``COMMAND``; each has
-``HELP``, ``ORDER``, ``add_arguments(parser)`` and ``run(args) -> int``. Any
+Each subcommand is a module of this package, named in :data:`COMMANDS` with its one-line
+help; it has ``add_arguments(parser)``, ``run(args) -> int`` and optionally
+``DESCRIPTION``. Only the module of the command being run is imported, and importing it
+is cheap (NumPy at most: Numba, SciPy and Matplotlib load inside ``run``), so
+``striatal --help`` and ``striatal X --help`` answer at once. Any
 :class:`~striatal.errors.StriatalError` becomes one line on stderr and exit 2.
 """
 
@@ -10,7 +13,6 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
-import pkgutil
 import re
 import signal
 import sys
@@ -57,16 +59,71 @@ class OneLineParser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
-def _commands() -> list[ModuleType]:
-    mods = []
-    for info in pkgutil.iter_modules(__path__):
-        mod = importlib.import_module(f"{__name__}.{info.name}")
-        if hasattr(mod, "COMMAND"):
-            mods.append(mod)
-    return sorted(mods, key=lambda m: (getattr(m, "ORDER", 100), m.COMMAND))
+#: Command -> (its module in this package, its one-line help), in the order of
+#: ``striatal --help``.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "simulate": ("simulate", "simulate the cart-pole under the switching controller (mean policy)"),
+    "evaluate": ("evaluate", "chance that a noisy trial passes the success test with fixed gains"),
+    "train": ("train", "run the chapter's switching REINFORCE learner (or a variant: --learner)"),
+    "figure": (
+        "figure",
+        "draw the chapter's Figure 5 (snapshots, tip path, x and theta) for one run",
+    ),
+    "sweep": (
+        "sweep",
+        "many learning runs over seeds (and a grid), with the learner's control and baselines",
+    ),
+    "compare": (
+        "compare",
+        "print the comparison table (markdown) of sweep summaries and write it as JSON",
+    ),
+    "curves": (
+        "curves",
+        "plot reward, running success rate, W1..W6, theta_c and the learner's own columns",
+    ),
+    "profile": ("profile", "fraction of seeds solved against budget, per arm, with 95 %% bands"),
+    "animate": (
+        "animate",
+        "animate one run of the switching controller as a GIF (or MP4 with ffmpeg)",
+    ),
+    "switch-figure": (
+        "switch_figure",
+        "plot the soft switch's balancing and swing-up weights against |theta|",
+    ),
+    "ablation": ("ablation", "compare the learner variants over many seeds from random W(0)"),
+    "interpret": (
+        "interpret",
+        "read mu_1, mu_2 as direct/indirect pathway activity and the updates as LTP/LTD",
+    ),
+    "neural": (
+        "neural",
+        "run the controller as a spiking network (needs the [neural] extra: nengo)",
+    ),
+    "robustness": (
+        "robustness",
+        "success of learned gains when pole mass/length differ or sensors are noisy",
+    ),
+    "bench": ("bench", "benchmark the kernel against Gymnasium's CartPole (docs/performance.md)"),
+}
 
 
-def build_parser() -> argparse.ArgumentParser:
+def command_module(name: str) -> ModuleType:
+    """The module of command ``name`` (imported now, not before)."""
+    return importlib.import_module(f"{__name__}.{COMMANDS[name][0]}")
+
+
+def command_of(argv: Sequence[str]) -> str | None:
+    """The command that ``argv`` names (its first word that is not an option), if any."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The ``striatal`` parser. With ``only`` a command's name, only that command's
+    options are declared (the others are listed, their modules not imported); with
+    ``only=""`` none are."""
     from striatal import __version__
 
     parser = OneLineParser(
@@ -76,12 +133,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"striatal {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
     sub.required = True
-    for mod in _commands():
-        p = sub.add_parser(
-            mod.COMMAND,
-            help=mod.HELP,
-            description=getattr(mod, "DESCRIPTION", mod.HELP),
-        )
+    for name, (_, help_text) in COMMANDS.items():
+        if only is not None and name != only:
+            sub.add_parser(name, help=help_text)
+            continue
+        mod = command_module(name)
+        p = sub.add_parser(name, help=help_text, description=getattr(mod, "DESCRIPTION", help_text))
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
     return parser
@@ -137,7 +194,8 @@ def _main(argv: Sequence[str] | None) -> int:
     # Python threads of a batch sweep (its noise) get the cores (docs/performance.md)
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     try:
-        parser = build_parser()
+        words = sys.argv[1:] if argv is None else argv
+        parser = build_parser(only=command_of(words) or "")
         args = parser.parse_args(argv)
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED

@@ -14,11 +14,7 @@ from typing import Any
 from striatal.cli.guards import bounded_float, bounded_int
 from striatal.io.files import dumps_json
 from striatal.params import check_seed
-from striatal.sim.bench import load_harness
 
-COMMAND = "bench"
-ORDER = 90
-HELP = "benchmark the kernel against Gymnasium's CartPole (docs/performance.md)"
 DESCRIPTION = (
     "Steps per second of one chapter trial (kernel.run_trial, noise generation included) "
     "against Gymnasium's CartPole-v1 step loop, of the batched kernel against "
@@ -100,6 +96,8 @@ def config_from(args: argparse.Namespace, harness: ModuleType) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
+    from striatal.sim.bench import load_harness
+
     harness = load_harness()  # benchmarks/harness.py of the checkout
     config = config_from(args, harness)
     seed = check_seed(args.seed)

@@ -15,9 +15,6 @@ if TYPE_CHECKING:
     from striatal.neural.network import NetworkConfig
     from striatal.params import Controller, Plant
 
-COMMAND = "neural"
-ORDER = 45
-HELP = "run the controller as a spiking network (needs the [neural] extra: nengo)"
 DESCRIPTION = (
     "Section 4's neural reading built as a spiking network of LIF neurons (nengo): cortex "
     "encodes the sensed state and E~ (eqs 15-16); a balancing channel decodes mu_1 (eq 22) "

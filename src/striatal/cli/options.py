@@ -8,7 +8,6 @@ from pathlib import Path
 from typing import Any
 
 from striatal.errors import ParameterError
-from striatal.io.rundir import read_result
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -218,6 +217,8 @@ def add_gain_source_arguments(parser: argparse.ArgumentParser) -> None:
 
 def result_controller(path: Path) -> tuple[Controller, Plant]:
     """The controller (W, theta_c, readings) and plant of a result.json of train."""
+    from striatal.io.rundir import read_result
+
     r = read_result(path)
     return r.controller, r.plant
 

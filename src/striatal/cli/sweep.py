@@ -16,9 +16,6 @@ from striatal.io.files import check_out_dir, dumps_json
 from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W, Simulation
 from striatal.sim.rollout import Protocol
 
-COMMAND = "sweep"
-ORDER = 40
-HELP = "many learning runs over seeds (and a grid), with the learner's control and baselines"
 DESCRIPTION = (
     "Run the learner for N seeds spawned from --seed (SeedSequence), for each --init and "
     "each alpha x gamma of the grid, plus the learner's declared no-learning control arm "

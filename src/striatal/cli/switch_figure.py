@@ -11,9 +11,6 @@ from striatal.cli.lists import CommaList
 from striatal.io.files import dumps_json
 from striatal.params import CHAPTER_FINAL_THETA_C, check_theta_c
 
-COMMAND = "switch-figure"
-ORDER = 43
-HELP = "plot the soft switch's balancing and swing-up weights against |theta|"
 DESCRIPTION = (
     "The cerebellar soft switch of section 4, read with the labels swapped "
     "(docs/paper-notes.md section 4): balancing weight clip(gamma (theta_c - |theta|), 0,"

@@ -22,9 +22,6 @@ from striatal.io.rundir import RunDir
 from striatal.learners import LearnerState, TrialRecord, default_config
 from striatal.params import CHAPTER_INITIAL_THETA_C, Plant, Simulation
 
-COMMAND = "train"
-ORDER = 20
-HELP = "run the chapter's switching REINFORCE learner (or a variant: --learner)"
 DESCRIPTION = (
     "Learn the six gains and theta_c with the chapter's REINFORCE rule (eqs 1-5, 21-25): "
     "60-s trials from theta = 3.12 at rest, a Gaussian policy, eligibility traces and the "
