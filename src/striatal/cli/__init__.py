@@ -20,10 +20,10 @@ import threading
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
-from typing import Any, NoReturn
+from typing import Any, NamedTuple, NoReturn
 
 from striatal import interrupts
-from striatal.cli import config
+from striatal.cli import config, jit
 from striatal.cli.helpformat import DefaultsHelpFormatter
 from striatal.errors import StriatalError
 from striatal.io.files import check_no_dangling_link
@@ -59,57 +59,79 @@ class OneLineParser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
-#: Command -> (its module in this package, its one-line help), in the order of
-#: ``striatal --help``.
-COMMANDS: dict[str, tuple[str, str]] = {
-    "simulate": ("simulate", "simulate the cart-pole under the switching controller (mean policy)"),
-    "evaluate": ("evaluate", "chance that a noisy trial passes the success test with fixed gains"),
-    "train": ("train", "run the chapter's switching REINFORCE learner (or a variant: --learner)"),
-    "figure": (
-        "figure",
-        "draw the chapter's Figure 5 (snapshots, tip path, x and theta) for one run",
+class Command(NamedTuple):
+    """A subcommand: its module in this package, its one-line help, and whether it runs
+    the compiled kernel (then its first compile is announced: :mod:`striatal.cli.jit`)."""
+
+    module: str
+    help: str
+    compiles: bool = True
+
+
+#: Every subcommand, in the order of ``striatal --help``.
+COMMANDS: dict[str, Command] = {
+    "simulate": Command(
+        "simulate", "simulate the cart-pole under the switching controller (mean policy)"
     ),
-    "sweep": (
+    "evaluate": Command(
+        "evaluate", "chance that a noisy trial passes the success test with fixed gains"
+    ),
+    "train": Command(
+        "train", "run the chapter's switching REINFORCE learner (or a variant: --learner)"
+    ),
+    "figure": Command(
+        "figure", "draw the chapter's Figure 5 (snapshots, tip path, x and theta) for one run"
+    ),
+    "sweep": Command(
         "sweep",
         "many learning runs over seeds (and a grid), with the learner's control and baselines",
     ),
-    "compare": (
+    "compare": Command(
         "compare",
         "print the comparison table (markdown) of sweep summaries and write it as JSON",
+        compiles=False,
     ),
-    "curves": (
+    "curves": Command(
         "curves",
         "plot reward, running success rate, W1..W6, theta_c and the learner's own columns",
+        compiles=False,
     ),
-    "profile": ("profile", "fraction of seeds solved against budget, per arm, with 95 %% bands"),
-    "animate": (
-        "animate",
-        "animate one run of the switching controller as a GIF (or MP4 with ffmpeg)",
+    "profile": Command(
+        "profile",
+        "fraction of seeds solved against budget, per arm, with 95 %% bands",
+        compiles=False,
     ),
-    "switch-figure": (
+    "animate": Command(
+        "animate", "animate one run of the switching controller as a GIF (or MP4 with ffmpeg)"
+    ),
+    "switch-figure": Command(
         "switch_figure",
         "plot the soft switch's balancing and swing-up weights against |theta|",
+        compiles=False,
     ),
-    "ablation": ("ablation", "compare the learner variants over many seeds from random W(0)"),
-    "interpret": (
+    "ablation": Command(
+        "ablation", "compare the learner variants over many seeds from random W(0)"
+    ),
+    "interpret": Command(
         "interpret",
         "read mu_1, mu_2 as direct/indirect pathway activity and the updates as LTP/LTD",
+        compiles=False,
     ),
-    "neural": (
-        "neural",
-        "run the controller as a spiking network (needs the [neural] extra: nengo)",
+    "neural": Command(
+        "neural", "run the controller as a spiking network (needs the [neural] extra: nengo)"
     ),
-    "robustness": (
-        "robustness",
-        "success of learned gains when pole mass/length differ or sensors are noisy",
+    "robustness": Command(
+        "robustness", "success of learned gains when pole mass/length differ or sensors are noisy"
     ),
-    "bench": ("bench", "benchmark the kernel against Gymnasium's CartPole (docs/performance.md)"),
+    "bench": Command(
+        "bench", "benchmark the kernel against Gymnasium's CartPole (docs/performance.md)"
+    ),
 }
 
 
 def command_module(name: str) -> ModuleType:
     """The module of command ``name`` (imported now, not before)."""
-    return importlib.import_module(f"{__name__}.{COMMANDS[name][0]}")
+    return importlib.import_module(f"{__name__}.{COMMANDS[name].module}")
 
 
 def command_of(argv: Sequence[str]) -> str | None:
@@ -133,12 +155,14 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"striatal {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
     sub.required = True
-    for name, (_, help_text) in COMMANDS.items():
+    for name, command in COMMANDS.items():
         if only is not None and name != only:
-            sub.add_parser(name, help=help_text)
+            sub.add_parser(name, help=command.help)
             continue
         mod = command_module(name)
-        p = sub.add_parser(name, help=help_text, description=getattr(mod, "DESCRIPTION", help_text))
+        p = sub.add_parser(
+            name, help=command.help, description=getattr(mod, "DESCRIPTION", command.help)
+        )
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
     return parser
@@ -171,7 +195,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``striatal`` and ``python -m striatal``; returns the exit code.
 
     Ctrl-C at any point, while the libraries load too (they load here, when the
-    parser imports the commands, not when ``striatal.cli`` is imported), exits 130
+    command's module or its ``run`` imports them, not when ``striatal.cli`` is
+    imported), exits 130
     without a traceback. Run as the program (``argv`` None: it parses ``sys.argv``),
     a Ctrl-C once the first is being handled, or once the command has returned,
     is ignored: the exit code stays the command's.
@@ -214,6 +239,8 @@ def _main(argv: Sequence[str] | None) -> int:
             # every --out (a folder or a file): a link to nothing above it can never be
             # written, so say so now rather than after the computation
             check_no_dangling_link(Path(out).parent)
+        if COMMANDS[args.command].compiles:
+            jit.announce_compiles()
         return int(args._run(args))
     except StriatalError as exc:
         sys.stderr.write(f"striatal {args.command}: error: {exc}\n")
