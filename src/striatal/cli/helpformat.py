@@ -38,6 +38,12 @@ def default_text(value: Any) -> str:
     return str(value)
 
 
+def default_note(text: str) -> str:
+    """``(default: text)``: how help states a default that argparse does not hold (an
+    option whose default depends on another, or is "none")."""
+    return f"(default: {text})"
+
+
 def states_default(action: argparse.Action) -> bool:
     """Whether the help appends ``(default: X)`` to this action's help."""
     if action.default is None or action.default is argparse.SUPPRESS:
@@ -60,7 +66,7 @@ class DefaultsHelpFormatter(argparse.HelpFormatter):
             return text
         # the help is %-expanded by argparse: a % in the default must stay literal
         stated = default_text(action.default).replace("%", "%%")
-        return f"{text} (default: {stated})" if text else f"default: {stated}"
+        return f"{text} {default_note(stated)}" if text else default_note(stated)
 
     def _format_args(self, action: argparse.Action, default_metavar: str) -> str:
         from striatal.cli.lists import CommaList

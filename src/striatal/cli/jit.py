@@ -13,7 +13,7 @@ import sys
 from typing import Any, TextIO
 
 #: What a command says before its first compile of the kernel (``{where}``: the cache).
-NOTICE = "striatal: compiling the simulation kernel (once, about 20 s; cached in {where})\n"
+NOTICE = "striatal: compiling the simulation kernel (once, about 10-30 s; cached in {where})\n"
 
 
 def cache_dir(dispatcher: Any) -> str | None:
