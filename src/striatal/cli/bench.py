@@ -12,6 +12,7 @@ from types import ModuleType
 from typing import Any
 
 from striatal.cli.guards import bounded_float, bounded_int
+from striatal.cli.helpformat import default_note
 from striatal.io.files import dumps_json
 from striatal.params import check_seed
 
@@ -44,17 +45,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=bounded_int(1, MAX_BATCH),
         default=None,
         help=f"B of the batched comparison, at most {MAX_BATCH} (its noise is B x steps "
-        "floats) (default 256)",
+        f"floats) {default_note('256; --quick: 32')}",
     )
     parser.add_argument(
         "--seconds",
         type=bounded_float(0.0, MAX_SECONDS),
         default=None,
         help=f"wall budget of one timed repeat of one side [s], at most {MAX_SECONDS:g} "
-        "(default 0.5)",
+        + default_note("0.5"),
     )
     parser.add_argument(
-        "--repeats", type=bounded_int(1, 100), default=None, help="timed repeats (default 5)"
+        "--repeats",
+        type=bounded_int(1, 100),
+        default=None,
+        help="timed repeats " + default_note("5; --quick: 2"),
     )
     parser.add_argument("--no-train", action="store_true", help="skip timing striatal train")
     parser.add_argument(

@@ -80,7 +80,7 @@ def _check_fields(obj: dict[str, Any], where: str) -> None:
 
 def load_summary(path: Path) -> dict[str, Any]:
     """A sweep's summary.json (from its folder or the file), checked for its arms and
-    the types of their fields (issue 16 item 9)."""
+    the types of their fields."""
     p = path / "summary.json" if path.is_dir() else path
     data = read_json(p, what="sweep summary")
     if not isinstance(data, dict) or not isinstance(data.get("arms"), list):

@@ -67,11 +67,3 @@ class DefaultsHelpFormatter(argparse.HelpFormatter):
         # the help is %-expanded by argparse: a % in the default must stay literal
         stated = default_text(action.default).replace("%", "%%")
         return f"{text} {default_note(stated)}" if text else default_note(stated)
-
-    def _format_args(self, action: argparse.Action, default_metavar: str) -> str:
-        from striatal.cli.lists import CommaList
-
-        if isinstance(action, CommaList) and isinstance(action.metavar, str):
-            # one word, A,B,...: not the "A [A ...]" of the deprecated space-separated form
-            return action.metavar
-        return super()._format_args(action, default_metavar)

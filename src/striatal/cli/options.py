@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from striatal.cli.helpformat import default_note
 from striatal.errors import ParameterError
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
@@ -63,7 +64,7 @@ def add_controller_arguments(parser: argparse.ArgumentParser, *, gains_required:
             "--chapter-final",
             action="store_true",
             help=f"the chapter's learned W {list(CHAPTER_FINAL_W)} and theta_c = "
-            f"{CHAPTER_FINAL_THETA_C} (default when no gains are given)",
+            f"{CHAPTER_FINAL_THETA_C}, the gain set used when none is chosen",
         )
         choice.add_argument(
             "--chapter-initial",
@@ -75,8 +76,8 @@ def add_controller_arguments(parser: argparse.ArgumentParser, *, gains_required:
             "--theta-c",
             type=float,
             default=None,
-            help="switching threshold [rad], balancing while |theta| < theta_c (eq 21); "
-            "default: the one of the chosen gain set",
+            help="switching threshold [rad], balancing while |theta| < theta_c (eq 21) "
+            + default_note("the one of the chosen gain set"),
         )
     g.add_argument(
         "--balance-sign",
@@ -150,9 +151,9 @@ def add_hardware_arguments(parser: argparse.ArgumentParser) -> None:
         "--hold",
         choices=("u", "force"),
         default=None,
-        help="what the motor holds over each step dt: 'u' (default, the chapter's "
-        "idealisation) or 'force' (eq 12 computed at the sample with the controller's "
-        "model, held while the plant's eqs 8-9 integrate)",
+        help="what the motor holds over each step dt: 'u' (the chapter's idealisation) or "
+        "'force' (eq 12 computed at the sample with the controller's model, held while the "
+        "plant's eqs 8-9 integrate) " + default_note("u; --robust: force"),
     )
     g.add_argument(
         "--max-force",

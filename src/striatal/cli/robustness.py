@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from striatal.cli import lists, options
+from striatal.cli import options
 from striatal.cli.lists import CommaList
 from striatal.errors import DataFileError, ParameterError
 from striatal.io.files import atomic_write_text, dumps_json, read_json
@@ -30,7 +30,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME[,...]",
         help="variants of an ablation.json, one column each (default: all)",
     )
-    lists.add_repeated_alias(parser, "--variant", "--variants", dest="variants")
     parser.add_argument("--repeats", type=int, default=10, help="sensor-noise runs per controller")
     parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
     parser.add_argument("--json", action="store_true", help="print the rows as JSON")

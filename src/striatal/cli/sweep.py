@@ -37,7 +37,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--init",
         action=CommaList,
         names=("chapter", "random"),
-        legacy_spaces=True,
         default=("chapter",),
         help="W(0): the chapter's, and/or uniform in [-1, 1]^6 per seed (as train --init "
         "random); comma-separated",

@@ -31,7 +31,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--inhibition",
         action=CommaList,
         item=float,
-        legacy_spaces=True,
         default=(2.0, 5.0, 20.0, 50.0),
         metavar="GAMMA[,...]",
         help="strengths of lateral inhibition gamma [1/rad], one curve each; comma-separated",
