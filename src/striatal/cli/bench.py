@@ -61,20 +61,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="timed repeats " + default_note("5; --quick: 2"),
     )
     parser.add_argument("--no-train", action="store_true", help="skip timing striatal train")
-    parser.add_argument(
-        "--sweep-seeds",
-        type=bounded_int(0, 10_000),
-        default=0,
-        help="time `striatal sweep --seeds N` (learner + control arm) on 1 and on all "
-        "workers (0: skip; the docs use 100)",
-    )
-    parser.add_argument(
-        "--memory-runs",
-        type=bounded_int(0, 100_000),
-        default=0,
-        help="peak memory of a sweep of this many runs on one worker, trials capped at 20 "
-        "(0: skip; the docs use 1000)",
-    )
+    for flag, most, what, documented in (
+        (
+            "--sweep-seeds",
+            10_000,
+            "time `striatal sweep --seeds N` (learner + control arm) on 1 and on all workers",
+            100,
+        ),
+        (
+            "--memory-runs",
+            100_000,
+            "peak memory of a sweep of this many runs on one worker, trials capped at 20",
+            1000,
+        ),
+    ):
+        parser.add_argument(
+            flag,
+            type=bounded_int(0, most),
+            default=0,
+            help=f"{what} (0: skip; the docs use {documented})",
+        )
     parser.add_argument(
         "--anchors",
         action="store_true",
