@@ -70,12 +70,34 @@ from numba import njit
 @njit(cache=True)
 def twice(x):
     return 2 * x
+
+@njit(cache=True)
+def thrice(x):
+    return 3 * x
 """
 
 
-def _run_probe(tmp_path: Path) -> str:
-    code = textwrap.dedent(
-        """
+FORKED = """
+import multiprocessing, sys
+sys.path.insert(0, sys.argv[1])
+from striatal.cli import jit
+jit.announce_compiles(package="probe")
+import probe
+
+def work(x):  # each worker compiles a function of its own
+    return probe.twice(x) if x == 1 else probe.thrice(x)
+
+with multiprocessing.get_context("fork").Pool(2) as pool:
+    pool.map(work, [1, 2], chunksize=1)
+"""
+
+
+def _run_probe(tmp_path: Path, forked: bool = False) -> str:
+    code = (
+        FORKED
+        if forked
+        else textwrap.dedent(
+            """
         import sys
         sys.path.insert(0, sys.argv[1])
         from striatal.cli import jit
@@ -83,6 +105,7 @@ def _run_probe(tmp_path: Path) -> str:
         import probe
         probe.twice(3)
         """
+        )
     )
     env = {**os.environ, "PYTHONPATH": SRC, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
     done = subprocess.run(
@@ -101,6 +124,11 @@ def test_the_first_compile_is_announced_once_and_a_warm_cache_is_silent(tmp_path
     assert cold.count("compiling the simulation kernel") == 1, cold
     assert str(tmp_path / "cache") in cold
     assert _run_probe(tmp_path) == ""
+
+
+def test_forked_workers_say_it_once_in_all(tmp_path: Path) -> None:
+    (tmp_path / "probe.py").write_text(PROBE)
+    assert _run_probe(tmp_path, forked=True).count("compiling the simulation kernel") == 1
 
 
 def test_the_commands_that_run_the_kernel_announce_its_compile() -> None:

@@ -23,19 +23,25 @@ def cache_dir(dispatcher: Any) -> str | None:
 
 def announce_compiles(package: str = "striatal", stream: TextIO | None = None) -> None:
     """From now on, say :data:`NOTICE` once, before Numba compiles the first cached
-    function of ``package`` (imports Numba)."""
+    function of ``package`` (imports Numba). The worker processes of a sweep, forked
+    with the listener, share its flag: one line in all, from whichever compiles first."""
+    import multiprocessing
+
     from numba.core import event
 
-    class Notice(event.Listener):
-        said = False
+    said = multiprocessing.Value("b", 0)
 
+    class Notice(event.Listener):
         def on_start(self, ev: event.Event) -> None:
             dispatcher = ev.data["dispatcher"]
             module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
             where = cache_dir(dispatcher)
-            if self.said or where is None or module.partition(".")[0] != package:
+            if where is None or module.partition(".")[0] != package:
                 return
-            self.said = True
+            with said.get_lock():
+                if said.value:
+                    return
+                said.value = 1
             out = sys.stderr if stream is None else stream
             out.write(NOTICE.format(where=where))
             out.flush()
