@@ -68,7 +68,7 @@ def test_defaults_are_still_stated() -> None:
     assert helps["init"].endswith("(default: chapter)")
     assert helps["max_trials"].count("default") == 1 and "2000" in helps["max_trials"]
     bench = {a.dest: h for a, h in _helps(COMMANDS["bench"])}
-    assert bench["batch_size"].endswith("(default 256)")
+    assert bench["batch_size"].endswith("(default: 256; --quick: 32)")
     sw = {a.dest: h for a, h in _helps(COMMANDS["switch-figure"])}
     assert sw["inhibition"].endswith("(default: 2.0,5.0,20.0,50.0)")
 
@@ -94,6 +94,16 @@ def test_the_options_the_issue_names_have_help() -> None:
     assert "budget" in helps["max_trials"] and "(default: 300)" in helps["max_trials"]
 
 
+@pytest.mark.parametrize("name", sorted(COMMANDS))
+def test_every_default_is_written_one_way(name: str) -> None:
+    """Every stated default reads "(default: X)", whoever states it."""
+    for action, help_text in _helps(COMMANDS[name]):
+        for m in re.finditer(r"\bdefault\b", help_text, re.IGNORECASE):
+            assert help_text[m.start() - 1 : m.end() + 1] == "(default:", (
+                f"{name} {action.option_strings}: {help_text!r}"
+            )
+
+
 # ---- item 3: one list syntax
 
 
@@ -101,32 +111,35 @@ def _parse(argv: list[str]) -> argparse.Namespace:
     return build_parser().parse_args(argv)
 
 
-def test_lists_are_comma_separated_and_old_forms_warn(capsys: pytest.CaptureFixture[str]) -> None:
+def test_lists_are_comma_separated(capsys: pytest.CaptureFixture[str]) -> None:
     new = _parse(["sweep", "--init", "chapter,random"])
     assert capsys.readouterr().err == ""
-    old = _parse(["sweep", "--init", "chapter", "random"])
-    err = capsys.readouterr().err.splitlines()
-    assert new.init == old.init == ("chapter", "random")
-    assert err == [
-        "striatal sweep: warning: '--init chapter random' is deprecated and goes in the "
-        "next release; write '--init chapter,random'"
-    ]
+    assert new.init == ("chapter", "random")
     assert _parse(["switch-figure", "--inhibition", "2,5"]).inhibition == (2.0, 5.0)
-    assert _parse(["switch-figure", "--inhibition", "2", "5"]).inhibition == (2.0, 5.0)
-    assert len(capsys.readouterr().err.splitlines()) == 1
     a = _parse(["sweep", "--alpha-grid", "0.5,1", "--baselines", "lqr,hand"])
     assert a.alpha_grid == (0.5, 1.0) and a.baselines == ("lqr", "hand")
     assert _parse(["sweep", "--alpha-grid", "-1,2"]).alpha_grid == (-1.0, 2.0)
-
-
-def test_repeated_variant_is_the_old_form_of_variants(capsys: pytest.CaptureFixture[str]) -> None:
-    new = _parse(["robustness", "f.json", "--variants", "chapter,pgpe"])
-    assert capsys.readouterr().err == ""
-    old = _parse(["robustness", "f.json", "--variant", "chapter", "--variant", "pgpe"])
-    err = capsys.readouterr().err.splitlines()
-    assert new.variants == old.variants == ("chapter", "pgpe")
-    assert len(err) == 2 and all("deprecated" in e and "--variants" in e for e in err)
+    assert _parse(["robustness", "f.json", "--variants", "chapter,pgpe"]).variants == (
+        "chapter",
+        "pgpe",
+    )
     assert _parse(["robustness", "f.json"]).variants == ()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["sweep", "--init", "chapter", "random"],
+        ["switch-figure", "--inhibition", "2", "5"],
+    ],
+)
+def test_space_separated_and_repeated_lists_are_refused(
+    argv: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as e:
+        _parse(argv)
+    err = capsys.readouterr().err.splitlines()
+    assert e.value.code == 2 and len(err) == 1 and "unrecognized arguments" in err[0], err
 
 
 @pytest.mark.parametrize(

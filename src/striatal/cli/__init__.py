@@ -1,7 +1,10 @@
 """The ``striatal`` command: a thin layer that parses, calls the library and prints.
 
-Subcommands are the modules of this package that define ``COMMAND``; each has
-``HELP``, ``ORDER``, ``add_arguments(parser)`` and ``run(args) -> int``. Any
+Each subcommand is a module of this package, named in :data:`COMMANDS` with its one-line
+help; it has ``add_arguments(parser)``, ``run(args) -> int`` and optionally
+``DESCRIPTION``. Only the module of the command being run is imported, and importing it
+is cheap (NumPy at most: Numba, SciPy and Matplotlib load inside ``run``), so
+``striatal --help`` and ``striatal X --help`` answer at once. Any
 :class:`~striatal.errors.StriatalError` becomes one line on stderr and exit 2.
 """
 
@@ -10,7 +13,6 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
-import pkgutil
 import re
 import signal
 import sys
@@ -18,10 +20,10 @@ import threading
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
-from typing import Any, NoReturn
+from typing import Any, NamedTuple, NoReturn
 
 from striatal import interrupts
-from striatal.cli import config
+from striatal.cli import config, jit
 from striatal.cli.helpformat import DefaultsHelpFormatter
 from striatal.errors import StriatalError
 from striatal.io.files import check_no_dangling_link
@@ -57,16 +59,93 @@ class OneLineParser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
-def _commands() -> list[ModuleType]:
-    mods = []
-    for info in pkgutil.iter_modules(__path__):
-        mod = importlib.import_module(f"{__name__}.{info.name}")
-        if hasattr(mod, "COMMAND"):
-            mods.append(mod)
-    return sorted(mods, key=lambda m: (getattr(m, "ORDER", 100), m.COMMAND))
+class Command(NamedTuple):
+    """A subcommand: its module in this package, its one-line help, and whether it runs
+    the compiled kernel (then its first compile is announced: :mod:`striatal.cli.jit`)."""
+
+    module: str
+    help: str
+    compiles: bool = True
 
 
-def build_parser() -> argparse.ArgumentParser:
+#: Every subcommand, in the order of ``striatal --help``.
+COMMANDS: dict[str, Command] = {
+    "simulate": Command(
+        "simulate", "simulate the cart-pole under the switching controller (mean policy)"
+    ),
+    "evaluate": Command(
+        "evaluate", "chance that a noisy trial passes the success test with fixed gains"
+    ),
+    "train": Command(
+        "train", "run the chapter's switching REINFORCE learner (or a variant: --learner)"
+    ),
+    "figure": Command(
+        "figure", "draw the chapter's Figure 5 (snapshots, tip path, x and theta) for one run"
+    ),
+    "sweep": Command(
+        "sweep",
+        "many learning runs over seeds (and a grid), with the learner's control and baselines",
+    ),
+    "compare": Command(
+        "compare",
+        "print the comparison table (markdown) of sweep summaries and write it as JSON",
+        compiles=False,
+    ),
+    "curves": Command(
+        "curves",
+        "plot reward, running success rate, W1..W6, theta_c and the learner's own columns",
+        compiles=False,
+    ),
+    "profile": Command(
+        "profile",
+        "fraction of seeds solved against budget, per arm, with 95 %% bands",
+        compiles=False,
+    ),
+    "animate": Command(
+        "animate", "animate one run of the switching controller as a GIF (or MP4 with ffmpeg)"
+    ),
+    "switch-figure": Command(
+        "switch_figure",
+        "plot the soft switch's balancing and swing-up weights against |theta|",
+        compiles=False,
+    ),
+    "ablation": Command(
+        "ablation", "compare the learner variants over many seeds from random W(0)"
+    ),
+    "interpret": Command(
+        "interpret",
+        "read mu_1, mu_2 as direct/indirect pathway activity and the updates as LTP/LTD",
+        compiles=False,
+    ),
+    "neural": Command(
+        "neural", "run the controller as a spiking network (needs the [neural] extra: nengo)"
+    ),
+    "robustness": Command(
+        "robustness", "success of learned gains when pole mass/length differ or sensors are noisy"
+    ),
+    "bench": Command(
+        "bench", "benchmark the kernel against Gymnasium's CartPole (docs/performance.md)"
+    ),
+}
+
+
+def command_module(name: str) -> ModuleType:
+    """The module of command ``name`` (imported now, not before)."""
+    return importlib.import_module(f"{__name__}.{COMMANDS[name].module}")
+
+
+def command_of(argv: Sequence[str]) -> str | None:
+    """The command that ``argv`` names (its first word that is not an option), if any."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The ``striatal`` parser. With ``only`` a command's name, only that command's
+    options are declared (the others are listed, their modules not imported); with
+    ``only=""`` none are."""
     from striatal import __version__
 
     parser = OneLineParser(
@@ -76,11 +155,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"striatal {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
     sub.required = True
-    for mod in _commands():
+    for name, command in COMMANDS.items():
+        if only is not None and name != only:
+            sub.add_parser(name, help=command.help)
+            continue
+        mod = command_module(name)
         p = sub.add_parser(
-            mod.COMMAND,
-            help=mod.HELP,
-            description=getattr(mod, "DESCRIPTION", mod.HELP),
+            name, help=command.help, description=getattr(mod, "DESCRIPTION", command.help)
         )
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
@@ -114,7 +195,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``striatal`` and ``python -m striatal``; returns the exit code.
 
     Ctrl-C at any point, while the libraries load too (they load here, when the
-    parser imports the commands, not when ``striatal.cli`` is imported), exits 130
+    command's module or its ``run`` imports them, not when ``striatal.cli`` is
+    imported), exits 130
     without a traceback. Run as the program (``argv`` None: it parses ``sys.argv``),
     a Ctrl-C once the first is being handled, or once the command has returned,
     is ignored: the exit code stays the command's.
@@ -137,7 +219,8 @@ def _main(argv: Sequence[str] | None) -> int:
     # Python threads of a batch sweep (its noise) get the cores (docs/performance.md)
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     try:
-        parser = build_parser()
+        words = sys.argv[1:] if argv is None else argv
+        parser = build_parser(only=command_of(words) or "")
         args = parser.parse_args(argv)
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
@@ -156,6 +239,8 @@ def _main(argv: Sequence[str] | None) -> int:
             # every --out (a folder or a file): a link to nothing above it can never be
             # written, so say so now rather than after the computation
             check_no_dangling_link(Path(out).parent)
+        if COMMANDS[args.command].compiles:
+            jit.announce_compiles()
         return int(args._run(args))
     except StriatalError as exc:
         sys.stderr.write(f"striatal {args.command}: error: {exc}\n")

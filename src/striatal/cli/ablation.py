@@ -21,9 +21,6 @@ from striatal.experiments.ablation import VARIANT_NAMES, build, markdown_table, 
 from striatal.io.files import atomic_write_text, check_out_dir, dumps_json, write_json
 from striatal.io.rundir import RunDir
 
-COMMAND = "ablation"
-ORDER = 45
-HELP = "compare the learner variants over many seeds from random W(0)"
 DESCRIPTION = (
     "Run each named learner variant from W(0) uniform in [-1, 1]^6 (as train --init random) "
     "for seeds S..S+N-1 and tabulate success (mean policy, Wilson 95 % interval), trials "
@@ -59,22 +56,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="noisy trials of each pass-probability estimate (W(0) and final gains), "
         "counted apart as eval_simulations; 0: none",
     )
-    parser.add_argument(
-        "--workers", type=int, default=config.WORKERS, help="local worker processes"
-    )
-    parser.add_argument(
-        "--backend",
-        choices=("local", "ray"),
-        default="local",
-        help="local worker processes, or a Ray cluster (--address)",
-    )
-    parser.add_argument("--address", default=None, help="Ray cluster HOST:PORT (--backend ray)")
-    parser.add_argument(
-        "--connect-timeout",
-        type=float,
-        default=experiments.CONNECT_TIMEOUT,
-        help="give up on a Ray address that accepts no connection after this many seconds",
-    )
+    options.add_worker_arguments(parser, connect_timeout=experiments.CONNECT_TIMEOUT)
     parser.add_argument(
         "--out",
         type=options.out_path,
@@ -111,12 +93,7 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--seeds must be >= 1, got {args.seeds}")
     if args.first_seed < 0:
         raise ParameterError(f"--first-seed must be >= 0, got {args.first_seed}")
-    if args.workers < 1:
-        raise ParameterError(f"--workers must be >= 1, got {args.workers}")
-    if args.backend == "ray" and not args.address:
-        raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
-    if not args.connect_timeout > 0:
-        raise ParameterError(f"--connect-timeout must be > 0 seconds, got {args.connect_timeout}")
+    options.check_worker_arguments(args)
     names = list(args.variants)
     if not names:
         raise ParameterError(f"--variants names no variant; choose from {', '.join(VARIANT_NAMES)}")

@@ -13,9 +13,6 @@ from striatal.errors import ParameterError
 from striatal.io.files import dumps_json
 from striatal.limits import count_of_steps
 
-COMMAND = "animate"
-ORDER = 42
-HELP = "animate one run of the switching controller as a GIF (or MP4 with ffmpeg)"
 DESCRIPTION = (
     "Simulate one run with the mean policy and write an animation: a frame every "
     "speed / fps seconds of simulated time, drawn by striatal.viz.render.cartpole_frame. "

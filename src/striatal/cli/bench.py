@@ -12,13 +12,10 @@ from types import ModuleType
 from typing import Any
 
 from striatal.cli.guards import bounded_float, bounded_int
+from striatal.cli.helpformat import default_note
 from striatal.io.files import dumps_json
 from striatal.params import check_seed
-from striatal.sim.bench import load_harness
 
-COMMAND = "bench"
-ORDER = 90
-HELP = "benchmark the kernel against Gymnasium's CartPole (docs/performance.md)"
 DESCRIPTION = (
     "Steps per second of one chapter trial (kernel.run_trial, noise generation included) "
     "against Gymnasium's CartPole-v1 step loop, of the batched kernel against "
@@ -48,33 +45,42 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=bounded_int(1, MAX_BATCH),
         default=None,
         help=f"B of the batched comparison, at most {MAX_BATCH} (its noise is B x steps "
-        "floats) (default 256)",
+        f"floats) {default_note('256; --quick: 32')}",
     )
     parser.add_argument(
         "--seconds",
         type=bounded_float(0.0, MAX_SECONDS),
         default=None,
         help=f"wall budget of one timed repeat of one side [s], at most {MAX_SECONDS:g} "
-        "(default 0.5)",
+        + default_note("0.5"),
     )
     parser.add_argument(
-        "--repeats", type=bounded_int(1, 100), default=None, help="timed repeats (default 5)"
+        "--repeats",
+        type=bounded_int(1, 100),
+        default=None,
+        help="timed repeats " + default_note("5; --quick: 2"),
     )
     parser.add_argument("--no-train", action="store_true", help="skip timing striatal train")
-    parser.add_argument(
-        "--sweep-seeds",
-        type=bounded_int(0, 10_000),
-        default=0,
-        help="time `striatal sweep --seeds N` (learner + control arm) on 1 and on all "
-        "workers (0: skip; the docs use 100)",
-    )
-    parser.add_argument(
-        "--memory-runs",
-        type=bounded_int(0, 100_000),
-        default=0,
-        help="peak memory of a sweep of this many runs on one worker, trials capped at 20 "
-        "(0: skip; the docs use 1000)",
-    )
+    for flag, most, what, documented in (
+        (
+            "--sweep-seeds",
+            10_000,
+            "time `striatal sweep --seeds N` (learner + control arm) on 1 and on all workers",
+            100,
+        ),
+        (
+            "--memory-runs",
+            100_000,
+            "peak memory of a sweep of this many runs on one worker, trials capped at 20",
+            1000,
+        ),
+    ):
+        parser.add_argument(
+            flag,
+            type=bounded_int(0, most),
+            default=0,
+            help=f"{what} (0: skip; the docs use {documented})",
+        )
     parser.add_argument(
         "--anchors",
         action="store_true",
@@ -100,6 +106,8 @@ def config_from(args: argparse.Namespace, harness: ModuleType) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
+    from striatal.sim.bench import load_harness
+
     harness = load_harness()  # benchmarks/harness.py of the checkout
     config = config_from(args, harness)
     seed = check_seed(args.seed)

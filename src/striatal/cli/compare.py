@@ -9,12 +9,8 @@ from typing import Any
 
 from striatal.cli import options
 from striatal.errors import DataFileError, ParameterError
-from striatal.experiments import runner as experiments
 from striatal.io.files import dumps_json, read_json, write_json
 
-COMMAND = "compare"
-ORDER = 41
-HELP = "print the comparison table (markdown) of sweep summaries and write it as JSON"
 DESCRIPTION = (
     "Read summary.json of one or more sweeps (a folder or the file itself), print one "
     "markdown table of every arm (learner, its no-learning control, baselines) per init: "
@@ -84,7 +80,7 @@ def _check_fields(obj: dict[str, Any], where: str) -> None:
 
 def load_summary(path: Path) -> dict[str, Any]:
     """A sweep's summary.json (from its folder or the file), checked for its arms and
-    the types of their fields (issue 16 item 9)."""
+    the types of their fields."""
     p = path / "summary.json" if path.is_dir() else path
     data = read_json(p, what="sweep summary")
     if not isinstance(data, dict) or not isinstance(data.get("arms"), list):
@@ -160,6 +156,8 @@ def run(args: argparse.Namespace) -> int:
     arms = label_arms(summaries, [str(p) for p in args.summaries])
     arms.sort(key=lambda a: (a["init"], a["arm"]))
     pairs = label_pairs(summaries)
+    from striatal.experiments import runner as experiments
+
     table = experiments.markdown_table({"arms": arms, "learner_vs_control": pairs})
     record = {
         "arms": arms,

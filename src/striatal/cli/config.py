@@ -232,8 +232,7 @@ def apply(
             del command_parser.error
         words += found
     at = list(argv).index(args.command) + 1
-    with lists.quiet():  # the command line was read once already: say its warnings once
-        return parser.parse_args([*argv[:at], *words, *argv[at:]])
+    return parser.parse_args([*argv[:at], *words, *argv[at:]])
 
 
 def _summary_values(args: argparse.Namespace) -> dict[str, Any]:

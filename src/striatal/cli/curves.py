@@ -9,11 +9,7 @@ from pathlib import Path
 from striatal.cli import options
 from striatal.errors import ParameterError
 from striatal.io.files import dumps_json
-from striatal.io.rundir import read_history
 
-COMMAND = "curves"
-ORDER = 41
-HELP = "plot reward, running success rate, W1..W6, theta_c and the learner's own columns"
 DESCRIPTION = (
     "Learning curves from history.csv of striatal train, in one figure: the reward of each "
     "trial (the sparse +10 / 0 / -5 with the running fraction of positive rewards, or the "
@@ -37,6 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from striatal.io.rundir import read_history
     from striatal.viz import plots
 
     out = plots.check_image_path(args.out, (".png", ".pdf", ".svg"))

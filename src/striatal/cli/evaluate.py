@@ -9,11 +9,7 @@ from striatal.cli import options, progress
 from striatal.errors import ParameterError
 from striatal.io.files import dumps_json
 from striatal.params import Controller, Plant, Simulation
-from striatal.sim.rollout import Protocol
 
-COMMAND = "evaluate"
-ORDER = 15
-HELP = "chance that a noisy trial passes the success test with fixed gains"
 DESCRIPTION = (
     "Run DRAWS noisy trials of the chapter's protocol (the Gaussian policy of eq 5, sigma "
     "from W6) with fixed gains and count how many pass the success test at T_f, judged on "
@@ -56,6 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from striatal.experiments.evaluate import check_draws, pass_probability
     from striatal.params import check_seed
+    from striatal.sim.rollout import Protocol
 
     check_draws(args.draws)
     check_seed(args.seed)

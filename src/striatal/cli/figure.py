@@ -12,9 +12,6 @@ from striatal.errors import ParameterError
 from striatal.io.files import dumps_json
 from striatal.limits import count_of_steps
 
-COMMAND = "figure"
-ORDER = 40
-HELP = "draw the chapter's Figure 5 (snapshots, tip path, x and theta) for one run"
 DESCRIPTION = (
     "Simulate one run with the mean policy and draw the chapter's Figure 5 in one PNG: "
     "(top) a cart-and-pole stick figure every 0.2 s, laid out along the strip at "

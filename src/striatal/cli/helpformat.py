@@ -38,6 +38,12 @@ def default_text(value: Any) -> str:
     return str(value)
 
 
+def default_note(text: str) -> str:
+    """``(default: text)``: how help states a default that argparse does not hold (an
+    option whose default depends on another, or is "none")."""
+    return f"(default: {text})"
+
+
 def states_default(action: argparse.Action) -> bool:
     """Whether the help appends ``(default: X)`` to this action's help."""
     if action.default is None or action.default is argparse.SUPPRESS:
@@ -60,12 +66,4 @@ class DefaultsHelpFormatter(argparse.HelpFormatter):
             return text
         # the help is %-expanded by argparse: a % in the default must stay literal
         stated = default_text(action.default).replace("%", "%%")
-        return f"{text} (default: {stated})" if text else f"default: {stated}"
-
-    def _format_args(self, action: argparse.Action, default_metavar: str) -> str:
-        from striatal.cli.lists import CommaList
-
-        if isinstance(action, CommaList) and isinstance(action.metavar, str):
-            # one word, A,B,...: not the "A [A ...]" of the deprecated space-separated form
-            return action.metavar
-        return super()._format_args(action, default_metavar)
+        return f"{text} {default_note(stated)}" if text else default_note(stated)

@@ -10,12 +10,8 @@ from typing import Any
 from striatal.cli import options
 from striatal.errors import DataFileError, ParameterError
 from striatal.io.files import dumps_json
-from striatal.io.rundir import read_history, read_result
 from striatal.params import Plant
 
-COMMAND = "interpret"
-ORDER = 45
-HELP = "read mu_1, mu_2 as direct/indirect pathway activity and the updates as LTP/LTD"
 DESCRIPTION = (
     "Section 4's neural reading of a gain set: mu_1 (balancing, eq 22) and mu_2 (swing-up, "
     "eq 23) as linear forms with numeric coefficients, each labelled direct (excitatory, "
@@ -43,12 +39,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _from_result(path: Path) -> tuple[list[float], float, str, Plant, str]:
+    from striatal.io.rundir import read_result
+
     r = read_result(path)
     return list(r.W), r.theta_c, r.controller.balance_sign, r.plant, r.learner
 
 
 def build(args: argparse.Namespace) -> dict[str, Any]:
     """The JSON reading for the parsed command line (validates everything first)."""
+    from striatal.io.rundir import read_history
     from striatal.neural import interpret
 
     learner = "chapter"

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from striatal.cli import progress
+from striatal.cli.helpformat import default_note
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, Simulation, check_seed
 
@@ -15,9 +16,6 @@ if TYPE_CHECKING:
     from striatal.neural.network import NetworkConfig
     from striatal.params import Controller, Plant
 
-COMMAND = "neural"
-ORDER = 45
-HELP = "run the controller as a spiking network (needs the [neural] extra: nengo)"
 DESCRIPTION = (
     "Section 4's neural reading built as a spiking network of LIF neurons (nengo): cortex "
     "encodes the sensed state and E~ (eqs 15-16); a balancing channel decodes mu_1 (eq 22) "
@@ -67,7 +65,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     run_g.add_argument("--theta0", type=float, default=CHAPTER_THETA0, help="initial angle [rad]")
     run_g.add_argument("--x0", type=float, default=0.0, help="initial cart position [m]")
     run_g.add_argument(
-        "--duration", type=float, default=None, help="T_f [s] (default 60; 30 with --learn)"
+        "--duration", type=float, default=None, help="T_f [s] " + default_note("60; --learn: 30")
     )
     learn = parser.add_argument_group("dopamine (second stage: the chapter's rule on the pathways)")
     learn.add_argument(
@@ -84,8 +82,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--alpha",
         type=float,
         default=None,
-        help="learning rate of eq 4 (with --learn; default the chapter learner's 5.0, "
-        "0: no learning)",
+        help="learning rate of eq 4 (with --learn; 0: no learning) "
+        + default_note("the chapter learner's, 5.0"),
     )
     options.add_plant_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")

@@ -7,8 +7,9 @@ import math
 from pathlib import Path
 from typing import Any
 
+from striatal.cli import config
+from striatal.cli.helpformat import default_note
 from striatal.errors import ParameterError
-from striatal.io.rundir import read_result
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -48,23 +49,32 @@ def plant_from(args: argparse.Namespace) -> Plant:
     )
 
 
+def add_gains_argument(group: Any, flag: str, *, help: str) -> None:
+    """An option that takes the six gains W1..W6 as six words (a vector, not a list)."""
+    group.add_argument(
+        flag, type=float, nargs=6, metavar=("W1", "W2", "W3", "W4", "W5", "W6"), help=help
+    )
+
+
+def add_trial_arguments(parser: argparse.ArgumentParser) -> None:
+    """--dt and --duration of every learning trial, then the plant's options."""
+    g = parser.add_argument_group("trial")
+    g.add_argument("--dt", type=float, default=0.01, help="control and RK4 step [s]")
+    g.add_argument("--duration", type=float, default=60.0, help="trial length T_f [s]")
+    add_plant_arguments(parser)
+
+
 def add_controller_arguments(parser: argparse.ArgumentParser, *, gains_required: bool) -> None:
     """--gains/--theta-c/--chapter-final/--chapter-initial and the readings of the chapter."""
     g = parser.add_argument_group("controller (sections 2.2-2.3, 4)")
     if gains_required:
         choice = g.add_mutually_exclusive_group()
-        choice.add_argument(
-            "--gains",
-            type=float,
-            nargs=6,
-            metavar=("W1", "W2", "W3", "W4", "W5", "W6"),
-            help="the six gains of eqs 22-23 (W1 > 0)",
-        )
+        add_gains_argument(choice, "--gains", help="the six gains of eqs 22-23 (W1 > 0)")
         choice.add_argument(
             "--chapter-final",
             action="store_true",
             help=f"the chapter's learned W {list(CHAPTER_FINAL_W)} and theta_c = "
-            f"{CHAPTER_FINAL_THETA_C} (default when no gains are given)",
+            f"{CHAPTER_FINAL_THETA_C}, the gain set used when none is chosen",
         )
         choice.add_argument(
             "--chapter-initial",
@@ -76,8 +86,8 @@ def add_controller_arguments(parser: argparse.ArgumentParser, *, gains_required:
             "--theta-c",
             type=float,
             default=None,
-            help="switching threshold [rad], balancing while |theta| < theta_c (eq 21); "
-            "default: the one of the chosen gain set",
+            help="switching threshold [rad], balancing while |theta| < theta_c (eq 21) "
+            + default_note("the one of the chosen gain set"),
         )
     g.add_argument(
         "--balance-sign",
@@ -151,9 +161,9 @@ def add_hardware_arguments(parser: argparse.ArgumentParser) -> None:
         "--hold",
         choices=("u", "force"),
         default=None,
-        help="what the motor holds over each step dt: 'u' (default, the chapter's "
-        "idealisation) or 'force' (eq 12 computed at the sample with the controller's "
-        "model, held while the plant's eqs 8-9 integrate)",
+        help="what the motor holds over each step dt: 'u' (the chapter's idealisation) or "
+        "'force' (eq 12 computed at the sample with the controller's model, held while the "
+        "plant's eqs 8-9 integrate) " + default_note("u; --robust: force"),
     )
     g.add_argument(
         "--max-force",
@@ -218,6 +228,8 @@ def add_gain_source_arguments(parser: argparse.ArgumentParser) -> None:
 
 def result_controller(path: Path) -> tuple[Controller, Plant]:
     """The controller (W, theta_c, readings) and plant of a result.json of train."""
+    from striatal.io.rundir import read_result
+
     r = read_result(path)
     return r.controller, r.plant
 
@@ -232,3 +244,36 @@ def controller_and_plant(args: argparse.Namespace) -> tuple[Controller, Plant]:
         return result_controller(args.result)
     gains, theta_c = gains_from(args)
     return controller_from(args, gains, theta_c), plant_from(args)
+
+
+def add_worker_arguments(
+    group: argparse.ArgumentParser | argparse._ArgumentGroup, *, connect_timeout: float
+) -> None:
+    """--backend, --address, --connect-timeout and --workers of a command that runs many
+    learning runs (sweep, ablation); check them with :func:`check_worker_arguments`."""
+    group.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="local worker processes, or a Ray cluster (--address)",
+    )
+    group.add_argument(
+        "--address", default=None, help="Ray cluster address HOST:PORT (--backend ray)"
+    )
+    group.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=connect_timeout,
+        help="give up on a Ray address that accepts no connection after this many seconds",
+    )
+    group.add_argument("--workers", type=int, default=config.WORKERS, help="local worker processes")
+
+
+def check_worker_arguments(args: argparse.Namespace) -> None:
+    """ParameterError unless the options of :func:`add_worker_arguments` make sense."""
+    if args.workers < 1:
+        raise ParameterError(f"--workers must be >= 1, got {args.workers}")
+    if args.backend == "ray" and not args.address:
+        raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
+    if not args.connect_timeout > 0:
+        raise ParameterError(f"--connect-timeout must be > 0 seconds, got {args.connect_timeout}")

@@ -9,9 +9,6 @@ from pathlib import Path
 from striatal.errors import ParameterError
 from striatal.io.files import dumps_json
 
-COMMAND = "profile"
-ORDER = 41
-HELP = "fraction of seeds solved against budget, per arm, with 95 %% bands"
 DESCRIPTION = (
     "Performance profiles from the runs.csv of striatal sweep folders: for each arm, the "
     "fraction of its seeds solved within a budget of simulations, simulated seconds or "

@@ -6,17 +6,12 @@ import argparse
 import sys
 from pathlib import Path
 
-from striatal.cli import lists, options
+from striatal.cli import options
 from striatal.cli.lists import CommaList
 from striatal.errors import DataFileError, ParameterError
-from striatal.experiments import baselines
-from striatal.experiments.robustness import CONDITIONS, controller_groups, robustness_table
 from striatal.io.files import atomic_write_text, dumps_json, read_json
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant
 
-COMMAND = "robustness"
-ORDER = 50
-HELP = "success of learned gains when pole mass/length differ or sensors are noisy"
 DESCRIPTION = (
     "Run the mean policy of learned gains (train result.json files, or the successful runs "
     "of an ablation.json) on plants with pole mass and length +-20 % and with sensor noise, "
@@ -35,7 +30,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME[,...]",
         help="variants of an ablation.json, one column each (default: all)",
     )
-    lists.add_repeated_alias(parser, "--variant", "--variants", dest="variants")
     parser.add_argument("--repeats", type=int, default=10, help="sensor-noise runs per controller")
     parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
     parser.add_argument("--json", action="store_true", help="print the rows as JSON")
@@ -45,6 +39,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from striatal.experiments import baselines
+    from striatal.experiments.robustness import CONDITIONS, controller_groups, robustness_table
+
     if args.repeats < 1:
         raise ParameterError(f"--repeats must be >= 1, got {args.repeats}")
     merged: dict[str, list[Controller]] = {}

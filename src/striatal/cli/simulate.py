@@ -4,18 +4,17 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TYPE_CHECKING
 
 from striatal.cli import options
 from striatal.errors import ParameterError
 from striatal.io.files import array_rows, check_out_dir, dumps_json, write_csv, write_json
 from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
-from striatal.sim.kernel import TRAJ_COLUMNS
-from striatal.sim.robust import RobustReport, check_robust
-from striatal.sim.rollout import Trajectory, simulate
 
-COMMAND = "simulate"
-ORDER = 10
-HELP = "simulate the cart-pole under the switching controller (mean policy)"
+if TYPE_CHECKING:
+    from striatal.sim.robust import RobustReport
+    from striatal.sim.rollout import Trajectory
+
 DESCRIPTION = (
     "Simulate the point-mass cart-pole (eqs 7-14) under the energy swing-up (eq 23) and the "
     "balancing law (eq 22), hard- or soft-switched at theta_c, with the mean policy (no "
@@ -100,6 +99,8 @@ def run_robust(
     args: argparse.Namespace, controller: Controller, plant: Plant, sim: Simulation
 ) -> RobustReport:
     """The robustness set for the options given (refusing the ones it sets itself)."""
+    from striatal.sim.robust import check_robust
+
     options.check_robust_run(args)
     return check_robust(
         controller, plant=plant, max_force=args.max_force, track=args.track, dt=sim.dt
@@ -107,6 +108,9 @@ def run_robust(
 
 
 def run(args: argparse.Namespace) -> int:
+    from striatal.sim.kernel import TRAJ_COLUMNS
+    from striatal.sim.rollout import simulate
+
     controller, plant = options.controller_and_plant(args)
     sim = options.simulation_from(args)
     hardware = options.hardware_from(args)

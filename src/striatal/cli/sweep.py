@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from striatal.cli import config, learner_options, options
-from striatal.cli.config import SEEDS, WORKERS
+from striatal.cli.config import SEEDS
 from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
 from striatal.experiments import baselines
@@ -16,9 +16,6 @@ from striatal.io.files import check_out_dir, dumps_json
 from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W, Simulation
 from striatal.sim.rollout import Protocol
 
-COMMAND = "sweep"
-ORDER = 40
-HELP = "many learning runs over seeds (and a grid), with the learner's control and baselines"
 DESCRIPTION = (
     "Run the learner for N seeds spawned from --seed (SeedSequence), for each --init and "
     "each alpha x gamma of the grid, plus the learner's declared no-learning control arm "
@@ -40,7 +37,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--init",
         action=CommaList,
         names=("chapter", "random"),
-        legacy_spaces=True,
         default=("chapter",),
         help="W(0): the chapter's, and/or uniform in [-1, 1]^6 per seed (as train --init "
         "random); comma-separated",
@@ -69,25 +65,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     learner_options.add_learner_arguments(parser)
     options.add_controller_arguments(parser, gains_required=False)
-    rg = parser.add_argument_group("trial")
-    rg.add_argument("--dt", type=float, default=0.01, help="control and RK4 step [s]")
-    rg.add_argument("--duration", type=float, default=60.0, help="trial length T_f [s]")
-    options.add_plant_arguments(parser)
+    options.add_trial_arguments(parser)
     eg = parser.add_argument_group("engine and output")
-    eg.add_argument(
-        "--backend",
-        choices=("local", "ray"),
-        default="local",
-        help="local worker processes, or a Ray cluster (--address)",
-    )
-    eg.add_argument("--address", default=None, help="Ray cluster address HOST:PORT (--backend ray)")
-    eg.add_argument(
-        "--connect-timeout",
-        type=float,
-        default=experiments.CONNECT_TIMEOUT,
-        help="give up on a Ray address that accepts no connection after this many seconds",
-    )
-    eg.add_argument("--workers", type=int, default=WORKERS, help="local worker processes")
+    options.add_worker_arguments(eg, connect_timeout=experiments.CONNECT_TIMEOUT)
     eg.add_argument(
         "--engine",
         choices=experiments.ENGINES,
@@ -114,12 +94,7 @@ def prepare(
     """(specs, settings, max_trials) the options describe; everything validated."""
     if args.seeds < 1:
         raise ParameterError(f"--seeds must be >= 1, got {args.seeds}")
-    if args.workers < 1:
-        raise ParameterError(f"--workers must be >= 1, got {args.workers}")
-    if args.backend == "ray" and not args.address:
-        raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
-    if not args.connect_timeout > 0:
-        raise ParameterError(f"--connect-timeout must be > 0 seconds, got {args.connect_timeout}")
+    options.check_worker_arguments(args)
     if args.eval_draws < 0:
         raise ParameterError(f"--eval-draws must be >= 0, got {args.eval_draws}")
     if args.engine != "processes" and (args.backend != "local" or args.workers != 1):

@@ -11,9 +11,6 @@ from striatal.cli.lists import CommaList
 from striatal.io.files import dumps_json
 from striatal.params import CHAPTER_FINAL_THETA_C, check_theta_c
 
-COMMAND = "switch-figure"
-ORDER = 43
-HELP = "plot the soft switch's balancing and swing-up weights against |theta|"
 DESCRIPTION = (
     "The cerebellar soft switch of section 4, read with the labels swapped "
     "(docs/paper-notes.md section 4): balancing weight clip(gamma (theta_c - |theta|), 0,"
@@ -34,7 +31,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--inhibition",
         action=CommaList,
         item=float,
-        legacy_spaces=True,
         default=(2.0, 5.0, 20.0, 50.0),
         metavar="GAMMA[,...]",
         help="strengths of lateral inhibition gamma [1/rad], one curve each; comma-separated",

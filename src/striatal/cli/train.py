@@ -22,19 +22,15 @@ from striatal.io.rundir import RunDir
 from striatal.learners import LearnerState, TrialRecord, default_config
 from striatal.params import CHAPTER_INITIAL_THETA_C, Plant, Simulation
 
-COMMAND = "train"
-ORDER = 20
-HELP = "run the chapter's switching REINFORCE learner (or a variant: --learner)"
-DESCRIPTION = (
-    "Learn the six gains and theta_c with the chapter's REINFORCE rule (eqs 1-5, 21-25): "
-    "60-s trials from theta = 3.12 at rest, a Gaussian policy, eligibility traces and the "
-    "sparse reward, until the chapter's success test holds or --max-trials. "
-    "--init random draws W(0) uniformly in [-1, 1]^6 from the seed; there and in "
-    "--init-gains a W1 below 0.001 is floored at 0.001 (docs/paper-notes.md section 11). "
-    "--learner rpe / pgpe / ac select the variants beyond the chapter (docs/ablation.md, "
-    "docs/results.md); "
-    "unset learning options take the chosen learner's defaults."
-)
+DESCRIPTION = """\
+Learn the six gains and theta_c with the chapter's REINFORCE rule (eqs 1-5, 21-25): 60-s
+trials from theta = 3.12 at rest, a Gaussian policy, eligibility traces and the sparse
+reward, until the chapter's success test holds or --max-trials. --init random draws W(0)
+uniformly in [-1, 1]^6 from the seed; there and in --init-gains a W1 below 0.001 is
+floored at 0.001 (docs/paper-notes.md section 11). --learner rpe / pgpe / ac select the
+variants beyond the chapter (docs/ablation.md, docs/results.md); unset learning options
+take the chosen learner's defaults.
+"""
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -46,11 +42,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="chapter",
         help="chapter: W(0) of the chapter; random: uniform in [-1, 1]^6 drawn from --seed",
     )
-    start.add_argument(
+    options.add_gains_argument(
+        start,
         "--init-gains",
-        type=float,
-        nargs=6,
-        metavar=("W1", "W2", "W3", "W4", "W5", "W6"),
         help="W(0) given by hand; W1 < 0.001 is floored at 0.001, as --init random does",
     )
     g.add_argument(
@@ -59,10 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--seed", type=int, default=0, help="seed of the policy noise (and random W(0))")
     learner_options.add_learner_arguments(parser)
     options.add_controller_arguments(parser, gains_required=False)
-    rg = parser.add_argument_group("trial")
-    rg.add_argument("--dt", type=float, default=0.01, help="control and RK4 step [s]")
-    rg.add_argument("--duration", type=float, default=60.0, help="trial length T_f [s]")
-    options.add_plant_arguments(parser)
+    options.add_trial_arguments(parser)
     og = parser.add_argument_group("output")
     og.add_argument(
         "--out", type=options.out_path, default=None, help="write result.json, history.csv here"

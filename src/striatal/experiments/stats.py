@@ -1,4 +1,4 @@
-"""Intervals and tests for comparing learning arms over seeds (issue 14, "honest comparisons").
+"""Intervals and tests for comparing learning arms over seeds.
 
 Pure functions on plain numbers; every result is a frozen dataclass with
 ``to_dict()`` that holds only JSON-ready values (an interval that cannot be

@@ -7,20 +7,28 @@ options the chapter leaves open are listed in docs/paper-notes.md, section 7.
 
 from __future__ import annotations
 
+import functools
 import math
-from dataclasses import asdict, dataclass, fields
-from typing import Any, Literal, TypeVar
+import types
+from dataclasses import Field, asdict, dataclass, field, fields
+from typing import Any, Literal, TypeVar, get_args, get_origin, get_type_hints
 
 from striatal.errors import ParameterError
-from striatal.params import Hardware, as_float, require_finite, require_finite_positive
+from striatal.params import Hardware, as_float, require_finite
 
 __all__ = [
+    "STORED_ALWAYS",
     "W1_FLOOR",
     "Eligibility",
     "LearnerConfig",
     "RewardKind",
     "SuccessOn",
     "ThetaCRule",
+    "bounds_of",
+    "bounds_text",
+    "check_field",
+    "field_kind",
+    "meta",
     "pick",
     "require_count",
 ]
@@ -44,6 +52,19 @@ def require_count(name: str, value: object) -> None:
         raise ParameterError(f"{name} must be a whole number >= 1, got {value!r}")
 
 
+def meta(help: str, *, bounds: str = "", **more: Any) -> dict[str, Any]:
+    """The metadata of a :class:`LearnerConfig` field: its option, stated once.
+
+    ``help`` is the field's meaning (the docstring and ``--help`` both read it);
+    ``bounds`` its allowed values: ``"[0, 1)"``, ``"(0, 100]"``, ``">= 0"`` or ``"> 0"``
+    (a number field is also finite, unless ``finite=False``). The choices of a text
+    field are its ``Literal`` type. ``more``: ``finite``, ``metavar``, ``flag`` and
+    ``sets`` (a true/false field set by the option ``--flag``, to the value ``sets``),
+    ``negatable`` (``--X`` and ``--no-X``), ``cli=False`` (no option).
+    """
+    return {"help": help, "bounds": bounds, **more}
+
+
 @dataclass(frozen=True)
 class LearnerConfig:
     """Every option of a learning run (the chapter leaves most open: docs/paper-notes.md, 7).
@@ -51,142 +72,176 @@ class LearnerConfig:
     Build it with :func:`striatal.learners.default_config` (the learner's tuned
     preset, then your changes): ``LearnerConfig(learner="pgpe")`` alone keeps the
     chapter's values of the other fields. Which rule reads which field:
-    ``striatal.learners.RULES[name].options``.
-
-    Attributes
-    ----------
-    learner : the learning rule, a key of :data:`striatal.learners.RULES`.
-    max_trials : stop after this many trials if the success test never holds.
-    success_on : judge the success test on the noisy trial ("noisy", the chapter) or on
-        a noise-free rerun with the mean policy ("mean").
-    theta_c_rule : eq 21 with min |theta| under the swing-up ("swingup"), over the whole
-        trial ("trial"), theta_c kept fixed ("fixed"), or learned with the gains
-        ("learned", pgpe).
-    action_every : a new action is drawn every this many control steps and held.
-    alpha : learning rate of eqs 1/4.
-    gamma : discount of the eligibility trace D(t) = e(t) + gamma D(t-1) (eq 3), per draw.
-    baseline : reinforcement baseline b of eq 1 (the chapter: 0).
-    reset_trace : D starts at 0 in every trial (otherwise it carries over).
-    eligibility : "score" (docs/paper-notes.md, section 2) or "chapter" (the printed e1).
-    max_step : bound on each component of one update.
-    w1_floor : W1 is kept >= this after every update.
-    reward : "sparse" (eqs 24-25) or "shaped" (:func:`striatal.learners.common.shaped_reward`).
-    rpe_rate : rate beta of the tracked baseline b <- b + beta (r - b) and of the running
-        mean square of the prediction error (rpe, pgpe: per trial; ac: per step, of delta).
-    normalise : divide the prediction error r - b (ac: the TD error delta, for the actor)
-        by its running root mean square.
-    explore : parameter-exploration std of W1..W5 (pgpe); theta_c's is 0.3 times it [rad].
-    sigma_rate : rate of the log-std adaptation of the exploration (pgpe; 0: fixed).
-    decay : synaptic decay lambda of W1..W5 (rpe, pgpe): the update adds
-        -rate * lambda * W (rate: alpha for pgpe, alpha (1 - gamma) for rpe).
-    plant_jitter : J of pgpe: each trial's true pole mass and length are the nominal
-        ones times factors uniform in [1 - J, 1 + J] (0: the nominal plant).
-    symmetric : pgpe's symmetric sampling (Sehnke et al. 2010): trials come in pairs
-        p + eps, p - eps on the same plant, and one update follows each pair with the
-        reward difference (r+ - r-) / 2 in place of r - b.
-    robust : the robust stop rule (issue 15, any rule): every trial and check holds the
-        motor force of eq 12 over each step (ac's own online trial still holds u), and
-        a controller that passes the success test must also pass the robustness set
-        (:func:`striatal.sim.robust.stop_check`, every run counted) for the run to stop.
-    critic_rate : rate beta of the critic's weights, v <- v + beta delta z (ac).
-    td_discount : discount gamma_v per control step of the TD error
-        delta = r + gamma_v V(s') - V(s) (ac); 1 - dt / tau for a value horizon tau.
-    critic_decay : lambda of the critic's trace z <- gamma_v lambda z + phi(s) (ac).
-    max_force : the motor's limit [N] for every trial and check of the run, the
-        robustness set's included (None: unlimited; :class:`striatal.params.Hardware`).
-    track : the track's half-length [m]: |x| beyond it ends the trial as a failure
-        (None: endless).
-
-    ``symmetric`` and ``robust`` (added with issue 15) are left out of :meth:`to_dict`
-    when False, and ``max_force`` and ``track`` when None, so the settings and run ids
-    of runs without them stay as they were.
+    ``striatal.learners.RULES[name].options``. Each field states its meaning, its
+    bounds and its choices once, in its metadata (:func:`meta`): validation here and
+    the options of ``striatal train`` and ``striatal sweep`` read them.
     """
 
-    alpha: float = 5.0
-    gamma: float = 0.999
-    baseline: float = 0.0
-    action_every: int = 1
-    reset_trace: bool = True
-    eligibility: Eligibility = "score"
-    success_on: SuccessOn = "noisy"
-    theta_c_rule: ThetaCRule = "swingup"
-    max_trials: int = 2000
-    max_step: float = 1.0
-    w1_floor: float = W1_FLOOR
-    learner: str = "chapter"
-    reward: RewardKind = "sparse"
-    rpe_rate: float = 0.1
-    normalise: bool = False
-    explore: float = 0.3
-    sigma_rate: float = 0.0
-    decay: float = 0.0
-    plant_jitter: float = 0.0
-    symmetric: bool = False
-    robust: bool = False
-    critic_rate: float = 0.01
-    td_discount: float = 0.99
-    critic_decay: float = 0.9
-    max_force: float | None = None
-    track: float | None = None
+    alpha: float = field(default=5.0, metadata=meta("learning rate (eqs 1, 4)", bounds=">= 0"))
+    gamma: float = field(
+        default=0.999,
+        metadata=meta(
+            "discount per draw of the eligibility trace D(t) = e(t) + gamma D(t-1) (eq 3)",
+            bounds="[0, 1)",
+        ),
+    )
+    baseline: float = field(
+        default=0.0, metadata=meta("reinforcement baseline b of eq 1 (chapter learner)")
+    )
+    action_every: int = field(
+        default=1, metadata=meta("draw a new action every N control steps and hold it")
+    )
+    reset_trace: bool = field(
+        default=True,
+        metadata=meta("do not reset the trace D between trials", flag="carry-trace", sets=False),
+    )
+    eligibility: Eligibility = field(
+        default="score",
+        metadata=meta(
+            "score: the Gaussian score (docs/paper-notes.md, section 2); chapter: the printed e1",
+        ),
+    )
+    success_on: SuccessOn = field(
+        default="noisy",
+        metadata=meta("judge the success test on the noisy trial (chapter) or a mean-policy rerun"),
+    )
+    theta_c_rule: ThetaCRule = field(
+        default="swingup",
+        metadata=meta(
+            "eq 21's min|theta| under the swing-up, over the whole trial, keep theta_c, or "
+            "learn it with the gains (pgpe)",
+        ),
+    )
+    max_trials: int = field(
+        default=2000, metadata=meta("stop after this many trials if the success test never holds")
+    )
+    max_step: float = field(
+        default=1.0,
+        metadata=meta(
+            "bound on each gain's update per trial (inf: none)", bounds="> 0", finite=False
+        ),
+    )
+    w1_floor: float = field(
+        default=W1_FLOOR,
+        metadata=meta(
+            "W1 is kept >= this after every update (sqrt(W1 g) of eq 22)",
+            bounds="> 0",
+            cli=False,
+        ),
+    )
+    learner: str = field(
+        default="chapter",
+        metadata=meta("the learning rule, a key of striatal.learners.RULES", cli=False),
+    )
+    reward: RewardKind = field(
+        default="sparse",
+        metadata=meta("sparse +10/-5 (eqs 24-25) or a dense score of the trial (shaped_reward)"),
+    )
+    rpe_rate: float = field(
+        default=0.1,
+        metadata=meta(
+            "rate beta of the expected-reward baseline b += beta (r - b) and of the prediction "
+            "error's running mean square (rpe, pgpe: per trial; ac: per step, of delta)",
+            bounds="(0, 1]",
+        ),
+    )
+    normalise: bool = field(
+        default=False,
+        metadata=meta(
+            "divide the prediction error r - b (ac: the TD error, for the actor) by its running "
+            "rms",
+            negatable=True,
+        ),
+    )
+    explore: float = field(
+        default=0.3,
+        metadata=meta(
+            "parameter-exploration std of W1..W5 (pgpe); theta_c's is 0.3 times it [rad]",
+            bounds="(0, 100]",
+        ),
+    )
+    sigma_rate: float = field(
+        default=0.0,
+        metadata=meta(
+            "adaptation rate of the exploration's log-std (pgpe; 0: fixed)", bounds=">= 0"
+        ),
+    )
+    decay: float = field(
+        default=0.0,
+        metadata=meta(
+            "synaptic decay lambda: the update adds -rate*lambda*W1..5 (rpe, pgpe; rate: alpha "
+            "for pgpe, alpha (1 - gamma) for rpe)",
+            bounds=">= 0",
+        ),
+    )
+    plant_jitter: float = field(
+        default=0.0,
+        metadata=meta(
+            "pgpe: each trial's pole mass and length scaled by U[1-J, 1+J], the controller "
+            "believing the nominal plant (learning for robustness)",
+            bounds="[0, 0.5]",
+        ),
+    )
+    symmetric: bool = field(
+        default=False,
+        metadata=meta(
+            "pgpe: symmetric sampling (Sehnke et al. 2010), trials in pairs p + eps, p - eps on "
+            "the same plant, one update per pair from the reward difference (r+ - r-) / 2",
+        ),
+    )
+    robust: bool = field(
+        default=False,
+        metadata=meta(
+            "the robust stop rule (any learner): trials hold the motor force of eq 12 (ac's "
+            "online trial still holds u), and a controller that passes the success test must "
+            "also pass the robustness set (striatal simulate --robust: 9 mean-policy runs of "
+            "60 s) for the run to stop; every run counted (docs/paper-notes.md section 12). It "
+            "also applies the learner's robust preset before the options given (pgpe: "
+            "--plant-jitter 0.2 --alpha 0.5)",
+        ),
+    )
+    critic_rate: float = field(
+        default=0.01,
+        metadata=meta("ac: rate beta of the critic's weights, v += beta delta z", bounds="[0, 1]"),
+    )
+    td_discount: float = field(
+        default=0.99,
+        metadata=meta(
+            "ac: discount gamma_v per control step of the TD error delta = r + gamma_v V(s') - "
+            "V(s); 1 - dt / tau for a value horizon tau",
+            bounds="[0, 1)",
+        ),
+    )
+    critic_decay: float = field(
+        default=0.9,
+        metadata=meta(
+            "ac: lambda of the critic's trace z <- gamma_v lambda z + phi(s)", bounds="[0, 1]"
+        ),
+    )
+    max_force: float | None = field(
+        default=None,
+        metadata=meta(
+            "motor limit [N] of every trial and check, the robustness set's included: the force "
+            "is clipped to [-F, F] (none: unlimited)",
+            bounds="> 0",
+            metavar="NEWTONS",
+        ),
+    )
+    track: float | None = field(
+        default=None,
+        metadata=meta(
+            "track half-length [m] of every trial and check: |x| beyond it ends the trial as a "
+            "failure (none: endless)",
+            bounds="> 0",
+            metavar="METRES",
+        ),
+    )
 
     def __post_init__(self) -> None:
-        a = require_finite("alpha", self.alpha)
-        if a < 0:
-            raise ParameterError(f"alpha must be >= 0, got {self.alpha}")
-        g = require_finite("gamma", self.gamma)
-        if not 0.0 <= g < 1.0:
-            raise ParameterError(f"gamma must be in [0, 1), got {self.gamma}")
-        require_finite("baseline", self.baseline)
-        require_count("action_every", self.action_every)
-        require_count("max_trials", self.max_trials)
-        if not (as_float("max_step", self.max_step) > 0):
-            raise ParameterError(f"max_step must be > 0 (inf for no bound), got {self.max_step}")
-        floor = as_float("w1_floor", self.w1_floor)
-        if not (math.isfinite(floor) and floor > 0):
-            raise ParameterError(f"w1_floor must be a finite number > 0, got {self.w1_floor}")
-        if self.eligibility not in ("score", "chapter"):
-            raise ParameterError(
-                f"eligibility must be 'score' or 'chapter', got {self.eligibility!r}"
-            )
-        if self.success_on not in ("noisy", "mean"):
-            raise ParameterError(f"success_on must be 'noisy' or 'mean', got {self.success_on!r}")
-        if self.theta_c_rule not in ("swingup", "trial", "fixed", "learned"):
-            raise ParameterError(
-                "theta_c_rule must be 'swingup', 'trial', 'fixed' or 'learned', "
-                f"got {self.theta_c_rule!r}"
-            )
-        if not isinstance(self.learner, str):
-            raise ParameterError(f"learner must be a name, got {self.learner!r}")
-        if self.reward not in ("sparse", "shaped"):
-            raise ParameterError(f"reward must be 'sparse' or 'shaped', got {self.reward!r}")
-        r = require_finite("rpe_rate", self.rpe_rate)
-        if not 0.0 < r <= 1.0:
-            raise ParameterError(f"rpe_rate must be in (0, 1], got {self.rpe_rate}")
-        e = require_finite("explore", self.explore)
-        if not 0.0 < e <= 100.0:
-            raise ParameterError(f"explore must be in (0, 100], got {self.explore}")
-        if require_finite("sigma_rate", self.sigma_rate) < 0.0:
-            raise ParameterError(f"sigma_rate must be >= 0, got {self.sigma_rate}")
-        if require_finite("decay", self.decay) < 0.0:
-            raise ParameterError(f"decay must be >= 0, got {self.decay}")
-        jit = require_finite("plant_jitter", self.plant_jitter)
-        if not 0.0 <= jit <= 0.5:
-            raise ParameterError(f"plant_jitter must be in [0, 0.5], got {self.plant_jitter}")
-        for name in _LATER_FLAGS:
-            if not isinstance(getattr(self, name), bool):
-                raise ParameterError(f"{name} must be true or false, got {getattr(self, name)!r}")
-        cr = require_finite("critic_rate", self.critic_rate)
-        if not 0.0 <= cr <= 1.0:
-            raise ParameterError(f"critic_rate must be in [0, 1], got {self.critic_rate}")
-        td = require_finite("td_discount", self.td_discount)
-        if not 0.0 <= td < 1.0:
-            raise ParameterError(f"td_discount must be in [0, 1), got {self.td_discount}")
-        lam = require_finite("critic_decay", self.critic_decay)
-        if not 0.0 <= lam <= 1.0:
-            raise ParameterError(f"critic_decay must be in [0, 1], got {self.critic_decay}")
-        for name in _LATER_LIMITS:
-            if getattr(self, name) is not None:
-                object.__setattr__(self, name, require_finite_positive(name, getattr(self, name)))
+        for f in fields(self):
+            value = check_field(f, getattr(self, f.name))
+            if value is not getattr(self, f.name):
+                object.__setattr__(self, f.name, value)
 
     @property
     def hardware(self) -> Hardware:
@@ -197,20 +252,116 @@ class LearnerConfig:
         )
 
     def to_dict(self) -> dict[str, Any]:
+        """The fields as stored in a run's settings (and hashed into its run id): every
+        field of :data:`STORED_ALWAYS`, and each later one only when it differs from its
+        default, so that adding a field changes no earlier run's settings or id."""
         d = asdict(self)
-        for name in _LATER_FLAGS:
-            if not d[name]:
-                del d[name]
-        for name in _LATER_LIMITS:
-            if d[name] is None:
-                del d[name]
+        for f in fields(self):
+            if f.name not in STORED_ALWAYS and d[f.name] == f.default:
+                del d[f.name]
         return d
 
 
-#: Flags added after the settings schema 2 (issue 15): stored only when set.
-_LATER_FLAGS = ("symmetric", "robust")
-#: Limits added with issue 15: stored only when given.
-_LATER_LIMITS = ("max_force", "track")
+#: The fields of the settings schema 2, stored in every run's settings. It never grows:
+#: a field added since is stored only when it differs from its default.
+STORED_ALWAYS = frozenset(
+    {
+        "alpha",
+        "gamma",
+        "baseline",
+        "action_every",
+        "reset_trace",
+        "eligibility",
+        "success_on",
+        "theta_c_rule",
+        "max_trials",
+        "max_step",
+        "w1_floor",
+        "learner",
+        "reward",
+        "rpe_rate",
+        "normalise",
+        "explore",
+        "sigma_rate",
+        "decay",
+        "plant_jitter",
+        "critic_rate",
+        "td_discount",
+        "critic_decay",
+    }
+)
+
+
+def field_kind(f: Field[Any]) -> tuple[type, tuple[Any, ...], bool]:
+    """A field's value type, its choices (of its ``Literal`` type; () for none) and
+    whether it may be None."""
+    hint = _hints()[f.name]
+    optional = False
+    if isinstance(hint, types.UnionType):
+        args = [a for a in get_args(hint) if a is not type(None)]
+        optional, hint = len(args) < len(get_args(hint)), args[0]
+    if get_origin(hint) is Literal:
+        return str, get_args(hint), optional
+    return hint, (), optional
+
+
+def bounds_of(f: Field[Any]) -> tuple[float, float, bool, bool] | None:
+    """``(low, high, low_open, high_open)`` of a field's ``bounds`` (None: no bounds)."""
+    text = f.metadata.get("bounds", "").replace(" ", "")
+    if not text:
+        return None
+    if text.startswith(">="):
+        return float(text[2:]), math.inf, False, False
+    if text.startswith(">"):
+        return float(text[1:]), math.inf, True, False
+    low, high = text[1:-1].split(",")
+    return float(low), float(high), text[0] == "(", text[-1] == ")"
+
+
+def check_field(f: Field[Any], value: Any) -> Any:
+    """``value`` if it is allowed for field ``f`` (a limit as float), else ParameterError."""
+    kind, choices, optional = field_kind(f)
+    name = f.name
+    if optional and value is None:
+        return None
+    if choices:
+        if value not in choices:
+            allowed = ", ".join(repr(c) for c in choices[:-1]) + f" or {choices[-1]!r}"
+            raise ParameterError(f"{name} must be {allowed}, got {value!r}")
+    elif kind is bool:
+        if not isinstance(value, bool):
+            raise ParameterError(f"{name} must be true or false, got {value!r}")
+    elif kind is int:
+        require_count(name, value)
+    elif kind is str:
+        if not isinstance(value, str):
+            raise ParameterError(f"{name} must be a name, got {value!r}")
+    elif kind is float:
+        number = (
+            require_finite(name, value) if f.metadata.get("finite", True) else as_float(name, value)
+        )
+        bounds = bounds_of(f)
+        if bounds is not None:
+            low, high, low_open, high_open = bounds
+            above = number > low if low_open else number >= low
+            below = number < high if high_open else number <= high
+            if not (above and below):
+                raise ParameterError(f"{name} must be {bounds_text(f)}, got {value!r}")
+        if optional:
+            return number
+    return value
+
+
+def bounds_text(f: Field[Any]) -> str:
+    """A field's bounds as a sentence says them: ">= 0", "in [0, 1)"."""
+    text = f.metadata.get("bounds", "")
+    return text if text[:1] in ("<", ">") else f"in {text}"
+
+
+@functools.cache
+def _hints() -> dict[str, Any]:
+    return get_type_hints(LearnerConfig)
+
 
 C = TypeVar("C")
 

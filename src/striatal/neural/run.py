@@ -31,7 +31,7 @@ __all__ = [
 
 #: Columns of the recorded trajectory (one row per control step of ``Simulation.dt``).
 NEURAL_TRAJ_COLUMNS = ("t", "x", "x_dot", "theta", "theta_dot", "u", "force", "mode")
-#: Upright test of the issue: |theta| below this [rad] throughout the last ``UPRIGHT_WINDOW`` s.
+#: A looser upright test: |theta| below this [rad] throughout the last ``UPRIGHT_WINDOW`` s.
 UPRIGHT_THETA = 0.1
 UPRIGHT_WINDOW = 10.0
 
@@ -196,7 +196,8 @@ def run_network(
     fed with each pathway's presynaptic signal (its decoded output in the term's units,
     filtered by the motor's synapse) whose output is added to the plant's u.
     Success is the chapter's test at T_f (``sim.success``, end of
-    section 2.4) on the final state; ``upright_last_10s`` the issue's looser test.
+    section 2.4) on the final state; ``upright_last_10s`` a looser test (|theta| <
+    UPRIGHT_THETA over the last UPRIGHT_WINDOW s).
     """
     nengo = require_nengo()
     seed = check_seed(seed)

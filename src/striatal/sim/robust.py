@@ -1,4 +1,4 @@
-"""The robustness set of GitHub issue 15: does a controller work from any start?
+"""The robustness set: does a controller work from any start?
 
 A controller is *robust* when its mean policy passes the chapter's success test at
 T_f = 60 s (end of section 2.4) in every case of :data:`ROBUST_CASES`, all run with
