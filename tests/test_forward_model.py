@@ -110,10 +110,7 @@ def test_generic_model_predicts_a_held_out_trial() -> None:
     pytest.importorskip("sklearn")
     true = Plant(pole_mass=0.12, length=0.9)
     train = Transitions.of(
-        [
-            simulate(true, c, SIM, model=Plant(), hardware=ROBUST_HARDWARE)
-            for c in (FINAL, INITIAL)
-        ]
+        [simulate(true, c, SIM, model=Plant(), hardware=ROBUST_HARDWARE) for c in (FINAL, INITIAL)]
     )
     model = fit_generic(train, np.random.default_rng(1))
     held = recorded(true, OTHER)

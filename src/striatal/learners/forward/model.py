@@ -171,7 +171,10 @@ class StructuredFit:
         return rk4_force_step(states, forces, dt, self.plant, self.friction)
 
 
-def fit_structured(data: Transitions, prior: Plant = Plant()) -> StructuredFit:
+NOMINAL = Plant()
+
+
+def fit_structured(data: Transitions, prior: Plant = NOMINAL) -> StructuredFit:
     """Least-squares cart mass, pole mass, length and cart friction from ``data``.
 
     Residuals: s_{k+1} - RK4(s_k, f_k) per component, each scaled by that component's
@@ -219,7 +222,9 @@ class GenericModel:
         X = _features(np.asarray(states, float), np.asarray(forces, float))
         return np.stack([member.predict(X) for member in self.members])  # type: ignore[attr-defined]
 
-    def predict(self, states: np.ndarray, forces: np.ndarray, dt: float | None = None) -> np.ndarray:
+    def predict(
+        self, states: np.ndarray, forces: np.ndarray, dt: float | None = None
+    ) -> np.ndarray:
         """Next states (n, 4) under the ensemble mean."""
         step = self.dt if dt is None else dt
         acc = self.accelerations(states, forces).mean(axis=0)
