@@ -1,0 +1,279 @@
+"""Cerebellar forward models: the cart-pole's next state from its state and the motor force.
+
+A forward model is learned by supervised learning from recorded real trials
+(:class:`Transitions`: state s_k, held motor force f_k, next state s_{k+1}, dt apart;
+the motor holds the force over a step, ``Hardware(hold="force")``). Two variants,
+declared by their prior knowledge:
+
+- :func:`fit_structured` knows the equations: the cart-pole's eqs 8-10 with the cart
+  mass M, the pole mass m, the length l and a viscous cart friction b unknown, gravity
+  known. It fits them by nonlinear least squares on the one-step RK4 map
+  (``scipy.optimize.least_squares``). Its uncertainty is the Gauss-Newton covariance of
+  the fit, and :meth:`StructuredFit.family` gives the plants it cannot rule out.
+- :func:`fit_generic` knows nothing of the cart-pole: a bootstrap ensemble of
+  scikit-learn regressors (random Fourier features and ridge regression) from
+  (x_dot, sin theta, cos theta, theta_dot, f) to the step's mean accelerations. Its
+  uncertainty is the ensemble's spread.
+
+Both are pure: the same transitions give the same model.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from striatal.errors import ParameterError
+from striatal.params import Plant
+from striatal.sim.rollout import Trajectory
+
+__all__ = [
+    "GenericModel",
+    "StructuredFit",
+    "Transitions",
+    "fit_generic",
+    "fit_structured",
+    "rk4_force_step",
+]
+
+#: The relative half-width of :meth:`StructuredFit.family` when the data leave less
+#: doubt than that (noise-free transitions: the covariance is round-off).
+FAMILY_FLOOR = 0.02
+
+
+@dataclass(frozen=True)
+class Transitions:
+    """One-step transitions: ``states`` (n, 4) [m, m/s, rad, rad/s], ``forces`` (n,) [N]
+    held over the step, ``next_states`` (n, 4), ``dt`` [s]."""
+
+    states: np.ndarray
+    forces: np.ndarray
+    next_states: np.ndarray
+    dt: float
+
+    def __post_init__(self) -> None:
+        n = len(self.forces)
+        if self.states.shape != (n, 4) or self.next_states.shape != (n, 4):
+            raise ParameterError(
+                f"transitions need states and next states of shape ({n}, 4), got "
+                f"{self.states.shape} and {self.next_states.shape}"
+            )
+        if n == 0:
+            raise ParameterError("a forward model needs at least one transition")
+        if not (np.isfinite(self.states).all() and np.isfinite(self.next_states).all()):
+            raise ParameterError("transitions must be finite")
+        if not self.dt > 0:
+            raise ParameterError(f"dt must be > 0, got {self.dt}")
+
+    @classmethod
+    def of(cls, trajectories: Sequence[Trajectory]) -> Transitions:
+        """The transitions of recorded trials (row k's force acts from row k to row k+1)."""
+        if not trajectories:
+            raise ParameterError("a forward model needs at least one recorded trial")
+        dts = {t.sim.dt for t in trajectories}
+        if len(dts) != 1:
+            raise ParameterError(f"recorded trials with different dt: {sorted(dts)}")
+        keep = [t for t in trajectories if len(t.data) > 1]
+        if not keep:
+            raise ParameterError("the recorded trials hold no transition")
+        return cls(
+            states=np.concatenate([t.states[:-1] for t in keep]),
+            forces=np.concatenate([t.column("force")[:-1] for t in keep]),
+            next_states=np.concatenate([t.states[1:] for t in keep]),
+            dt=dts.pop(),
+        )
+
+    def __len__(self) -> int:
+        return len(self.forces)
+
+    def split(self, every: int) -> tuple[Transitions, Transitions]:
+        """(the rest, every ``every``-th transition): a held-out split without shuffling."""
+        held = np.zeros(len(self), dtype=bool)
+        held[::every] = True
+        return self._pick(~held), self._pick(held)
+
+    def _pick(self, rows: np.ndarray) -> Transitions:
+        return Transitions(self.states[rows], self.forces[rows], self.next_states[rows], self.dt)
+
+
+def _accelerations(
+    s: np.ndarray, f: np.ndarray, M: float, m: float, l: float, b: float, g: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(x_ddot, theta_ddot) of eqs 8-10 with a viscous cart friction -b x_dot added to f."""
+    th, thd = s[..., 2], s[..., 3]
+    c, sn = np.cos(th), np.sin(th)
+    det = (m + M) * m * l**2 - (m * l * c) ** 2
+    rhs1 = f - b * s[..., 1] + m * l * thd**2 * sn
+    rhs2 = m * g * l * sn
+    return (m * l**2 * rhs1 - m * l * c * rhs2) / det, ((m + M) * rhs2 - m * l * c * rhs1) / det
+
+
+def rk4_force_step(
+    states: np.ndarray, forces: np.ndarray, dt: float, plant: Plant, friction: float = 0.0
+) -> np.ndarray:
+    """One RK4 step of eqs 8-10 with the force held, for (n, 4) states at once.
+
+    The kernel's step under ``Hardware(hold="force")`` for ``friction`` 0.
+    """
+    M, m, l, g = plant.cart_mass, plant.pole_mass, plant.length, plant.gravity
+
+    def d(s: np.ndarray) -> np.ndarray:
+        xdd, thdd = _accelerations(s, forces, M, m, l, friction, g)
+        return np.stack([s[..., 1], xdd, s[..., 3], thdd], axis=-1)
+
+    k1 = d(states)
+    k2 = d(states + 0.5 * dt * k1)
+    k3 = d(states + 0.5 * dt * k2)
+    k4 = d(states + dt * k3)
+    out: np.ndarray = states + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return out
+
+
+@dataclass(frozen=True)
+class StructuredFit:
+    """The fitted cart-pole: ``plant`` (M, m, l; gravity as given), ``friction`` b
+    [N s/m], ``covariance`` (4, 4) of (M, m, l, b), ``rms`` the one-step residual per
+    state component (4,), ``transitions`` the number fitted."""
+
+    plant: Plant
+    friction: float
+    covariance: np.ndarray
+    rms: np.ndarray
+    transitions: int
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard errors of (M, m, l, b)."""
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+    def family(self, k: float = 3.0, floor: float = FAMILY_FLOOR) -> tuple[Plant, ...]:
+        """The plants the fit cannot rule out: the four corners of pole mass and length
+        at +-max(k sigma, floor x value), cart mass at its estimate."""
+        m, l = self.plant.pole_mass, self.plant.length
+        dm = max(k * float(self.std[1]), floor * m)
+        dl = max(k * float(self.std[2]), floor * l)
+        return tuple(
+            Plant(
+                cart_mass=self.plant.cart_mass,
+                pole_mass=m + sm * dm,
+                length=l + sl * dl,
+                gravity=self.plant.gravity,
+            )
+            for sm in (-1.0, 1.0)
+            for sl in (-1.0, 1.0)
+        )
+
+    def predict(self, states: np.ndarray, forces: np.ndarray, dt: float) -> np.ndarray:
+        """Next states (n, 4) under the fitted equations."""
+        return rk4_force_step(states, forces, dt, self.plant, self.friction)
+
+
+NOMINAL = Plant()
+
+
+def fit_structured(data: Transitions, prior: Plant = NOMINAL) -> StructuredFit:
+    """Least-squares cart mass, pole mass, length and cart friction from ``data``.
+
+    Residuals: s_{k+1} - RK4(s_k, f_k) per component, each scaled by that component's
+    spread over the data, so metres and radians weigh alike. Started from ``prior``
+    (friction 0); gravity is ``prior.gravity``, known.
+    """
+    scale = np.std(data.next_states - data.states, axis=0)
+    scale = np.where(scale > 0, scale, 1.0)
+
+    def residual(p: np.ndarray) -> np.ndarray:
+        plant = Plant(cart_mass=p[0], pole_mass=p[1], length=p[2], gravity=prior.gravity)
+        pred = rk4_force_step(data.states, data.forces, data.dt, plant, p[3])
+        return ((pred - data.next_states) / scale).ravel()
+
+    x0 = np.array([prior.cart_mass, prior.pole_mass, prior.length, 0.0])
+    lower = np.array([1e-3 * prior.cart_mass, 1e-3 * prior.pole_mass, 1e-3 * prior.length, -np.inf])
+    sol = least_squares(residual, x0, bounds=(lower, np.inf), x_scale="jac", xtol=1e-14, ftol=1e-14)
+    n, k = sol.fun.size, sol.x.size
+    sigma2 = float(sol.fun @ sol.fun) / max(n - k, 1)
+    JTJ = sol.jac.T @ sol.jac
+    covariance = sigma2 * np.linalg.pinv(JTJ)
+    rms = np.sqrt(np.mean(sol.fun.reshape(-1, 4) ** 2, axis=0)) * scale
+    plant = Plant(cart_mass=sol.x[0], pole_mass=sol.x[1], length=sol.x[2], gravity=prior.gravity)
+    return StructuredFit(plant, float(sol.x[3]), covariance, rms, len(data))
+
+
+def _features(states: np.ndarray, forces: np.ndarray) -> np.ndarray:
+    """(x_dot, sin theta, cos theta, theta_dot, f): the inputs of the generic model; the
+    cart position is left out (the track is flat)."""
+    th = states[:, 2]
+    return np.column_stack([states[:, 1], np.sin(th), np.cos(th), states[:, 3], forces])
+
+
+@dataclass(frozen=True)
+class GenericModel:
+    """A bootstrap ensemble of regressors from :func:`_features` to the step's mean
+    accelerations ((x_dot' - x_dot) / dt, (theta_dot' - theta_dot) / dt); the position
+    and angle advance by the mean of the old and new velocities (a trapezoid)."""
+
+    members: tuple[object, ...]
+    dt: float
+
+    def accelerations(self, states: np.ndarray, forces: np.ndarray) -> np.ndarray:
+        """(n_members, n, 2) predicted mean accelerations [m/s^2, rad/s^2]."""
+        X = _features(np.asarray(states, float), np.asarray(forces, float))
+        return np.stack([member.predict(X) for member in self.members])  # type: ignore[attr-defined]
+
+    def predict(
+        self, states: np.ndarray, forces: np.ndarray, dt: float | None = None
+    ) -> np.ndarray:
+        """Next states (n, 4) under the ensemble mean."""
+        step = self.dt if dt is None else dt
+        acc = self.accelerations(states, forces).mean(axis=0)
+        s = np.asarray(states, float)
+        v = s[:, [1, 3]] + step * acc
+        out = s.copy()
+        out[:, [1, 3]] = v
+        out[:, [0, 2]] = s[:, [0, 2]] + 0.5 * step * (s[:, [1, 3]] + v)
+        return out
+
+    def spread(self, states: np.ndarray, forces: np.ndarray) -> np.ndarray:
+        """(n, 2) ensemble standard deviation of the accelerations: the model's doubt."""
+        return self.accelerations(states, forces).std(axis=0)
+
+
+def fit_generic(
+    data: Transitions,
+    rng: np.random.Generator,
+    *,
+    members: int = 5,
+    components: int = 300,
+    gamma: float = 0.5,
+    ridge: float = 1e-6,
+) -> GenericModel:
+    """A bootstrap ensemble of ``members`` regressors: scikit-learn's ``StandardScaler``,
+    ``RBFSampler`` (``components`` random Fourier features of an RBF kernel of width
+    ``gamma``) and ``Ridge`` (penalty ``ridge``), each on a bootstrap resample of
+    ``data``. Needs scikit-learn (the ``model`` extra)."""
+    try:
+        from sklearn.kernel_approximation import RBFSampler
+        from sklearn.linear_model import Ridge
+        from sklearn.pipeline import make_pipeline
+        from sklearn.preprocessing import StandardScaler
+    except ImportError as exc:  # pragma: no cover - depends on the install
+        raise ParameterError(
+            "the generic forward model needs scikit-learn: pip install 'striatal[model]'"
+        ) from exc
+    if members < 1:
+        raise ParameterError(f"members must be >= 1, got {members}")
+    X = _features(data.states, data.forces)
+    y = (data.next_states[:, [1, 3]] - data.states[:, [1, 3]]) / data.dt
+    fitted = []
+    for _ in range(members):
+        rows = rng.integers(0, len(data), len(data))
+        seed = int(rng.integers(2**31 - 1))
+        pipe = make_pipeline(
+            StandardScaler(),
+            RBFSampler(gamma=gamma, n_components=components, random_state=seed),
+            Ridge(alpha=ridge),
+        )
+        fitted.append(pipe.fit(X[rows], y[rows]))
+    return GenericModel(tuple(fitted), data.dt)

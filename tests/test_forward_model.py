@@ -1,0 +1,155 @@
+"""The cerebellar forward models (striatal.learners.forward.model): what they recover from
+recorded real trials, how well they predict trials they were not fitted on, their doubt."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from striatal.errors import ParameterError
+from striatal.learners.forward.model import (
+    FAMILY_FLOOR,
+    Transitions,
+    fit_generic,
+    fit_structured,
+    rk4_force_step,
+)
+from striatal.params import (
+    CHAPTER_FINAL_THETA_C,
+    CHAPTER_FINAL_W,
+    CHAPTER_INITIAL_THETA_C,
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+)
+from striatal.sim.robust import ROBUST_HARDWARE
+from striatal.sim.rollout import simulate
+
+FINAL = Controller(gains=CHAPTER_FINAL_W, theta_c=CHAPTER_FINAL_THETA_C)
+INITIAL = Controller(gains=CHAPTER_INITIAL_W, theta_c=CHAPTER_INITIAL_THETA_C)
+OTHER = Controller(gains=(1.0, -0.3, -0.9, 0.4, 0.5, 1.0), theta_c=0.8)
+SIM = Simulation(duration=20.0)
+
+
+def recorded(plant: Plant, controller: Controller = FINAL) -> Transitions:
+    """One real trial under force hold, the controller believing the nominal plant."""
+    return Transitions.of(
+        [simulate(plant, controller, SIM, model=Plant(), hardware=ROBUST_HARDWARE)]
+    )
+
+
+def test_the_numpy_step_is_the_kernels_force_hold_step() -> None:
+    data = recorded(Plant(pole_mass=0.12, length=0.9))
+    pred = rk4_force_step(data.states, data.forces, data.dt, Plant(pole_mass=0.12, length=0.9))
+    assert np.abs(pred - data.next_states).max() < 1e-12
+    # and a wrong plant does not fit: the test can tell
+    wrong = rk4_force_step(data.states, data.forces, data.dt, Plant())
+    assert np.abs(wrong - data.next_states).max() > 1e-4
+
+
+@pytest.mark.parametrize(("mass", "length"), [(0.12, 0.9), (0.08, 0.8), (0.12, 1.2), (0.1, 1.0)])
+def test_structured_fit_recovers_the_plant_from_noise_free_trials(
+    mass: float, length: float
+) -> None:
+    true = Plant(pole_mass=mass, length=length)
+    fit = fit_structured(recorded(true))
+    assert fit.plant.pole_mass == pytest.approx(mass, rel=1e-6)
+    assert fit.plant.length == pytest.approx(length, rel=1e-6)
+    assert fit.plant.cart_mass == pytest.approx(1.0, rel=1e-6)
+    assert abs(fit.friction) < 1e-6
+    assert fit.rms.max() < 1e-10
+
+
+def test_structured_fit_within_tolerance_from_noisy_measurements() -> None:
+    """Sensor noise of 1 mm and 1 mrad (and per s) on every recorded state: pole mass and
+    length within 1 %, each within 4 of its standard errors of the truth."""
+    true = Plant(pole_mass=0.12, length=0.9)
+    clean = recorded(true)
+    rng = np.random.default_rng(3)
+    noisy = Transitions(
+        clean.states + rng.normal(0.0, 1e-3, clean.states.shape),
+        clean.forces,
+        clean.next_states + rng.normal(0.0, 1e-3, clean.states.shape),
+        clean.dt,
+    )
+    fit = fit_structured(noisy)
+    assert fit.plant.pole_mass == pytest.approx(0.12, rel=0.01)
+    assert fit.plant.length == pytest.approx(0.9, rel=0.01)
+    assert abs(fit.plant.pole_mass - 0.12) < 4 * fit.std[1]
+    assert abs(fit.plant.length - 0.9) < 4 * fit.std[2]
+    assert (fit.std > 0).all()
+
+
+def test_structured_fit_recovers_a_cart_friction() -> None:
+    """Next states made by the model's own equations with b = 0.3 N s/m: b comes back."""
+    true = Plant(pole_mass=0.12, length=0.9)
+    base = recorded(true)
+    next_states = rk4_force_step(base.states, base.forces, base.dt, true, friction=0.3)
+    fit = fit_structured(Transitions(base.states, base.forces, next_states, base.dt))
+    assert fit.friction == pytest.approx(0.3, rel=1e-6)
+    assert fit.plant.pole_mass == pytest.approx(0.12, rel=1e-6)
+
+
+def test_family_brackets_the_estimate_at_the_floor_when_the_data_are_exact() -> None:
+    fit = fit_structured(recorded(Plant(pole_mass=0.12, length=0.9)))
+    family = fit.family()
+    assert len(family) == 4
+    masses = sorted({p.pole_mass for p in family})
+    lengths = sorted({p.length for p in family})
+    assert masses == pytest.approx([0.12 * (1 - FAMILY_FLOOR), 0.12 * (1 + FAMILY_FLOOR)])
+    assert lengths == pytest.approx([0.9 * (1 - FAMILY_FLOOR), 0.9 * (1 + FAMILY_FLOOR)])
+    wide = fit.family(floor=0.2)
+    assert max(p.length for p in wide) == pytest.approx(0.9 * 1.2)
+
+
+def test_generic_model_predicts_a_held_out_trial() -> None:
+    """Fitted on two trials (chapter W(0) and final W), it predicts a third controller's
+    trial one step ahead: mean accelerations within 25 % of their spread, next
+    velocities within 5 mm/s and 10 mrad/s (root mean square)."""
+    pytest.importorskip("sklearn")
+    true = Plant(pole_mass=0.12, length=0.9)
+    train = Transitions.of(
+        [simulate(true, c, SIM, model=Plant(), hardware=ROBUST_HARDWARE) for c in (FINAL, INITIAL)]
+    )
+    model = fit_generic(train, np.random.default_rng(1))
+    held = recorded(true, OTHER)
+    acc_true = (held.next_states[:, [1, 3]] - held.states[:, [1, 3]]) / held.dt
+    acc = model.accelerations(held.states, held.forces).mean(axis=0)
+    rms = np.sqrt(((acc - acc_true) ** 2).mean(axis=0))
+    assert (rms < 0.25 * acc_true.std(axis=0)).all()
+    err = np.sqrt(((model.predict(held.states, held.forces) - held.next_states) ** 2).mean(axis=0))
+    assert err[1] < 5e-3 and err[3] < 1e-2
+    assert (model.spread(held.states, held.forces) >= 0).all()
+
+
+def test_generic_model_is_deterministic_under_a_seed() -> None:
+    pytest.importorskip("sklearn")
+    data = recorded(Plant()).split(4)[1]
+    a = fit_generic(data, np.random.default_rng(5), members=2, components=50)
+    b = fit_generic(data, np.random.default_rng(5), members=2, components=50)
+    c = fit_generic(data, np.random.default_rng(6), members=2, components=50)
+    pa, pb, pc = (m.predict(data.states[:50], data.forces[:50]) for m in (a, b, c))
+    assert np.array_equal(pa, pb)
+    assert not np.array_equal(pa, pc)
+
+
+def test_split_holds_out_every_kth_transition() -> None:
+    data = recorded(Plant())
+    rest, held = data.split(5)
+    assert len(rest) + len(held) == len(data)
+    assert np.array_equal(held.states, data.states[::5])
+
+
+def test_bad_transitions_are_refused() -> None:
+    z = np.zeros((3, 4))
+    with pytest.raises(ParameterError, match="at least one"):
+        Transitions(np.zeros((0, 4)), np.zeros(0), np.zeros((0, 4)), 0.01)
+    with pytest.raises(ParameterError, match="shape"):
+        Transitions(z, np.zeros(2), z, 0.01)
+    with pytest.raises(ParameterError, match="finite"):
+        Transitions(np.full((3, 4), np.nan), np.zeros(3), z, 0.01)
+    with pytest.raises(ParameterError, match="dt"):
+        Transitions(z, np.zeros(3), z, 0.0)
+    with pytest.raises(ParameterError, match="recorded trial"):
+        Transitions.of([])
