@@ -102,9 +102,10 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
     )
     lg.add_argument(
         "--theta-c-rule",
-        choices=("swingup", "trial", "fixed", "learned"),
+        choices=("swingup", "trial", "clamped", "fixed", "learned"),
         default=None,
-        help="eq 21's min|theta| under the swing-up, over the whole trial, keep theta_c, or "
+        help="eq 21's min|theta| under the swing-up, over the whole trial, over the whole "
+        "trial but at least 0.6 (clamped), keep theta_c, or "
         "learn it with the gains (pgpe); " + _default_text("theta_c_rule"),
     )
     lg.add_argument(

@@ -26,7 +26,7 @@ __all__ = [
 ]
 
 SuccessOn = Literal["noisy", "mean"]
-ThetaCRule = Literal["swingup", "trial", "fixed", "learned"]
+ThetaCRule = Literal["swingup", "trial", "clamped", "fixed", "learned"]
 Eligibility = Literal["score", "chapter"]
 RewardKind = Literal["sparse", "shaped"]
 
@@ -60,7 +60,8 @@ class LearnerConfig:
     success_on : judge the success test on the noisy trial ("noisy", the chapter) or on
         a noise-free rerun with the mean policy ("mean").
     theta_c_rule : eq 21 with min |theta| under the swing-up ("swingup"), over the whole
-        trial ("trial"), theta_c kept fixed ("fixed"), or learned with the gains
+        trial ("trial"), over the whole trial but not below eq 21's reset value
+        ("clamped"), theta_c kept fixed ("fixed"), or learned with the gains
         ("learned", pgpe).
     action_every : a new action is drawn every this many control steps and held.
     alpha : learning rate of eqs 1/4.
@@ -150,9 +151,9 @@ class LearnerConfig:
             )
         if self.success_on not in ("noisy", "mean"):
             raise ParameterError(f"success_on must be 'noisy' or 'mean', got {self.success_on!r}")
-        if self.theta_c_rule not in ("swingup", "trial", "fixed", "learned"):
+        if self.theta_c_rule not in ("swingup", "trial", "clamped", "fixed", "learned"):
             raise ParameterError(
-                "theta_c_rule must be 'swingup', 'trial', 'fixed' or 'learned', "
+                "theta_c_rule must be 'swingup', 'trial', 'clamped', 'fixed' or 'learned', "
                 f"got {self.theta_c_rule!r}"
             )
         if not isinstance(self.learner, str):
