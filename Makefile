@@ -20,7 +20,7 @@ $(RUN_STAMP): pyproject.toml | $(BIN)/python
 
 $(TEST_STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/pip install -q torch==2.13.0  # the CPU build; [rl] only asks for a range
-	$(BIN)/pip install -q -e ".[dev,rl,cluster,render,neural]"
+	$(BIN)/pip install -q -e ".[dev,rl,cluster,render,neural,model]"
 	touch $@ $(RUN_STAMP)
 
 # The chapter's experiment (about 3 minutes on 2 cores):

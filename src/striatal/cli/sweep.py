@@ -13,6 +13,7 @@ from striatal.errors import ParameterError
 from striatal.experiments import baselines
 from striatal.experiments import runner as experiments
 from striatal.io.files import check_out_dir, dumps_json
+from striatal.learners import rule_of
 from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W, Simulation
 from striatal.sim.rollout import Protocol
 
@@ -165,12 +166,29 @@ def prepare(
     if config.robust:
         # only when set, so the settings of sweeps without it stay as they were
         settings["robust"] = experiments.NOTE_ROBUST
+    tuning_root = rule_of(config).tuning_root_of(config)
+    if tuning_root is not None:
+        settings["tuning_root"] = tuning_root
     return specs, settings, config.max_trials
+
+
+def in_sample_note(settings: dict[str, Any]) -> str | None:
+    """The stderr line of a sweep run on the root its preset was tuned on, else None."""
+    root = settings.get("tuning_root")
+    if root is None or root != settings["root_seed"]:
+        return None
+    return (
+        f"note: the preset was tuned on root seed {root}: these are its tuning seeds, "
+        "not a held-out evaluation (use another --seed)"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     out = check_out_dir(args.out) if args.out is not None else None
     specs, settings, max_trials = prepare(args)
+    note = in_sample_note(settings)
+    if note is not None:
+        print(note, file=sys.stderr)
     settings["options"] = config.recorded_options(args)
     result = experiments.sweep(
         specs,

@@ -201,7 +201,8 @@ def _eq21(outs: np.ndarray, theta_c: np.ndarray, rule: str) -> np.ndarray:
     m = outs[:, col]
     with np.errstate(invalid="ignore"):
         reset = ~np.isfinite(m) | (m > THETA_C_RESET_ABOVE)
-        return np.where(reset, THETA_C_RESET_TO, np.maximum(m, THETA_C_FLOOR))
+        floor = THETA_C_RESET_TO if rule == "clamped" else THETA_C_FLOOR
+        return np.where(reset, THETA_C_RESET_TO, np.maximum(m, floor))
 
 
 def _rows_finite(a: np.ndarray) -> np.ndarray:

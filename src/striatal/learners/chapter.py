@@ -95,7 +95,11 @@ def finite_trace(trace: np.ndarray) -> tuple[float, ...]:
 
 
 class ChapterRule(Rule):
-    """The chapter's rule: Gaussian policy per step (eq 5), trace D (eq 3), update eq 4."""
+    """The chapter's rule: Gaussian policy per step (eq 5), trace D (eq 3), update eq 4.
+
+    No preset: the chapter's learner with striatal's defaults (alpha 5, gamma 0.999),
+    set before any sweep ran: ``tuning_root`` None.
+    """
 
     name = "chapter"
     summary = "the chapter's rule (eqs 1-5, 21)"

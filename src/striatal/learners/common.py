@@ -74,12 +74,23 @@ def random_initial_gains(rng: np.random.Generator) -> tuple[float, ...]:
 
 
 def theta_c_rule(outcome: TrialOutcome, theta_c: float, rule: ThetaCRule) -> float:
-    """Eq 21: theta_c = min|theta| if it is < 1.4, else 0.6 (docs/paper-notes.md, section 6)."""
+    """Eq 21: theta_c = min|theta| if it is < 1.4, else 0.6 (docs/paper-notes.md, section 6).
+
+    min|theta| [rad] is read under the swing-up ("swingup": never below the theta_c the
+    trial ran with, so theta_c only rises until it resets, a ratchet) or over the whole
+    trial ("trial": once the balancing law holds the pole, about 0, so theta_c falls to
+    THETA_C_FLOOR). "clamped" reads it over the whole trial, held at or above the reset
+    value 0.6: theta_c rises to the closest approach of a trial that never came within
+    0.6 rad and falls back when a trial comes closer than it, so it neither ratchets
+    nor collapses.
+    """
     if rule in ("fixed", "learned"):
         return theta_c
     m = outcome.min_abs_theta_swingup if rule == "swingup" else outcome.min_abs_theta
     if not math.isfinite(m) or m > THETA_C_RESET_ABOVE:
         return THETA_C_RESET_TO
+    if rule == "clamped":
+        return max(m, THETA_C_RESET_TO)
     return max(m, THETA_C_FLOOR)
 
 

@@ -34,7 +34,7 @@ __all__ = [
 ]
 
 SuccessOn = Literal["noisy", "mean"]
-ThetaCRule = Literal["swingup", "trial", "fixed", "learned"]
+ThetaCRule = Literal["swingup", "trial", "clamped", "fixed", "learned"]
 Eligibility = Literal["score", "chapter"]
 RewardKind = Literal["sparse", "shaped"]
 
@@ -108,8 +108,9 @@ class LearnerConfig:
     theta_c_rule: ThetaCRule = field(
         default="swingup",
         metadata=meta(
-            "eq 21's min|theta| under the swing-up, over the whole trial, keep theta_c, or "
-            "learn it with the gains (pgpe)",
+            "eq 21's min|theta| under the swing-up (a ratchet), over the whole trial (falls "
+            "to its floor), over the whole trial but at least 0.6 (clamped), keep theta_c, "
+            "or learn it with the gains (pgpe)",
         ),
     )
     max_trials: int = field(

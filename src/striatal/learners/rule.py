@@ -83,6 +83,11 @@ class Rule:
     #: The changes the robust stop rule adds to :attr:`preset` (``robust=True``), before
     #: the options given (docs/results.md, "Robust from any start").
     robust_preset: ClassVar[Mapping[str, Any]] = MappingProxyType({})
+    #: The sweep root seed (``striatal sweep --seed``) whose seeds :attr:`preset` was tuned
+    #: on; None: tuned on seeds no sweep root spawns (docs/results.md, "Protocol").
+    tuning_root: ClassVar[int | None] = None
+    #: The same for :attr:`robust_preset`.
+    robust_tuning_root: ClassVar[int | None] = None
     #: The no-learning control: the fields changed to switch learning off (the sweep's
     #: control arm), everything else (exploration, eq 21) kept.
     control: ClassVar[Mapping[str, Any]] = MappingProxyType({"alpha": 0.0})
@@ -125,6 +130,11 @@ class Rule:
                 "theta_c_rule 'learned' (theta_c perturbed and updated with the gains) "
                 f"needs a learner that learns it (pgpe), not {self.name!r}"
             )
+
+    def tuning_root_of(self, config: LearnerConfig) -> int | None:
+        """The root :func:`striatal.learners.default_config` took ``config``'s preset from
+        (:attr:`robust_tuning_root` with ``config.robust``, else :attr:`tuning_root`)."""
+        return self.robust_tuning_root if config.robust else self.tuning_root
 
     def control_config(self, config: LearnerConfig) -> LearnerConfig:
         """``config`` with learning switched off as :attr:`control` says."""
