@@ -174,7 +174,7 @@ def test_cli_engines_give_the_same_runs_csv(
 ) -> None:
     """The issue's small sweep: --seeds 6 --max-trials 40 --duration 10, both engines."""
     argv = ["sweep", "--seeds", "6", "--max-trials", "40", "--duration", "10"]
-    argv += ["--eval-draws", "5", "--init", "chapter", "random", "--json"]
+    argv += ["--eval-draws", "5", "--init", "chapter,random", "--json"]
     assert main([*argv, "--out", str(tmp_path / "p"), "--workers", "2"]) == 0
     processes = json.loads(capsys.readouterr().out)
     assert main([*argv, "--out", str(tmp_path / "b"), "--engine", "batch"]) == 0

@@ -293,6 +293,7 @@ STORED_ALWAYS = frozenset(
 )
 
 
+@functools.cache
 def field_kind(f: Field[Any]) -> tuple[type, tuple[Any, ...], bool]:
     """A field's value type, its choices (of its ``Literal`` type; () for none) and
     whether it may be None."""
@@ -306,6 +307,7 @@ def field_kind(f: Field[Any]) -> tuple[type, tuple[Any, ...], bool]:
     return hint, (), optional
 
 
+@functools.cache
 def bounds_of(f: Field[Any]) -> tuple[float, float, bool, bool] | None:
     """``(low, high, low_open, high_open)`` of a field's ``bounds`` (None: no bounds)."""
     text = f.metadata.get("bounds", "").replace(" ", "")
@@ -347,7 +349,9 @@ def check_field(f: Field[Any], value: Any) -> Any:
             above = number > low if low_open else number >= low
             below = number < high if high_open else number <= high
             if not (above and below):
-                raise ParameterError(f"{name} must be {bounds_text(f)}, got {value!r}")
+                finite = f.metadata.get("finite", True)
+                unbounded = "" if finite or high_open else " (inf for no bound)"
+                raise ParameterError(f"{name} must be {bounds_text(f)}{unbounded}, got {value!r}")
         if optional:
             return number
     return value
