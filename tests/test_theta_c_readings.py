@@ -11,11 +11,11 @@ import math
 
 import numpy as np
 import pytest
+from test_learn import outcome
 
 from striatal.learners import TrialRecord, default_config, learn, theta_c_rule
 from striatal.learners.common import THETA_C_FLOOR, THETA_C_RESET_ABOVE, THETA_C_RESET_TO
 from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W, Controller, Plant
-from striatal.sim.rollout import TrialOutcome
 
 START = Controller(gains=CHAPTER_INITIAL_W, theta_c=CHAPTER_INITIAL_THETA_C)
 SEEDS = (1, 2, 3)
@@ -27,22 +27,6 @@ def control_records(rule: str, seed: int, trials: int) -> list[TrialRecord]:
     records: list[TrialRecord] = []
     learn(Plant(), START, config, seed, on_trial=lambda s, rec: records.append(rec))
     return records
-
-
-def outcome(min_swing: float, min_all: float) -> TrialOutcome:
-    return TrialOutcome(
-        reward=-5.0,
-        ended_at=60.0,
-        final_state=(0.0, 0.0, 0.0, 0.0),
-        min_abs_theta_swingup=min_swing,
-        min_abs_theta=min_all,
-        fault=False,
-        early=False,
-        n_switches=0,
-        max_abs_x=0.0,
-        max_abs_force=0.0,
-        success=False,
-    )
 
 
 @pytest.mark.parametrize("seed", SEEDS)

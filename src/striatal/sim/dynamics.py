@@ -7,6 +7,8 @@ baselines and figures. ``state``: (..., 4) [m, m/s, rad, rad/s].
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from striatal.params import Plant
@@ -20,6 +22,7 @@ __all__ = [
     "force_level_accelerations",
     "linearization",
     "pendulum_energy",
+    "rk4_force_step",
     "rk4_step",
     "wrap_angle",
 ]
@@ -68,13 +71,32 @@ def derivative(state: np.ndarray, u: np.ndarray | float, plant: Plant) -> np.nda
     return np.stack([s[..., 1], acc[..., 0], s[..., 3], acc[..., 1]], axis=-1)
 
 
+def _rk4(d: Callable[[np.ndarray], np.ndarray], state: np.ndarray, dt: float) -> np.ndarray:
+    """One classical RK4 step of d state / dt = d(state)."""
+    k1 = d(state)
+    k2 = d(state + 0.5 * dt * k1)
+    k3 = d(state + 0.5 * dt * k2)
+    k4 = d(state + dt * k3)
+    out: np.ndarray = state + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return out
+
+
 def rk4_step(state: np.ndarray, u: np.ndarray | float, dt: float, plant: Plant) -> np.ndarray:
     """One classical RK4 step with u held."""
-    k1 = derivative(state, u, plant)
-    k2 = derivative(state + 0.5 * dt * k1, u, plant)
-    k3 = derivative(state + 0.5 * dt * k2, u, plant)
-    k4 = derivative(state + dt * k3, u, plant)
-    return state + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return _rk4(lambda s: derivative(s, u, plant), state, dt)
+
+
+def rk4_force_step(
+    state: np.ndarray, f: np.ndarray | float, dt: float, plant: Plant, friction: float = 0.0
+) -> np.ndarray:
+    """One RK4 step of eqs 8-10 with the cart force f [N] held (``Hardware(hold="force")``),
+    a viscous cart friction -friction * x_dot [N] added to it (0: the kernel's plant)."""
+
+    def d(s: np.ndarray) -> np.ndarray:
+        acc = force_level_accelerations(s, f - friction * s[..., 1], plant)
+        return np.stack([s[..., 1], acc[..., 0], s[..., 3], acc[..., 1]], axis=-1)
+
+    return _rk4(d, np.asarray(state, dtype=float), dt)
 
 
 def pendulum_energy(state: np.ndarray, plant: Plant) -> np.ndarray:

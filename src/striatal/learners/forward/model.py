@@ -28,6 +28,7 @@ from scipy.optimize import least_squares
 
 from striatal.errors import ParameterError
 from striatal.params import Plant
+from striatal.sim.dynamics import rk4_force_step
 from striatal.sim.rollout import Trajectory
 
 __all__ = [
@@ -97,39 +98,6 @@ class Transitions:
 
     def _pick(self, rows: np.ndarray) -> Transitions:
         return Transitions(self.states[rows], self.forces[rows], self.next_states[rows], self.dt)
-
-
-def _accelerations(
-    s: np.ndarray, f: np.ndarray, M: float, m: float, l: float, b: float, g: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """(x_ddot, theta_ddot) of eqs 8-10 with a viscous cart friction -b x_dot added to f."""
-    th, thd = s[..., 2], s[..., 3]
-    c, sn = np.cos(th), np.sin(th)
-    det = (m + M) * m * l**2 - (m * l * c) ** 2
-    rhs1 = f - b * s[..., 1] + m * l * thd**2 * sn
-    rhs2 = m * g * l * sn
-    return (m * l**2 * rhs1 - m * l * c * rhs2) / det, ((m + M) * rhs2 - m * l * c * rhs1) / det
-
-
-def rk4_force_step(
-    states: np.ndarray, forces: np.ndarray, dt: float, plant: Plant, friction: float = 0.0
-) -> np.ndarray:
-    """One RK4 step of eqs 8-10 with the force held, for (n, 4) states at once.
-
-    The kernel's step under ``Hardware(hold="force")`` for ``friction`` 0.
-    """
-    M, m, l, g = plant.cart_mass, plant.pole_mass, plant.length, plant.gravity
-
-    def d(s: np.ndarray) -> np.ndarray:
-        xdd, thdd = _accelerations(s, forces, M, m, l, friction, g)
-        return np.stack([s[..., 1], xdd, s[..., 3], thdd], axis=-1)
-
-    k1 = d(states)
-    k2 = d(states + 0.5 * dt * k1)
-    k3 = d(states + 0.5 * dt * k2)
-    k4 = d(states + dt * k3)
-    out: np.ndarray = states + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    return out
 
 
 @dataclass(frozen=True)
