@@ -128,7 +128,7 @@ def test_force_level_accelerations_match_the_numpy_reference() -> None:
     for _ in range(20):
         s = rng.normal(size=4) * [1, 2, 3, 4]
         f = float(rng.normal() * 10)
-        got = kernel._force_accelerations(
+        got = kernel.force_accelerations(
             math.sin(s[2]), math.cos(s[2]), s[3], f, *p.as_array().tolist()
         )
         np.testing.assert_allclose(got, force_level_accelerations(s, f, p), rtol=1e-12)

@@ -20,7 +20,7 @@ step, in the manner of Doya (2000, continuous-time actor-critic) and Frémaux et
 - the critic's trace z <- gamma_v lambda z + phi(s_k) and v <- v + beta delta_k z.
 
 The plant, the controllers and the eligibilities are the kernel's njit functions
-(:func:`striatal.sim.kernel.plant_step`, ``_policy_wrapped``, ``trace_step``, ``judge``,
+(:func:`striatal.sim.kernel.plant_step`, ``policy_terms``, ``trace_step``, ``judge``,
 ``write_summary``): no physics is written here. With alpha = beta = 0 the trial is
 :func:`striatal.sim.kernel.run_trial`'s bit for bit (tests/test_online.py).
 """
@@ -47,12 +47,12 @@ from striatal.sim.kernel import (
     PlantArgs,
     ProtocolArgs,
     TraceArgs,
-    _inv_root,
-    _policy_wrapped,
+    balancing_roots,
     judge,
     motor_force,
     plant_step,
     plant_terms,
+    policy_terms,
     sigma_of,
     trace_step,
     wrap_angle,
@@ -242,8 +242,7 @@ def run_online_trial(
     sq_rate = critic.square_rate
     normalise = critic.normalise
     sigma = sigma_of(W[5])
-    root = math.sqrt(W[0] * model[3])
-    inv_root = _inv_root(W[0], model[3])
+    root, inv_root = balancing_roots(W[0], model[3])
     d = np.empty(6)
     for i in range(6):
         d[i] = trace[i]
@@ -293,17 +292,23 @@ def run_online_trial(
                 z[i] = discount * lam * z[i] + phi[i]
             if hold == 0:
                 hold = action_every
-                mu, g1, g2, g3, g4, g5 = _policy_wrapped(
+                mu, g1, g2, g3, g4, g5 = policy_terms(
                     x,
                     x_dot,
                     th,
                     theta_dot,
-                    W,
+                    W[0],
+                    W[1],
+                    W[2],
+                    W[3],
+                    W[4],
                     theta_c,
                     sign,
                     soft,
                     inhibition,
-                    model,
+                    model[1],
+                    model[2],
+                    model[3],
                     chapter_eligibility,
                     root,
                     inv_root,
@@ -360,8 +365,7 @@ def run_online_trial(
                         if W[0] < critic.w1_floor:
                             W[0] = critic.w1_floor
                         sigma = sigma_of(W[5])
-                        root = math.sqrt(W[0] * model[3])
-                        inv_root = _inv_root(W[0], model[3])
+                        root, inv_root = balancing_roots(W[0], model[3])
             if status == STATUS_FAULT:
                 end_step = k + 1
                 break

@@ -1,0 +1,398 @@
+"""The lockstep batch: the trials of a block advance step k together, as arrays over
+lanes, so that LLVM vectorises the loops over trials (no libm call inside them).
+
+The same arguments and outputs as :func:`striatal.sim.kernel.trials.run_trials_batch`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from striatal.sim.kernel.libm import TWO_PI, sincos_poly, wrap_angle
+from striatal.sim.kernel.plant import PlantArgs, accelerations_terms, force_terms
+from striatal.sim.kernel.policy import ControlArgs, Gains, balancing_roots, sigma_of
+from striatal.sim.kernel.traces import TraceArgs
+from striatal.sim.kernel.trials import (
+    BLOW_UP,
+    OUT_EARLY,
+    OUT_END_STEP,
+    OUT_FAULT,
+    OUT_MAX_ABS_FORCE,
+    OUT_MAX_ABS_X,
+    OUT_MIN_ABS_THETA,
+    OUT_MIN_ABS_THETA_SWINGUP,
+    OUT_N_SWITCHES,
+    OUT_REWARD,
+    OUT_THETA,
+    OUT_THETA_DOT,
+    OUT_TRACK,
+    OUT_X,
+    OUT_X_DOT,
+    STATUS_EARLY,
+    STATUS_FAULT,
+    STATUS_RUNNING,
+    ProtocolArgs,
+    judge,
+)
+
+__all__ = [
+    "LOCKSTEP_BLOCK",
+    "run_trials_lockstep",
+]
+
+#: Trials per lockstep block (one block per thread at a time).
+LOCKSTEP_BLOCK = 64
+
+
+@njit(cache=True)
+def _clip01(v: float) -> float:
+    """min(max(v, 0), 1) as selects (NaN gives 1, as min(max(NaN, 0), 1) does)."""
+    lo = v if v > 0.0 else 0.0
+    return lo if lo < 1.0 else 1.0
+
+
+# Rows of the per-block state array of the lockstep kernel (fields x lanes).
+_F_X, _F_XD, _F_TH, _F_THD, _F_A, _F_ACTIVE, _F_TC = 0, 1, 2, 3, 4, 5, 6
+_F_W1, _F_W2, _F_W3, _F_W4, _F_W5, _F_ROOT, _F_INVROOT, _F_SIGMA = 7, 8, 9, 10, 11, 12, 13, 14
+_F_EPS, _F_THW, _F_D0 = 15, 16, 17  # D0..D5: 17..22
+_F_MINSW, _F_MINALL, _F_NSW, _F_PREV, _F_MAXX, _F_MAXF = 23, 24, 25, 26, 27, 28
+_N_FIELDS = 29
+
+
+@njit(cache=True, error_model="numpy")
+def _lockstep_block(
+    lo: int,
+    hi: int,
+    states0: np.ndarray,
+    gains: Gains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
+    noise: np.ndarray,
+    learning: TraceArgs,
+    outs: np.ndarray,
+) -> None:
+    """Trials lo..hi-1 of :func:`run_trials_lockstep`, advanced step by step together.
+
+    The state array always has LOCKSTEP_BLOCK lanes (a compile-time row stride, so the
+    loops over lanes vectorise without run-time alias checks); the loops step the
+    trials rounded up to a multiple of 4, the extra lanes idle copies of the first
+    trial, inactive from the start.
+    """
+    n = hi - lo
+    # lanes actually stepped: the trials rounded up to a multiple of 4 (one AVX2
+    # vector); the array keeps LOCKSTEP_BLOCK lanes so its row stride is a constant
+    L = min(LOCKSTEP_BLOCK, (n + 3) // 4 * 4)
+    S = np.zeros((_N_FIELDS, LOCKSTEP_BLOCK))
+    status = np.full(LOCKSTEP_BLOCK, STATUS_RUNNING)
+    end_step = np.full(LOCKSTEP_BLOCK, protocol.n_steps)
+    reward = np.zeros(LOCKSTEP_BLOCK)
+    p = plant.plant
+    model = plant.model
+    mismatch = plant.mismatch
+    dt = plant.dt
+    h = 0.5 * dt
+    w6 = dt / 6.0
+    length = model[2]
+    g = model[3]
+    m = model[1]
+    # parameters as plain floats: the loops over lanes read no parameter array
+    p_cart, p_pole, p_len, p_g = p[0], p[1], p[2], p[3]
+    q_cart, q_pole, q_len, q_g = model[0], model[1], model[2], model[3]
+    sign = control.sign
+    soft = control.soft
+    inhibition = control.inhibition
+    chapter = control.chapter_eligibility
+    gamma = learning.gamma
+    stochastic = noise.shape[1] > 0
+    n_steps = protocol.n_steps
+    for j in range(L):
+        b = lo + j if j < n else lo
+        S[_F_X, j] = states0[b, 0]
+        S[_F_XD, j] = states0[b, 1]
+        S[_F_TH, j] = states0[b, 2]
+        S[_F_THD, j] = states0[b, 3]
+        S[_F_ACTIVE, j] = 1.0 if j < n else 0.0
+        S[_F_MAXX, j] = abs(states0[b, 0])
+        S[_F_TC, j] = gains.theta_c[b]
+        w1 = gains.W[b, 0]
+        S[_F_W1, j] = w1
+        S[_F_W2, j] = gains.W[b, 1]
+        S[_F_W3, j] = gains.W[b, 2]
+        S[_F_W4, j] = gains.W[b, 3]
+        S[_F_W5, j] = gains.W[b, 4]
+        S[_F_ROOT, j], S[_F_INVROOT, j] = balancing_roots(w1, g)
+        S[_F_SIGMA, j] = sigma_of(gains.W[b, 5])
+        for i in range(6):
+            S[_F_D0 + i, j] = learning.trace[b, i]
+        S[_F_MINSW, j] = math.inf
+        S[_F_MINALL, j] = math.inf
+        S[_F_PREV, j] = -1.0
+        if j < n and protocol.check_step == 0:
+            st, rw = judge(S[_F_X, j], S[_F_XD, j], S[_F_TH, j], S[_F_THD, j], 0, protocol)
+            if st != STATUS_RUNNING:
+                status[j] = st
+                reward[j] = rw
+                end_step[j] = 0
+                S[_F_ACTIVE, j] = 0.0
+    n_active = 0
+    for j in range(L):
+        n_active += 1 if S[_F_ACTIVE, j] > 0.0 else 0
+    hold = 0
+    draw = 0
+    k = 0
+    while k < n_steps and n_active > 0:
+        act = hold == 0
+        if act:
+            hold = control.action_every
+            if stochastic:
+                for j in range(n):
+                    S[_F_EPS, j] = noise[lo + j, draw]
+            draw += 1
+        hold -= 1
+        # pass 1: switch and statistics
+        for j in range(L):
+            run = S[_F_ACTIVE, j] > 0.0
+            t = S[_F_TH, j]
+            tw = t - TWO_PI * np.ceil((t - math.pi) / TWO_PI)
+            S[_F_THW, j] = tw
+            abs_th = abs(tw)
+            bal = abs_th < S[_F_TC, j]
+            mode = 1.0 if bal else 0.0
+            ms = S[_F_MINSW, j]
+            S[_F_MINSW, j] = abs_th if (run and not bal and abs_th < ms) else ms
+            ma = S[_F_MINALL, j]
+            S[_F_MINALL, j] = abs_th if (run and abs_th < ma) else ma
+            prev = S[_F_PREV, j]
+            S[_F_NSW, j] += 1.0 if (run and prev >= 0.0 and mode != prev) else 0.0
+            S[_F_PREV, j] = mode if run else prev
+        # at a draw: the policy (eqs 5, 22-23, switch of section 2.3 or 4), trace (eq 3)
+        if act:
+            for j in range(L):
+                run = S[_F_ACTIVE, j] > 0.0
+                tw = S[_F_THW, j]
+                tc = S[_F_TC, j]
+                abs_th = abs(tw)
+                bal = abs_th < tc
+                wb_soft = _clip01(inhibition * (tc - abs_th))
+                ws_soft = _clip01(inhibition * (abs_th - tc))
+                wb = wb_soft if soft else (1.0 if bal else 0.0)
+                ws = ws_soft if soft else (0.0 if bal else 1.0)
+                on_b = wb > 0.0
+                on_s = ws > 0.0
+                xj = S[_F_X, j]
+                xdj = S[_F_XD, j]
+                thdj = S[_F_THD, j]
+                w1 = S[_F_W1, j]
+                w5 = S[_F_W5, j]
+                inv_root = S[_F_INVROOT, j]
+                mu_b = (
+                    sign * ((1.0 + w1 * length) * g * tw + 2.0 * length * S[_F_ROOT, j] * thdj)
+                    - S[_F_W2, j] * xj
+                    - S[_F_W3, j] * xdj
+                )
+                d1_chapter = -length * (g * tw - inv_root * thdj)
+                d1_score = sign * length * (g * tw + inv_root * thdj)
+                d1 = d1_chapter if chapter else d1_score
+                _, cth = sincos_poly(tw)
+                e_t = 0.5 * m * length * length * thdj * thdj + m * g * length * (cth - 1.0)
+                mu_s = S[_F_W4, j] * e_t * thdj * cth - 0.25 * w5 * w5 * xj - w5 * xdj
+                mu = (wb * mu_b if on_b else 0.0) + (ws * mu_s if on_s else 0.0)
+                sg = S[_F_SIGMA, j]
+                eps = sg * S[_F_EPS, j]
+                upd = run and stochastic
+                g1 = wb * d1 if on_b else 0.0
+                g2 = -wb * xj if on_b else 0.0
+                g3 = -wb * xdj if on_b else 0.0
+                g4 = ws * e_t * thdj * cth if on_s else 0.0
+                g5 = -ws * (0.5 * w5 * xj + xdj) if on_s else 0.0
+                t0 = S[_F_D0, j]
+                t1 = S[_F_D0 + 1, j]
+                t2 = S[_F_D0 + 2, j]
+                t3 = S[_F_D0 + 3, j]
+                t4 = S[_F_D0 + 4, j]
+                t5 = S[_F_D0 + 5, j]
+                S[_F_D0, j] = eps * g1 + gamma * t0 if upd else t0
+                S[_F_D0 + 1, j] = eps * g2 + gamma * t1 if upd else t1
+                S[_F_D0 + 2, j] = eps * g3 + gamma * t2 if upd else t2
+                S[_F_D0 + 3, j] = eps * g4 + gamma * t3 if upd else t3
+                S[_F_D0 + 4, j] = eps * g5 + gamma * t4 if upd else t4
+                S[_F_D0 + 5, j] = (eps * eps - sg * sg) * (1.1 - sg) + gamma * t5 if upd else t5
+                act_a = mu + eps if stochastic else mu
+                S[_F_A, j] = act_a if run else S[_F_A, j]
+        # pass 2: force (eq 12), one RK4 step (eqs 13-14), the fault prefilter of judge
+        suspect = 0
+        for j in range(L):
+            u = S[_F_A, j]
+            t = S[_F_TH, j]
+            x0 = S[_F_X, j]
+            xd0 = S[_F_XD, j]
+            thd0 = S[_F_THD, j]
+            s1, c1 = sincos_poly(t)
+            f = abs(force_terms(s1, c1, thd0, u, q_cart, q_pole, q_len, q_g))
+            a1, b1 = accelerations_terms(
+                xd0,
+                s1,
+                c1,
+                thd0,
+                u,
+                p_cart,
+                p_pole,
+                p_len,
+                p_g,
+                q_cart,
+                q_pole,
+                q_len,
+                q_g,
+                mismatch,
+            )
+            xd2 = xd0 + h * a1
+            thd2 = thd0 + h * b1
+            s2, c2 = sincos_poly(t + h * thd0)
+            a2, b2 = accelerations_terms(
+                xd2,
+                s2,
+                c2,
+                thd2,
+                u,
+                p_cart,
+                p_pole,
+                p_len,
+                p_g,
+                q_cart,
+                q_pole,
+                q_len,
+                q_g,
+                mismatch,
+            )
+            xd3 = xd0 + h * a2
+            thd3 = thd0 + h * b2
+            s3, c3 = sincos_poly(t + h * thd2)
+            a3, b3 = accelerations_terms(
+                xd3,
+                s3,
+                c3,
+                thd3,
+                u,
+                p_cart,
+                p_pole,
+                p_len,
+                p_g,
+                q_cart,
+                q_pole,
+                q_len,
+                q_g,
+                mismatch,
+            )
+            xd4 = xd0 + dt * a3
+            thd4 = thd0 + dt * b3
+            s4, c4 = sincos_poly(t + dt * thd3)
+            a4, b4 = accelerations_terms(
+                xd4,
+                s4,
+                c4,
+                thd4,
+                u,
+                p_cart,
+                p_pole,
+                p_len,
+                p_g,
+                q_cart,
+                q_pole,
+                q_len,
+                q_g,
+                mismatch,
+            )
+            nx = x0 + w6 * (xd0 + 2.0 * xd2 + 2.0 * xd3 + xd4)
+            nxd = xd0 + w6 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+            nth = t + w6 * (thd0 + 2.0 * thd2 + 2.0 * thd3 + thd4)
+            nthd = thd0 + w6 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+            run = S[_F_ACTIVE, j] > 0.0
+            mf = S[_F_MAXF, j]
+            S[_F_MAXF, j] = f if (run and f > mf) else mf
+            S[_F_X, j] = nx if run else x0
+            S[_F_XD, j] = nxd if run else xd0
+            S[_F_TH, j] = nth if run else t
+            S[_F_THD, j] = nthd if run else thd0
+            ok = abs(nx) < BLOW_UP and abs(nxd) < BLOW_UP
+            ok = ok and abs(nth) < BLOW_UP and abs(nthd) < BLOW_UP
+            suspect += 0 if (ok or not run) else 1
+        k += 1
+        # the trial rules (judge) where they can end a trial: a suspect state, the
+        # eq-24 check step, the last step; elsewhere judge returns RUNNING
+        if suspect > 0 or k == protocol.check_step or k >= n_steps:
+            for j in range(L):
+                if S[_F_ACTIVE, j] > 0.0:
+                    st, rw = judge(S[_F_X, j], S[_F_XD, j], S[_F_TH, j], S[_F_THD, j], k, protocol)
+                    if st != STATUS_RUNNING:
+                        status[j] = st
+                        reward[j] = rw
+                        end_step[j] = k
+                        S[_F_ACTIVE, j] = 0.0
+                        n_active -= 1
+                    if st != STATUS_FAULT and abs(S[_F_X, j]) > S[_F_MAXX, j]:
+                        S[_F_MAXX, j] = abs(S[_F_X, j])
+        else:
+            for j in range(L):
+                ax = abs(S[_F_X, j])
+                mx = S[_F_MAXX, j]
+                S[_F_MAXX, j] = ax if (S[_F_ACTIVE, j] > 0.0 and ax > mx) else mx
+    for j in range(n):
+        b = lo + j
+        out = outs[b]
+        out[OUT_REWARD] = reward[j]
+        out[OUT_END_STEP] = end_step[j]
+        out[OUT_X] = S[_F_X, j]
+        out[OUT_X_DOT] = S[_F_XD, j]
+        out[OUT_THETA] = wrap_angle(S[_F_TH, j])
+        out[OUT_THETA_DOT] = S[_F_THD, j]
+        out[OUT_MIN_ABS_THETA_SWINGUP] = S[_F_MINSW, j]
+        out[OUT_MIN_ABS_THETA] = S[_F_MINALL, j]
+        out[OUT_FAULT] = 1.0 if status[j] == STATUS_FAULT else 0.0
+        out[OUT_EARLY] = 1.0 if status[j] == STATUS_EARLY else 0.0
+        out[OUT_N_SWITCHES] = S[_F_NSW, j]
+        out[OUT_MAX_ABS_X] = S[_F_MAXX, j]
+        out[OUT_MAX_ABS_FORCE] = S[_F_MAXF, j]
+        out[OUT_TRACK] = 0.0
+        if stochastic:
+            for i in range(6):
+                learning.trace[b, i] = S[_F_D0 + i, j]
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def run_trials_lockstep(
+    states0: np.ndarray,
+    gains: Gains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
+    noise: np.ndarray,
+    learning: TraceArgs,
+    outs: np.ndarray,
+) -> None:
+    """:func:`run_trials_batch` with all trials of a block advancing step k together.
+
+    Same arguments (build them with :func:`striatal.sim.rollout.batch_args`) and outputs.
+    State, trace and statistics are arrays over the trials of a block of
+    :data:`LOCKSTEP_BLOCK`; the loops over trials call no libm function (sin/cos by
+    :func:`sincos_poly`), so they vectorise; blocks run in parallel over cores. An
+    ended trial is frozen by a mask. The trial rules are :func:`judge`'s. Results
+    equal the scalar kernel's up to the round-off of the polynomial sin/cos, which
+    the chaotic swing-up can amplify over a trial (tests/test_lockstep.py states the
+    tolerance). It refuses (ValueError) the force hold, a force limit and a track:
+    run those with :func:`run_trials_batch`.
+    """
+    if plant.hold_force or plant.max_force < math.inf or protocol.track < math.inf:
+        raise ValueError(
+            "run_trials_lockstep supports only u held, no force limit and no track: "
+            "use run_trials_batch for hold force, max_force or track"
+        )
+    B = states0.shape[0]
+    n_blocks = (B + LOCKSTEP_BLOCK - 1) // LOCKSTEP_BLOCK
+    for i in prange(n_blocks):
+        lo = i * LOCKSTEP_BLOCK
+        hi = min(lo + LOCKSTEP_BLOCK, B)
+        _lockstep_block(lo, hi, states0, gains, plant, control, protocol, noise, learning, outs)

@@ -1,0 +1,247 @@
+"""The controllers and the Gaussian policy: the switch (section 2.3, section 4), the
+balancing (eq 22) and swing-up (eq 23) means, sigma (eq 5 with eqs 22-23) and d mu / d W.
+
+Readings: docs/paper-notes.md, sections 1-4.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+from numba import njit
+
+from striatal.sim.kernel.libm import wrap_angle
+
+__all__ = [
+    "MODE_BALANCE",
+    "MODE_SWINGUP",
+    "ControlArgs",
+    "Gains",
+    "balancing_roots",
+    "policy_mean",
+    "policy_terms",
+    "sigma_of",
+    "switch_weights",
+]
+
+MODE_SWINGUP = 0
+MODE_BALANCE = 1
+
+
+class Gains(NamedTuple):
+    """The learned parameters: W1..W6 (eqs 22-23) and the switching threshold theta_c (eq 21).
+
+    For :func:`run_trials_batch`, W is (B, 6) and theta_c (B,).
+    """
+
+    W: np.ndarray
+    theta_c: Any
+
+
+class ControlArgs(NamedTuple):
+    """The controller's readings: eq-20 sign (+1 corrected, -1 printed), switch, action rate.
+
+    ``inhibition``: gamma of the soft switch; ``action_every``: steps an action is held;
+    ``chapter_eligibility``: the printed e1 instead of the score (docs/paper-notes.md section 2).
+    """
+
+    sign: float
+    soft: bool
+    inhibition: float
+    action_every: int
+    chapter_eligibility: bool
+
+
+@njit(cache=True)
+def switch_weights(
+    abs_theta: float, theta_c: float, soft: bool, inhibition: float
+) -> tuple[float, float]:
+    """(balancing weight, swing-up weight).
+
+    Hard switch (section 2.3): balancing while |theta| < theta_c. Soft switch
+    (section 4, read as in docs/paper-notes.md section 4): clip(gamma (theta_c - |theta|), 0, 1)
+    and clip(gamma (|theta| - theta_c), 0, 1).
+    """
+    if not soft:
+        if abs_theta < theta_c:
+            return 1.0, 0.0
+        return 0.0, 1.0
+    wb = min(max(inhibition * (theta_c - abs_theta), 0.0), 1.0)
+    ws = min(max(inhibition * (abs_theta - theta_c), 0.0), 1.0)
+    return wb, ws
+
+
+@njit(cache=True)
+def sigma_of(w6: float) -> float:
+    """Policy standard deviation sigma = 0.1 + 1 / (1 + exp(-W6)), eqs 22-23.
+
+    Reading: docs/paper-notes.md section 3.
+    """
+    return 0.1 + 1.0 / (1.0 + math.exp(-w6))
+
+
+@njit(cache=True)
+def policy_mean(
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    W: np.ndarray,
+    theta_c: float,
+    sign: float,
+    soft: bool,
+    inhibition: float,
+    model: np.ndarray,
+    chapter_eligibility: bool,
+    grad: np.ndarray,
+) -> float:
+    """Mean action mu (eq 22 or 23, blended by the switch) and d mu / d W1..W5 into ``grad``.
+
+    ``theta`` is wrapped first. Balancing, eq 22 with the sign reading ``sign``
+    (+1 corrected, -1 printed):
+    mu1 = sign ((1 + W1 l) g theta + 2 l sqrt(W1 g) theta_dot) - W2 x - W3 x_dot.
+    Swing-up, eq 23: mu2 = W4 E~ theta_dot cos theta - W5^2/4 x - W5 x_dot.
+    With ``chapter_eligibility`` the W1 entry is the chapter's printed
+    -l (g theta - sqrt(g / W1) theta_dot) instead of the true derivative.
+    """
+    th = wrap_angle(theta)
+    root, inv_root = balancing_roots(W[0], model[3])
+    mu, g1, g2, g3, g4, g5 = _policy_wrapped(
+        x,
+        x_dot,
+        th,
+        theta_dot,
+        W,
+        theta_c,
+        sign,
+        soft,
+        inhibition,
+        model,
+        chapter_eligibility,
+        root,
+        inv_root,
+        0.0,
+        False,
+    )
+    grad[0] = g1
+    grad[1] = g2
+    grad[2] = g3
+    grad[3] = g4
+    grad[4] = g5
+    return mu
+
+
+@njit(cache=True)
+def balancing_roots(w1: float, g: float) -> tuple[float, float]:
+    """(sqrt(W1 g), sqrt(g / W1)) of the balancing law (eq 22) and its W1 eligibility.
+
+    sqrt(g / W1) is NaN for W1 = 0 (the balancing law then raises when it is used).
+    ``g`` [m/s^2]: the model's gravity.
+    """
+    return math.sqrt(w1 * g), math.nan if w1 == 0.0 else math.sqrt(g / w1)
+
+
+@njit(cache=True)
+def _policy_wrapped(
+    x: float,
+    x_dot: float,
+    th: float,
+    theta_dot: float,
+    W: np.ndarray,
+    theta_c: float,
+    sign: float,
+    soft: bool,
+    inhibition: float,
+    model: np.ndarray,
+    chapter_eligibility: bool,
+    root: float,
+    inv_root: float,
+    cos_th: float,
+    have_cos: bool,
+) -> tuple[float, float, float, float, float, float]:
+    """(mu, d mu / d W1..W5) of :func:`policy_mean` for a wrapped ``th``.
+
+    ``root`` = sqrt(W1 g) and ``inv_root`` = sqrt(g / W1) (constant over a trial);
+    ``cos_th`` = cos th when ``have_cos`` (else computed here). The same arithmetic.
+    """
+    return policy_terms(
+        x,
+        x_dot,
+        th,
+        theta_dot,
+        W[0],
+        W[1],
+        W[2],
+        W[3],
+        W[4],
+        theta_c,
+        sign,
+        soft,
+        inhibition,
+        model[1],
+        model[2],
+        model[3],
+        chapter_eligibility,
+        root,
+        inv_root,
+        cos_th,
+        have_cos,
+    )
+
+
+@njit(cache=True)
+def policy_terms(
+    x: float,
+    x_dot: float,
+    th: float,
+    theta_dot: float,
+    w1: float,
+    w2: float,
+    w3: float,
+    w4: float,
+    w5: float,
+    theta_c: float,
+    sign: float,
+    soft: bool,
+    inhibition: float,
+    m: float,
+    length: float,
+    g: float,
+    chapter_eligibility: bool,
+    root: float,
+    inv_root: float,
+    cos_th: float,
+    have_cos: bool,
+) -> tuple[float, float, float, float, float, float]:
+    """:func:`_policy_wrapped` on plain floats: W1..W5 and the model's m, l, g (eqs 22-23)."""
+    wb, ws = switch_weights(abs(th), theta_c, soft, inhibition)
+    mu = 0.0
+    g1 = 0.0
+    g2 = 0.0
+    g3 = 0.0
+    g4 = 0.0
+    g5 = 0.0
+    if wb > 0.0:
+        if w1 == 0.0:
+            inv_root = math.sqrt(g / w1)  # raises ZeroDivisionError: W1 = 0 has no law
+        mu += wb * (
+            sign * ((1.0 + w1 * length) * g * th + 2.0 * length * root * theta_dot)
+            - w2 * x
+            - w3 * x_dot
+        )
+        if chapter_eligibility:
+            d1 = -length * (g * th - inv_root * theta_dot)
+        else:
+            d1 = sign * length * (g * th + inv_root * theta_dot)
+        g1 = wb * d1
+        g2 = -wb * x
+        g3 = -wb * x_dot
+    if ws > 0.0:
+        c = cos_th if have_cos else math.cos(th)
+        e_tilde = 0.5 * m * length * length * theta_dot * theta_dot + m * g * length * (c - 1.0)
+        mu += ws * (w4 * e_tilde * theta_dot * c - 0.25 * w5 * w5 * x - w5 * x_dot)
+        g4 = ws * e_tilde * theta_dot * c
+        g5 = -ws * (0.5 * w5 * x + x_dot)
+    return mu, g1, g2, g3, g4, g5

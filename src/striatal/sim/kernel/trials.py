@@ -1,0 +1,464 @@
+"""The trial: the protocol's judge (eqs 24-25), the summary row, the scalar trial loop
+and its batch over cores.
+
+Build the arguments with :func:`striatal.sim.rollout.trial_args` and
+:func:`striatal.sim.rollout.batch_args`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit, prange
+
+from striatal.sim.kernel.libm import wrap_angle
+from striatal.sim.kernel.plant import (
+    PlantArgs,
+    clip_force,
+    force,
+    motor_force,
+    plant_step,
+    plant_terms,
+)
+from striatal.sim.kernel.policy import (
+    MODE_BALANCE,
+    MODE_SWINGUP,
+    ControlArgs,
+    Gains,
+    balancing_roots,
+    policy_terms,
+    sigma_of,
+)
+from striatal.sim.kernel.traces import TraceArgs, trace_step
+
+__all__ = [
+    "BLOW_UP",
+    "N_OUT",
+    "N_TRAJ",
+    "OUT_EARLY",
+    "OUT_END_STEP",
+    "OUT_FAULT",
+    "OUT_MAX_ABS_FORCE",
+    "OUT_MAX_ABS_X",
+    "OUT_MIN_ABS_THETA",
+    "OUT_MIN_ABS_THETA_SWINGUP",
+    "OUT_N_SWITCHES",
+    "OUT_REWARD",
+    "OUT_THETA",
+    "OUT_THETA_DOT",
+    "OUT_TRACK",
+    "OUT_X",
+    "OUT_X_DOT",
+    "STATUS_EARLY",
+    "STATUS_FAILURE",
+    "STATUS_FAULT",
+    "STATUS_RUNNING",
+    "STATUS_SUCCESS",
+    "STATUS_TRACK",
+    "TRAJ_COLUMNS",
+    "Buffers",
+    "NoiseArgs",
+    "ProtocolArgs",
+    "judge",
+    "judge_batch",
+    "run_trial",
+    "run_trials_batch",
+    "write_summary",
+]
+
+#: A state component beyond this magnitude counts as a numerical fault.
+BLOW_UP = 1.0e8
+
+# Layout of the per-trial summary row written by :func:`run_trial`.
+OUT_REWARD = 0
+OUT_END_STEP = 1
+OUT_X = 2
+OUT_X_DOT = 3
+OUT_THETA = 4
+OUT_THETA_DOT = 5
+OUT_MIN_ABS_THETA_SWINGUP = 6
+OUT_MIN_ABS_THETA = 7
+OUT_FAULT = 8
+OUT_EARLY = 9
+OUT_N_SWITCHES = 10
+OUT_MAX_ABS_X = 11
+OUT_MAX_ABS_FORCE = 12
+OUT_TRACK = 13
+N_OUT = 14
+
+# Columns of a recorded trajectory row.
+TRAJ_COLUMNS = ("t", "x", "x_dot", "theta", "theta_dot", "u", "force", "mode")
+N_TRAJ = len(TRAJ_COLUMNS)
+
+
+# Outcome of :func:`judge`.
+STATUS_RUNNING = 0
+STATUS_FAULT = 1
+STATUS_EARLY = 2
+STATUS_SUCCESS = 3
+STATUS_FAILURE = 4
+STATUS_TRACK = 5
+
+
+class ProtocolArgs(NamedTuple):
+    """The trial protocol of eqs 24-25 in steps: see :func:`judge`. check_step -1: never.
+
+    ``track``: the half-length of the track [m]; |x| beyond it ends the trial (inf: none).
+    """
+
+    n_steps: int
+    check_step: int
+    check_x: float
+    check_theta: float
+    goal_x: float
+    goal_theta: float
+    reward_success: float
+    reward_failure: float
+    track: float = math.inf
+
+
+class NoiseArgs(NamedTuple):
+    """Standard normals of the action draws (n_draws,), empty for the mean policy; of the
+    sensor (n_steps, 2), empty for none, with the stds of x [m] and theta [rad]."""
+
+    action: np.ndarray
+    sensor: np.ndarray
+    sensor_std_x: float
+    sensor_std_theta: float
+
+
+class Buffers(NamedTuple):
+    """Output buffers: the summary row (N_OUT,); the trajectory (n_steps + 1, N_TRAJ) or none
+    (0, N_TRAJ)."""
+
+    out: np.ndarray
+    traj: np.ndarray
+
+
+@njit(cache=True)
+def judge(
+    x: float, x_dot: float, theta: float, theta_dot: float, step: int, protocol: ProtocolArgs
+) -> tuple[int, float]:
+    """(status, reward) of a state reached after ``step`` steps: the trial rules, eqs 24-25.
+
+    The one statement of the chapter's sparse-reward protocol (docs/paper-notes.md
+    section 5), shared by :func:`run_trial` and the Gymnasium task
+    (:func:`striatal.envs.task.outcome`). In order: a non-finite state or one with a
+    component beyond :data:`BLOW_UP` is a numerical fault (STATUS_FAULT, failure
+    reward); |x| beyond ``protocol.track`` ends the trial at the track's end
+    (STATUS_TRACK, failure reward); at ``step == protocol.check_step`` (t = 30 s)
+    before the last step, eq 24 ends the trial (STATUS_EARLY, failure reward) if
+    |x| > check_x or |theta| > check_theta; at ``step >= protocol.n_steps`` the trial
+    ends with eq 25's reward (STATUS_SUCCESS if |x| < goal_x and |theta| < goal_theta,
+    else STATUS_FAILURE). Otherwise STATUS_RUNNING and reward 0.
+    """
+    if not (
+        abs(x) < BLOW_UP
+        and abs(x_dot) < BLOW_UP
+        and abs(theta) < BLOW_UP
+        and abs(theta_dot) < BLOW_UP
+    ):
+        return STATUS_FAULT, protocol.reward_failure
+    if abs(x) > protocol.track:
+        return STATUS_TRACK, protocol.reward_failure
+    if (
+        step == protocol.check_step
+        and step < protocol.n_steps
+        and (abs(x) > protocol.check_x or abs(wrap_angle(theta)) > protocol.check_theta)
+    ):
+        return STATUS_EARLY, protocol.reward_failure
+    if step >= protocol.n_steps:
+        if abs(x) < protocol.goal_x and abs(wrap_angle(theta)) < protocol.goal_theta:
+            return STATUS_SUCCESS, protocol.reward_success
+        return STATUS_FAILURE, protocol.reward_failure
+    return STATUS_RUNNING, 0.0
+
+
+@njit(cache=True)
+def judge_batch(
+    states: np.ndarray,
+    steps: np.ndarray,
+    protocol: ProtocolArgs,
+    status: np.ndarray,
+    reward: np.ndarray,
+) -> None:
+    """:func:`judge` for each row of ``states`` (B, 4) reached after ``steps[b]`` steps."""
+    for b in range(states.shape[0]):
+        status[b], reward[b] = judge(
+            states[b, 0], states[b, 1], states[b, 2], states[b, 3], steps[b], protocol
+        )
+
+
+@njit(cache=True)
+def write_summary(
+    out: np.ndarray,
+    status: int,
+    reward: float,
+    end_step: int,
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    min_swing: float,
+    min_all: float,
+    n_switches: int,
+    max_abs_x: float,
+    max_abs_f: float,
+) -> None:
+    """Write a trial's summary row ``out`` (N_OUT,), layout OUT_*, as :func:`run_trial` does."""
+    out[OUT_REWARD] = reward
+    out[OUT_END_STEP] = end_step
+    out[OUT_X] = x
+    out[OUT_X_DOT] = x_dot
+    out[OUT_THETA] = wrap_angle(theta)
+    out[OUT_THETA_DOT] = theta_dot
+    out[OUT_MIN_ABS_THETA_SWINGUP] = min_swing
+    out[OUT_MIN_ABS_THETA] = min_all
+    out[OUT_FAULT] = 1.0 if status == STATUS_FAULT else 0.0
+    out[OUT_EARLY] = 1.0 if status == STATUS_EARLY else 0.0
+    out[OUT_N_SWITCHES] = n_switches
+    out[OUT_MAX_ABS_X] = max_abs_x
+    out[OUT_MAX_ABS_FORCE] = max_abs_f
+    out[OUT_TRACK] = 1.0 if status == STATUS_TRACK else 0.0
+
+
+@njit(cache=True)
+def run_trial(
+    state0: np.ndarray,
+    gains: Gains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
+    noise: NoiseArgs,
+    learning: TraceArgs,
+    buffers: Buffers,
+) -> None:
+    """Run one trial of the chapter's protocol (eqs 1-5, 13-14, 21-25) in place.
+
+    Build the arguments with :func:`striatal.sim.rollout.trial_args`. A new action
+    a = mu + sigma * noise.action[j] is drawn every ``control.action_every`` steps
+    (eq 5) and held; at each draw the eligibility e (score of the Gaussian policy
+    with the chapter's rescaling, docs/paper-notes.md section 2) enters the trace
+    D = e + gamma D (eq 3), updated in ``learning.trace``. An empty
+    ``noise.action`` runs the mean policy (no trace update). ``noise.sensor``
+    (n_steps, 2) of standard normals, scaled by the two stds, corrupts the x and
+    theta the controller sees; empty for none. The trial ends by the rules of
+    :func:`judge` (eq 24 check, eq 25 reward, numerical fault), applied to the
+    state after every step. Results go to ``buffers.out`` (layout OUT_*);
+    ``buffers.traj`` of shape (n_steps + 1, 8) records t, state (theta unwrapped),
+    u, force, mode when it has rows.
+
+    What the motor holds over a step dt (the controller's sample period; the policy
+    draws every ``control.action_every`` steps): by default u (the chapter's
+    idealisation, a feedback linearisation running continuously inside the step).
+    With ``plant.hold_force`` the force f of eq 12 is computed once at the step's
+    start from the sampled state (the angle the controller sees) with the ``model``,
+    held, and the true plant's eqs 8-9 are integrated (:func:`rk4_force_step`).
+    ``plant.max_force`` (finite) clips f: with the force held, the held f; with u held,
+    the force of every RK4 stage (:func:`_rk4_limited`), so the plant gets u only while
+    the motor can deliver it (docs/paper-notes.md section 9). The recorded force and
+    OUT_MAX_ABS_FORCE are the (clipped) force at the step's start.
+    """
+    W = gains.W
+    theta_c = gains.theta_c
+    model = plant.model
+    pt = plant_terms(plant)
+    # W1..W5 read once (a store to a buffer would otherwise reload them every step)
+    w1 = W[0]
+    w2 = W[1]
+    w3 = W[2]
+    w4 = W[3]
+    w5 = W[4]
+    dt = plant.dt
+    action_every = control.action_every
+    trace = learning.trace
+    gamma = learning.gamma
+    sensor_noise = noise.sensor
+    out = buffers.out
+    traj = buffers.traj
+    n_steps = protocol.n_steps
+    x = state0[0]
+    x_dot = state0[1]
+    theta = state0[2]
+    theta_dot = state0[3]
+    stochastic = noise.action.shape[0] > 0
+    noisy_sensor = sensor_noise.shape[0] > 0
+    record = traj.shape[0] > 0
+    sigma = sigma_of(W[5])
+    sign = control.sign
+    soft = control.soft
+    inhibition = control.inhibition
+    chapter_eligibility = control.chapter_eligibility
+    # constant over the trial: the square roots of the balancing law (eq 22)
+    root, inv_root = balancing_roots(W[0], model[3])
+    # the trace D (eq 3) in registers, written back at the end
+    d0 = trace[0]
+    d1 = trace[1]
+    d2 = trace[2]
+    d3 = trace[3]
+    d4 = trace[4]
+    d5 = trace[5]
+    max_force = plant.max_force
+    limited = max_force < math.inf
+    min_swing = math.inf
+    min_all = math.inf
+    n_switches = 0
+    prev_mode = -1
+    max_abs_x = abs(x)
+    max_abs_f = 0.0
+    a = 0.0
+    draw = 0
+    hold = 0  # steps left before the next action draw (eq 5)
+    status = STATUS_RUNNING
+    reward = 0.0
+    end_step = n_steps
+    if protocol.check_step == 0:
+        status, reward = judge(x, x_dot, theta, theta_dot, 0, protocol)
+        if status != STATUS_RUNNING:
+            end_step = 0
+    if status == STATUS_RUNNING:
+        for k in range(n_steps):
+            # sin and cos of theta once a step: the force (eq 12), RK4's first stage
+            # and, without sensor noise, the swing-up law (eq 23) share them
+            s = math.sin(theta)
+            c = math.cos(theta)
+            ox = x
+            otheta = theta
+            if noisy_sensor:
+                ox += noise.sensor_std_x * sensor_noise[k, 0]
+                otheta += noise.sensor_std_theta * sensor_noise[k, 1]
+            th = wrap_angle(otheta)
+            abs_th = abs(th)
+            mode = MODE_BALANCE if abs_th < theta_c else MODE_SWINGUP
+            if mode == MODE_SWINGUP and abs_th < min_swing:
+                min_swing = abs_th
+            if abs_th < min_all:
+                min_all = abs_th
+            if prev_mode >= 0 and mode != prev_mode:
+                n_switches += 1
+            prev_mode = mode
+            if hold == 0:
+                hold = action_every
+                mu, g1, g2, g3, g4, g5 = policy_terms(
+                    ox,
+                    x_dot,
+                    th,
+                    theta_dot,
+                    w1,
+                    w2,
+                    w3,
+                    w4,
+                    w5,
+                    theta_c,
+                    sign,
+                    soft,
+                    inhibition,
+                    pt.model_m,
+                    pt.model_length,
+                    pt.model_g,
+                    chapter_eligibility,
+                    root,
+                    inv_root,
+                    c,
+                    th == theta,
+                )
+                if stochastic:
+                    eps = sigma * noise.action[draw]
+                    a = mu + eps
+                    d0, d1, d2, d3, d4, d5 = trace_step(
+                        eps, sigma, gamma, g1, g2, g3, g4, g5, d0, d1, d2, d3, d4, d5
+                    )
+                else:
+                    a = mu
+                draw += 1
+            hold -= 1
+            f = motor_force(s, c, otheta, theta_dot, a, noisy_sensor, pt)
+            if abs(f) > max_abs_f:
+                max_abs_f = abs(f)
+            if record:
+                traj[k, 0] = k * dt
+                traj[k, 1] = x
+                traj[k, 2] = x_dot
+                traj[k, 3] = theta
+                traj[k, 4] = theta_dot
+                traj[k, 5] = a
+                traj[k, 6] = f
+                traj[k, 7] = mode
+            x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
+            status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
+            if status == STATUS_FAULT:
+                end_step = k + 1
+                break
+            if abs(x) > max_abs_x:
+                max_abs_x = abs(x)
+            if status != STATUS_RUNNING:
+                end_step = k + 1
+                break
+    if stochastic:
+        trace[0] = d0
+        trace[1] = d1
+        trace[2] = d2
+        trace[3] = d3
+        trace[4] = d4
+        trace[5] = d5
+    if record:
+        traj[end_step, 0] = end_step * dt
+        traj[end_step, 1] = x
+        traj[end_step, 2] = x_dot
+        traj[end_step, 3] = theta
+        traj[end_step, 4] = theta_dot
+        traj[end_step, 5] = a
+        f_end = force(theta, theta_dot, a, model)
+        traj[end_step, 6] = clip_force(f_end, max_force) if limited else f_end
+        traj[end_step, 7] = MODE_BALANCE if abs(wrap_angle(theta)) < theta_c else MODE_SWINGUP
+    write_summary(
+        out,
+        status,
+        reward,
+        end_step,
+        x,
+        x_dot,
+        theta,
+        theta_dot,
+        min_swing,
+        min_all,
+        n_switches,
+        max_abs_x,
+        max_abs_f,
+    )
+
+
+@njit(cache=True, parallel=True)
+def run_trials_batch(
+    states0: np.ndarray,
+    gains: Gains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
+    noise: np.ndarray,
+    learning: TraceArgs,
+    outs: np.ndarray,
+) -> None:
+    """:func:`run_trial` for B independent trials at once, parallel over cores.
+
+    Build the arguments with :func:`striatal.sim.rollout.batch_args`. Row b of
+    ``states0`` (B, 4), ``gains.W`` (B, 6), ``gains.theta_c`` (B,), ``noise``
+    (B, n_draws) (or (B, 0) for the mean policy), ``learning.trace`` (B, 6) and
+    ``outs`` (B, N_OUT) belongs to trial b; no sensor noise, nothing recorded.
+    The result of each row equals the scalar kernel's bit for bit.
+    """
+    no_sensor = np.empty((0, 2))
+    no_traj = np.empty((0, N_TRAJ))
+    for b in prange(states0.shape[0]):
+        run_trial(
+            states0[b],
+            Gains(gains.W[b], gains.theta_c[b]),
+            plant,
+            control,
+            protocol,
+            NoiseArgs(noise[b], no_sensor, 0.0, 0.0),
+            TraceArgs(learning.gamma, learning.trace[b]),
+            Buffers(outs[b], no_traj),
+        )
