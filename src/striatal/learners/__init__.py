@@ -9,7 +9,9 @@
 - the rules: :mod:`~striatal.learners.chapter` (the chapter's, eqs 1-5, 21),
   :mod:`~striatal.learners.rpe` (reward prediction error),
   :mod:`~striatal.learners.pgpe` (exploration in parameter space);
-- :mod:`striatal.learners.loop`: the registry :data:`RULES` and the loop :func:`learn`.
+- :mod:`striatal.learners.loop`: the registry :data:`RULES` and the loop :func:`learn`;
+- :mod:`striatal.learners.forward`: a cerebellar forward model and the rule that learns
+  on it in imagination (``forward``), registered here since it builds on the loop.
 
 The tuned presets live with each rule (:func:`default_config`); ``striatal train``
 and :func:`striatal.train` read them from here.
@@ -17,10 +19,6 @@ and :func:`striatal.train` read them from here.
 
 from __future__ import annotations
 
-from dataclasses import replace
-from typing import Any
-
-from striatal.errors import ParameterError
 from striatal.learners.common import (
     initial_state,
     jitter_corners,
@@ -33,7 +31,17 @@ from striatal.learners.common import (
     tracked_baseline,
 )
 from striatal.learners.config import W1_FLOOR, LearnerConfig
-from striatal.learners.loop import LEARNERS, RULES, check_config, learn, learning_step, rule_of
+from striatal.learners.forward.rule import FORWARD
+from striatal.learners.loop import (
+    RULES,
+    check_config,
+    control_config,
+    default_config,
+    learn,
+    learning_step,
+    register,
+    rule_of,
+)
 from striatal.learners.rule import Rule, TrialPlan, Update
 from striatal.learners.state import History, LearnerState, TrainResult, TrialRecord
 
@@ -59,6 +67,7 @@ __all__ = [
     "mean_policy_success",
     "prediction_error_factor",
     "random_initial_gains",
+    "register",
     "rule_of",
     "shaped_reward",
     "theta_c_rule",
@@ -66,25 +75,6 @@ __all__ = [
     "tracked_baseline",
 ]
 
-
-def default_config(learner: str = "chapter", **changes: Any) -> LearnerConfig:
-    """The learner's tuned preset with ``changes`` applied, checked by its rule.
-
-    ``default_config("pgpe")`` is what ``striatal train --learner pgpe`` runs;
-    ``default_config("chapter")`` is the chapter's learner exactly. With
-    ``robust=True`` the rule's ``robust_preset`` is applied over its preset first
-    (pgpe: plant_jitter 0.2, alpha 0.5).
-    """
-    rule = rule_of(learner)
-    robust = dict(rule.robust_preset) if changes.get("robust") is True else {}
-    try:
-        config = replace(LearnerConfig(learner=learner, **rule.preset), **{**robust, **changes})
-    except TypeError as exc:
-        raise ParameterError(f"unknown learner option: {exc}") from None
-    return check_config(config)
-
-
-def control_config(config: LearnerConfig) -> LearnerConfig:
-    """``config``'s no-learning control (its rule's ``control``: alpha 0 for chapter and
-    rpe, the same exploration without update for pgpe)."""
-    return rule_of(config).control_config(config)
+register(FORWARD)
+#: The learner names, in the registry's order.
+LEARNERS: tuple[str, ...] = tuple(RULES)

@@ -42,14 +42,15 @@ RewardKind = Literal["sparse", "shaped"]
 W1_FLOOR = 1e-3
 
 
-def require_count(name: str, value: object) -> None:
-    """ParameterError unless ``value`` is a whole number >= 1 (text, null or a list too)."""
+def require_count(name: str, value: object, low: int = 1) -> None:
+    """ParameterError unless ``value`` is a whole number >= ``low`` (text, null or a list
+    too)."""
     try:
-        whole = int(value) == value  # type: ignore[call-overload]
+        whole = not isinstance(value, bool) and int(value) == value  # type: ignore[call-overload]
     except (TypeError, ValueError, OverflowError):
         whole = False
-    if not whole or value < 1:  # type: ignore[operator]
-        raise ParameterError(f"{name} must be a whole number >= 1, got {value!r}")
+    if not whole or value < low:  # type: ignore[operator]
+        raise ParameterError(f"{name} must be a whole number >= {low}, got {value!r}")
 
 
 def meta(help: str, *, bounds: str = "", **more: Any) -> dict[str, Any]:
@@ -219,6 +220,14 @@ class LearnerConfig:
             "ac: lambda of the critic's trace z <- gamma_v lambda z + phi(s)", bounds="[0, 1]"
         ),
     )
+    imagine_trials: int = field(
+        default=2000,
+        metadata=meta(
+            "forward: imagined trials (on the forward model, not counted as simulations) allowed "
+            "after each real trial; 0 fits no model and learns nothing (its control)",
+            bounds=">= 0",
+        ),
+    )
     max_force: float | None = field(
         default=None,
         metadata=meta(
@@ -335,7 +344,7 @@ def check_field(f: Field[Any], value: Any) -> Any:
         if not isinstance(value, bool):
             raise ParameterError(f"{name} must be true or false, got {value!r}")
     elif kind is int:
-        require_count(name, value)
+        require_count(name, value, 0 if f.metadata.get("bounds") == ">= 0" else 1)
     elif kind is str:
         if not isinstance(value, str):
             raise ParameterError(f"{name} must be a name, got {value!r}")

@@ -29,6 +29,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -46,12 +47,33 @@ from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Pla
 from striatal.sim.robust import nominal_is_the_case, stop_check
 from striatal.sim.rollout import Protocol, TrialOutcome, recorded_trial, run_trial
 
-__all__ = ["LEARNERS", "RULES", "check_config", "learn", "learning_step", "rule_of"]
+__all__ = [
+    "RULES",
+    "check_config",
+    "control_config",
+    "default_config",
+    "learn",
+    "learning_step",
+    "register",
+    "rule_of",
+]
 
-#: The registry: learner name -> rule. Add a rule here (docs/architecture.md).
-RULES: dict[str, Rule] = {r.name: r for r in (CHAPTER, RPE, PGPE, AC)}
-#: The learner names, in the registry's order.
-LEARNERS: tuple[str, ...] = tuple(RULES)
+#: The registry: learner name -> rule (docs/architecture.md). The rules below the loop
+#: are registered here; a rule that builds on the loop registers in
+#: :mod:`striatal.learners` with :func:`register`.
+RULES: dict[str, Rule] = {}
+
+
+def register(rule: Rule) -> Rule:
+    """Add ``rule`` to :data:`RULES` under its name (ParameterError if the name is taken)."""
+    if rule.name in RULES:
+        raise ParameterError(f"a learner named {rule.name!r} is registered already")
+    RULES[rule.name] = rule
+    return rule
+
+
+for _rule in (CHAPTER, RPE, PGPE, AC):
+    register(_rule)
 
 
 def rule_of(config: LearnerConfig | str) -> Rule:
@@ -60,9 +82,30 @@ def rule_of(config: LearnerConfig | str) -> Rule:
     try:
         return RULES[name]
     except (KeyError, TypeError):
-        raise ParameterError(
-            f"learner must be one of {', '.join(LEARNERS)}, got {name!r}"
-        ) from None
+        raise ParameterError(f"learner must be one of {', '.join(RULES)}, got {name!r}") from None
+
+
+def default_config(learner: str = "chapter", **changes: Any) -> LearnerConfig:
+    """The learner's tuned preset with ``changes`` applied, checked by its rule.
+
+    ``default_config("pgpe")`` is what ``striatal train --learner pgpe`` runs;
+    ``default_config("chapter")`` is the chapter's learner exactly. With
+    ``robust=True`` the rule's ``robust_preset`` is applied over its preset first
+    (pgpe: plant_jitter 0.2, alpha 0.5).
+    """
+    rule = rule_of(learner)
+    robust = dict(rule.robust_preset) if changes.get("robust") is True else {}
+    try:
+        config = replace(LearnerConfig(learner=learner, **rule.preset), **{**robust, **changes})
+    except TypeError as exc:
+        raise ParameterError(f"unknown learner option: {exc}") from None
+    return check_config(config)
+
+
+def control_config(config: LearnerConfig) -> LearnerConfig:
+    """``config``'s no-learning control (its rule's ``control``: alpha 0 for chapter and
+    rpe, the same exploration without update for pgpe)."""
+    return rule_of(config).control_config(config)
 
 
 def check_config(config: LearnerConfig) -> LearnerConfig:

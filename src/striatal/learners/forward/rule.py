@@ -1,0 +1,257 @@
+"""A basal-ganglia learner that learns in imagination on a cerebellar forward model ("forward").
+
+The division of labour of Doya (1999): the cerebellum learns an internal model of the
+body by supervised learning, the basal ganglia learn by reinforcement. Here:
+
+1. **real trial**: the current gains W and theta_c run once on the real plant, with the
+   mean policy (eqs 22-23, no exploration noise), recorded. It is also the success test
+   of that controller (``success_on`` "mean"); with ``robust`` the robustness set
+   decides, every run counted by the loop.
+2. **model fit** (the cerebellum, supervised): the transitions of the real trials so far
+   (state, held motor force, next state) fit the structured forward model,
+   :func:`striatal.learners.forward.model.fit_structured`: the cart-pole's equations
+   with cart mass, pole mass, length and cart friction unknown, started from the
+   nominal :class:`~striatal.params.Plant`, and gravity known to be its 9.81 m/s^2.
+3. **imagined learning** (the basal ganglia, reinforcement): pgpe, the project's rule
+   (:mod:`striatal.learners.pgpe`, its own code through :func:`striatal.learners.loop.learn`),
+   learns from W on the fitted plant with its tuned preset (its robust preset with
+   ``robust``: jittered plants and the robustness set around the fitted plant) for at most
+   ``imagine_trials`` trials. A candidate it finds must also pass the robustness set on
+   each plant the fit cannot rule out (:meth:`StructuredFit.family`), else imagination goes
+   on. The candidate, found or not, is the next real trial's controller.
+
+Imagined trials run on the model only: they are counted apart (memory "imagined":
+imagined simulations and simulated seconds; history column ``imagined``), never in
+``simulations``. In imagination the controller's partial feedback linearisation (eq 12)
+believes the fitted plant; on the real plant it believes the nominal one, as every
+controller here. Friction is fitted but not imagined (the kernel's plant has none): a
+plant with friction is outside what imagination can represent.
+
+The no-learning control (``imagine_trials`` 0) runs the same real-trial schedule with no
+model and no update: W(0) is tried again each trial.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from striatal.errors import ParameterError
+from striatal.learners.config import LearnerConfig, pick
+from striatal.learners.forward.model import StructuredFit, Transitions, fit_structured
+from striatal.learners.loop import default_config, learn
+from striatal.learners.rule import Rule, TrialPlan, Update
+from striatal.learners.state import LearnerState
+from striatal.params import N_GAINS, Controller, Plant, Simulation
+from striatal.sim.robust import stop_check
+from striatal.sim.rollout import Protocol, TrialOutcome, recorded_trial
+
+__all__ = ["FORWARD", "MAX_TRANSITIONS", "ForwardConfig", "ForwardRule", "imagine"]
+
+#: Transitions kept from the real trials (the most recent); each trial adds at most
+#: :data:`PER_TRIAL` of them, evenly spaced.
+MAX_TRANSITIONS = 1200
+PER_TRIAL = 400
+#: Columns of one kept transition: state (4), held force, next state (4).
+_WIDTH = 9
+#: The rule that learns in imagination.
+INNER = "pgpe"
+
+
+@dataclass(frozen=True)
+class ForwardConfig:
+    """The forward rule's options (see :class:`LearnerConfig` for each)."""
+
+    imagine_trials: int
+
+
+@dataclass(frozen=True)
+class Imagined:
+    """What one round of imagination gave: the candidate ``W`` (6,) and ``theta_c``,
+    whether it passed in imagination (``solved``), the imagined ``simulations`` and
+    ``simulated_seconds`` it cost, and the ``fit`` it ran on."""
+
+    W: tuple[float, ...]
+    theta_c: float
+    solved: bool
+    simulations: int
+    simulated_seconds: float
+    fit: StructuredFit
+
+
+def transitions_of(rows: np.ndarray, per_trial: int = PER_TRIAL) -> np.ndarray:
+    """At most ``per_trial`` evenly spaced transitions (n, 9) of one recorded trial
+    (rows: kernel.TRAJ_COLUMNS; row k's force acts from row k to row k+1)."""
+    n = len(rows) - 1
+    if n < 1:
+        return np.empty((0, _WIDTH))
+    k = np.unique(np.linspace(0, n - 1, min(n, per_trial)).astype(int))
+    states = rows[:, 1:5]
+    return np.column_stack([states[k], rows[k, 6], states[k + 1]])
+
+
+def kept_data(state: LearnerState) -> np.ndarray:
+    """The transitions (n, 9) in the state's memory "data"."""
+    flat = np.array(state.get("data"), dtype=float)
+    return flat.reshape(-1, _WIDTH)
+
+
+def imagine(
+    fit: StructuredFit,
+    controller: Controller,
+    config: LearnerConfig,
+    sim: Simulation,
+    protocol: Protocol,
+    seed: int,
+) -> Imagined:
+    """Learn with :data:`INNER` on ``fit``'s plant from ``controller`` (gains, theta_c)
+    for at most ``config.imagine_trials`` imagined trials (eqs 22-25 with the inner
+    rule's preset; its robust preset and stop rule with ``config.robust``). A solution
+    must also be robust on each plant of ``fit.family()`` (with ``robust``), else the
+    inner learner goes on from it with a new seed."""
+    inner = default_config(
+        INNER,
+        robust=config.robust,
+        max_force=config.max_force,
+        track=config.track,
+        action_every=config.action_every,
+    )
+    budget = config.imagine_trials
+    simulations, seconds = 0, 0.0
+    template, round_seed = controller, seed
+    solved = False
+    while budget > 0 and not solved:
+        result = learn(
+            fit.plant,
+            template,
+            replace(inner, max_trials=budget),
+            round_seed,
+            sim=sim,
+            protocol=protocol,
+        )
+        budget -= result.trials
+        simulations += result.state.simulations
+        seconds += result.state.simulated_seconds
+        template = replace(template, gains=tuple(result.W), theta_c=result.theta_c)
+        solved = result.success
+        if solved and config.robust:
+            for plant in fit.family():
+                verdict = stop_check(template, plant, sim.dt, hardware=config.hardware)
+                simulations += verdict.simulations
+                seconds += verdict.simulated_seconds
+                if not verdict.robust:
+                    solved = False
+                    break
+        round_seed += 1
+    return Imagined(
+        W=tuple(float(w) for w in template.gains),
+        theta_c=float(template.theta_c),
+        solved=solved,
+        simulations=simulations,
+        simulated_seconds=seconds,
+        fit=fit,
+    )
+
+
+class ForwardRule(Rule):
+    """Real trial, model fit, imagined learning with pgpe, and again (module docstring).
+
+    The preset has no tuned number of its own (the inner learner's presets are pgpe's,
+    its imagined budget 2000 trials set before any sweep ran): ``tuning_root`` None.
+    """
+
+    name = "forward"
+    summary = (
+        "a cerebellar forward model fitted to the real trials; pgpe learns on it in "
+        "imagination, real trials only gather data and verify"
+    )
+    config_type = ForwardConfig
+    preset = MappingProxyType({"success_on": "mean"})
+    control = MappingProxyType({"imagine_trials": 0})
+    control_also = "its real trials repeat W(0), noise-free"
+    history_columns = ("imagined", "model_pole_mass", "model_length", "solved_in_imagination")
+    memory_names = ("data", "imagined")
+    judges_candidate = True
+    runs_trial = True
+
+    def check(self, config: LearnerConfig) -> None:
+        super().check(config)
+        if config.success_on != "mean":
+            raise ParameterError(
+                "learner 'forward' runs its real trials with the mean policy: its success "
+                "test is judged on that trial (success_on 'mean')"
+            )
+
+    def plan(
+        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
+    ) -> TrialPlan:
+        return TrialPlan(
+            W=np.array(state.W, dtype=float),
+            theta_c=state.theta_c,
+            trace=np.zeros(N_GAINS),
+            gamma=0.0,
+            rng=None,
+            scratch={
+                "seed": np.array([rng.integers(2**31 - 1)], dtype=np.int64),
+                "rows": np.zeros((PER_TRIAL, _WIDTH)),
+                "n": np.zeros(1, dtype=np.int64),
+                "context": np.empty((), dtype=object),
+                "report": np.zeros(4),
+            },
+        )
+
+    def run(self, config: LearnerConfig, plan: TrialPlan, trial: Mapping[str, Any]) -> TrialOutcome:
+        """The real trial, recorded (its transitions and context go to the plan's scratch)."""
+        outcome, rows = recorded_trial(**trial)
+        plan.scratch["context"][()] = trial
+        kept = transitions_of(rows)
+        plan.scratch["rows"][: len(kept)] = kept
+        plan.scratch["n"][0] = len(kept)
+        return outcome
+
+    def update(
+        self,
+        state: LearnerState,
+        config: LearnerConfig,
+        plan: TrialPlan,
+        outcome: TrialOutcome,
+        reward: float,
+        success: bool,
+    ) -> Update:
+        c = pick(ForwardConfig, config)
+        new = plan.scratch["rows"][: int(plan.scratch["n"][0])]
+        data = np.concatenate([kept_data(state), new])[-MAX_TRANSITIONS:]
+        done = state.get("imagined") or (0.0, 0.0)
+        W, theta_c = tuple(float(w) for w in plan.W), plan.theta_c
+        report = plan.scratch["report"]
+        if not success and c.imagine_trials > 0 and len(data) > 0:
+            trial: Mapping[str, Any] = plan.scratch["context"][()]
+            sim: Simulation = trial["sim"]
+            fit = fit_structured(Transitions(data[:, :4], data[:, 4], data[:, 5:], sim.dt))
+            template = replace(trial["controller"], gains=W, theta_c=theta_c)
+            seed = int(plan.scratch["seed"][0])
+            dream = imagine(fit, template, config, sim, trial["protocol"], seed)
+            W, theta_c = dream.W, dream.theta_c
+            done = (done[0] + dream.simulations, done[1] + dream.simulated_seconds)
+            report[:] = (dream.simulations, fit.plant.pole_mass, fit.plant.length, dream.solved)
+        return Update(
+            W=W,
+            theta_c=float(theta_c),
+            memory=(
+                ("data", tuple(float(v) for v in data.ravel())),
+                ("imagined", (float(done[0]), float(done[1]))),
+            ),
+        )
+
+    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
+        """The imagined simulations after this trial, the fitted pole mass [kg] and length
+        [m] they ran on, and whether imagination found a solution (0 when none ran)."""
+        r = plan.scratch["report"]
+        return tuple((name, float(v)) for name, v in zip(self.history_columns, r, strict=True))
+
+
+FORWARD = ForwardRule()

@@ -1,0 +1,149 @@
+"""The forward learner (striatal.learners.forward.rule): imagined trials are counted apart,
+real ones always; its solutions pass the project's robust check; on a plant outside its
+model's family the real checks refuse what imagination found."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+from striatal.errors import ParameterError
+from striatal.experiments.spec import initial_gains
+from striatal.learners import LEARNERS, control_config, default_config, learn
+from striatal.learners.forward import rule as forward
+from striatal.learners.forward.model import Transitions, fit_structured
+from striatal.learners.state import TrialRecord
+from striatal.params import CHAPTER_INITIAL_THETA_C, Controller, Plant, Simulation
+from striatal.sim import kernel
+from striatal.sim.robust import ROBUST_HARDWARE, check_robust
+from striatal.sim.rollout import simulate
+
+
+class Calls:
+    """Kernel trial calls, split into those made while the rule imagines and the rest."""
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
+        self.real = self.imagined = 0
+        self.real_steps = 0
+        self.dreaming = False
+        run_trial, imagine = kernel.run_trial, forward.imagine
+
+        def counted(*args: Any) -> Any:
+            out = run_trial(*args)
+            if self.dreaming:
+                self.imagined += 1
+            else:
+                self.real += 1
+                self.real_steps += int(args[-1][0][kernel.OUT_END_STEP])
+            return out
+
+        def dreaming(*args: Any, **kwargs: Any) -> Any:
+            self.dreaming = True
+            try:
+                return imagine(*args, **kwargs)
+            finally:
+                self.dreaming = False
+
+        monkeypatch.setattr(kernel, "run_trial", counted)
+        monkeypatch.setattr(forward, "imagine", dreaming)
+
+
+def start(seed: int) -> Controller:
+    return Controller(gains=initial_gains("random", seed), theta_c=CHAPTER_INITIAL_THETA_C)
+
+
+def run(
+    plant: Plant, seed: int, max_trials: int = 6, learn_seed: int | None = None
+) -> tuple[Any, list[TrialRecord]]:
+    """Learn from W(0) of ``seed`` (``striatal sweep --init random``'s), with the robust
+    stop rule, under ``learn_seed`` (default: ``seed``)."""
+    rows: list[TrialRecord] = []
+    config = default_config("forward", robust=True, max_trials=max_trials)
+    result = learn(
+        plant,
+        start(seed),
+        config,
+        seed if learn_seed is None else learn_seed,
+        on_trial=lambda s, r: rows.append(r),
+    )
+    return result, rows
+
+
+def test_forward_is_registered_with_a_control_that_learns_nothing() -> None:
+    assert "forward" in LEARNERS
+    control = control_config(default_config("forward", robust=True))
+    assert control.imagine_trials == 0
+    with pytest.raises(ParameterError, match="success_on 'mean'"):
+        default_config("forward", success_on="noisy")
+    with pytest.raises(ParameterError, match="imagine_trials must be a whole number >= 0"):
+        default_config("forward", imagine_trials=-1)
+    with pytest.raises(ParameterError, match="does not use imagine_trials"):
+        default_config("pgpe", imagine_trials=10)
+
+
+@pytest.mark.parametrize("seed", [101, 102])
+def test_imagined_trials_never_reach_simulations_and_real_ones_always_do(
+    monkeypatch: pytest.MonkeyPatch, seed: int
+) -> None:
+    calls = Calls(monkeypatch)
+    result, rows = run(Plant(), seed)
+    state = result.state
+    assert calls.imagined > 0 and calls.real > 0
+    assert state.simulations == calls.real
+    assert state.simulated_seconds == pytest.approx(calls.real_steps * Simulation().dt)
+    imagined = state.get("imagined")
+    assert imagined[0] == calls.imagined
+    assert sum(r.extra[0][1] for r in rows) == calls.imagined  # the history column
+    # the real trials: one recorded trial per learning trial, plus the robust checks
+    assert calls.real >= len(rows)
+
+
+def test_the_learned_controller_passes_the_projects_robust_check() -> None:
+    result, rows = run(Plant(), 101)
+    assert result.success
+    assert len(rows) <= 3  # one trial to gather data, then (nearly always) one check
+    report = check_robust(Controller(gains=result.W, theta_c=result.theta_c))
+    assert report.robust
+
+
+def test_the_control_repeats_w0_and_never_imagines(monkeypatch: pytest.MonkeyPatch) -> None:
+    calls = Calls(monkeypatch)
+    config = control_config(default_config("forward", robust=True, max_trials=3))
+    result = learn(Plant(), start(101), config, 101)
+    assert calls.imagined == 0
+    assert tuple(start(101).gains) == result.W
+    assert result.trials == 3 and not result.success
+    assert result.state.get("imagined") == (0.0, 0.0)
+
+
+def test_a_plant_outside_the_family_shows_in_the_fit_and_the_real_checks() -> None:
+    """Gravity is what the model takes as known (9.81 m/s^2): on a plant with g = 20 the
+    fit cannot explain the data, and a controller found in imagination is refused by the
+    real trial until one passes there (then it passes the robust check for real)."""
+    far = Plant(gravity=20.0)
+    sim = Simulation(duration=20.0)
+    trajectory = simulate(far, start(102), sim, hardware=ROBUST_HARDWARE)
+    fit = fit_structured(Transitions.of([trajectory]))
+    near = fit_structured(
+        Transitions.of([simulate(Plant(), start(102), sim, hardware=ROBUST_HARDWARE)])
+    )
+    assert fit.rms.max() > 1e3 * near.rms.max()
+    assert abs(fit.plant.length - 1.0) > 0.2  # the length takes the blame for g
+    result, rows = run(far, 102, max_trials=8, learn_seed=2)
+    # imagination after trial i found a candidate; trial i + 1 ran it on the real plant
+    assert any(
+        dict(rows[i].extra)["solved_in_imagination"] == 1 and not rows[i + 1].success
+        for i in range(len(rows) - 1)
+    )
+    if result.success:
+        report = check_robust(Controller(gains=result.W, theta_c=result.theta_c), plant=far)
+        assert report.robust
+
+
+def test_the_rules_run_is_deterministic() -> None:
+    a, _ = run(Plant(), 101)
+    b, _ = run(Plant(), 101)
+    assert a.W == b.W and a.state.simulations == b.state.simulations
+    assert np.array_equal(np.array(a.state.get("data")), np.array(b.state.get("data")))
