@@ -75,6 +75,9 @@ def test_forward_is_registered_with_a_control_that_learns_nothing() -> None:
     assert "forward" in LEARNERS
     control = control_config(default_config("forward", robust=True))
     assert control.imagine_trials == 0
+    from striatal.experiments.runner import control_note
+
+    assert "no model is fitted and nothing is learned" in control_note("forward")
     with pytest.raises(ParameterError, match="success_on 'mean'"):
         default_config("forward", success_on="noisy")
     with pytest.raises(ParameterError, match="imagine_trials must be a whole number >= 0"):

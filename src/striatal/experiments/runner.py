@@ -187,6 +187,8 @@ def control_note(learner: str) -> str:
     """What the control arm of ``learner`` is (from the rule's declared ``control``)."""
     rule = rule_of(learner)
     changes = ", ".join(f"{k} = {v:g}" for k, v in rule.control.items())
+    if rule.control_text:
+        return f"control arm ({learner}): {changes}: {rule.control_text}"
     if rule.judges_candidate:
         return (
             f"control arm ({learner}): {changes}: the same perturbations around W(0) with "

@@ -93,6 +93,9 @@ class Rule:
     control: ClassVar[Mapping[str, Any]] = MappingProxyType({"alpha": 0.0})
     #: What the control still learns, if anything (said in the sweep's control note).
     control_also: ClassVar[str] = ""
+    #: What the control arm does, when the sweep's note cannot say it from :attr:`control`
+    #: alone (empty: the note says it).
+    control_text: ClassVar[str] = ""
     #: The rule's own history.csv columns (between theta_c and the trial's flags).
     history_columns: ClassVar[tuple[str, ...]] = ()
     #: The entries the rule keeps in ``LearnerState.memory``.

@@ -172,7 +172,10 @@ class ForwardRule(Rule):
     config_type = ForwardConfig
     preset = MappingProxyType({"success_on": "mean"})
     control = MappingProxyType({"imagine_trials": 0})
-    control_also = "its real trials repeat W(0), noise-free"
+    control_text = (
+        "no model is fitted and nothing is learned: the same real-trial schedule, each "
+        "trial the noise-free W(0) with its checks"
+    )
     history_columns = ("imagined", "model_pole_mass", "model_length", "solved_in_imagination")
     memory_names = ("data", "imagined")
     judges_candidate = True
@@ -229,7 +232,7 @@ class ForwardRule(Rule):
         W, theta_c = tuple(float(w) for w in plan.W), plan.theta_c
         report = plan.scratch["report"]
         if not success and c.imagine_trials > 0 and len(data) > 0:
-            trial: Mapping[str, Any] = plan.scratch["context"][()]
+            trial: Mapping[str, Any] = plan.scratch["context"].item()
             sim: Simulation = trial["sim"]
             fit = fit_structured(Transitions(data[:, :4], data[:, 4], data[:, 5:], sim.dt))
             template = replace(trial["controller"], gains=W, theta_c=theta_c)
