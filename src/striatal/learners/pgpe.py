@@ -147,14 +147,10 @@ class PgpeRule(Rule):
     memory_names = ("explore", "reward_mean", "rpe_square", "pair_z", "pair_reward", "pair_scale")
     learns_theta_c = True
     judges_candidate = True
+    mean_policy_only = "acts with the mean policy of perturbed gains"
 
     def check(self, config: LearnerConfig) -> None:
         super().check(config)
-        if config.success_on != "mean":
-            raise ParameterError(
-                "learner 'pgpe' acts with the mean policy of perturbed gains: "
-                "its success test is judged on the mean policy (success_on 'mean')"
-            )
         if config.symmetric and config.sigma_rate > 0.0:
             raise ParameterError(
                 "learner 'pgpe' adapts its exploration (sigma_rate) only without --symmetric"

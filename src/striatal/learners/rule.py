@@ -106,6 +106,9 @@ class Rule:
     #: (the plan's W and theta_c: pgpe's candidate p') rather than the state's mean W.
     #: Then, on success, :meth:`update` must return the plan's W and theta_c.
     judges_candidate: ClassVar[bool] = False
+    #: Why the rule's success test can only be judged on the mean policy (its trials act
+    #: with it); empty: the rule also takes success_on "noisy".
+    mean_policy_only: ClassVar[str] = ""
     #: Whether the rule runs its trial itself (:meth:`run`): a rule that changes W within
     #: the trial (ac). Otherwise the loop runs the plan with :mod:`striatal.sim.rollout`.
     runs_trial: ClassVar[bool] = False
@@ -127,6 +130,11 @@ class Rule:
             raise ParameterError(
                 f"learner {self.name!r} does not use {', '.join(unused)} "
                 f"(it reads: {', '.join(o for o in self.options if o != 'learner')})"
+            )
+        if self.mean_policy_only and config.success_on != "mean":
+            raise ParameterError(
+                f"learner {self.name!r} {self.mean_policy_only}: its success test is judged "
+                "on the mean policy (success_on 'mean')"
             )
         if config.theta_c_rule == "learned" and not self.learns_theta_c:
             raise ParameterError(

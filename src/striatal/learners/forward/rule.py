@@ -40,7 +40,6 @@ from typing import Any
 
 import numpy as np
 
-from striatal.errors import ParameterError
 from striatal.learners.config import LearnerConfig, pick
 from striatal.learners.forward.model import StructuredFit, Transitions, fit_structured
 from striatal.learners.loop import default_config, learn
@@ -180,14 +179,7 @@ class ForwardRule(Rule):
     memory_names = ("data", "imagined")
     judges_candidate = True
     runs_trial = True
-
-    def check(self, config: LearnerConfig) -> None:
-        super().check(config)
-        if config.success_on != "mean":
-            raise ParameterError(
-                "learner 'forward' runs its real trials with the mean policy: its success "
-                "test is judged on that trial (success_on 'mean')"
-            )
+    mean_policy_only = "runs its real trials with the mean policy"
 
     def plan(
         self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
