@@ -19,7 +19,8 @@ import pytest
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError
 from striatal.experiments import runner as experiments
-from striatal.learn import LearnerConfig, random_initial_gains, train
+from striatal.learners import LearnerConfig, random_initial_gains
+from striatal.learners import learn as train
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
     CHAPTER_INITIAL_W,

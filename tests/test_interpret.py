@@ -11,11 +11,13 @@ import pytest
 
 from striatal.cli import main
 from striatal.errors import ParameterError
-from striatal.learn import HISTORY_COLUMNS
+from striatal.learners.state import history_columns
 from striatal.neural import interpret
 from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Plant
 from striatal.sim.control import balancing_mean, swingup_mean
 from striatal.sim.dynamics import energy_error
+
+HISTORY_COLUMNS = history_columns(("sigma",))
 
 
 def _coefs(terms: tuple[interpret.Term, ...]) -> dict[str, float]:

@@ -18,7 +18,7 @@ from striatal.errors import ParameterError
 from striatal.experiments import baselines
 from striatal.experiments import runner as experiments
 from striatal.experiments.ablation import VARIANTS, build, markdown_table, runs_of, summary, variant
-from striatal.learn import random_initial_gains
+from striatal.learners import random_initial_gains
 from striatal.params import Controller, Plant, Simulation
 
 LEARNER_VARIANTS = [v for v in VARIANTS if v.kind == "learner"]

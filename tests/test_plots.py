@@ -14,11 +14,13 @@ import pytest
 import striatal
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError
-from striatal.learn import HISTORY_COLUMNS
+from striatal.learners.state import history_columns
 from striatal.params import CHAPTER_FINAL_W, Controller, Plant, Simulation
 from striatal.sim.control import switch_weights
 from striatal.sim.rollout import Trajectory, simulate
 from striatal.viz import plots
+
+HISTORY_COLUMNS = history_columns(("sigma",))
 
 
 @pytest.fixture(scope="module")

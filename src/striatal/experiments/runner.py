@@ -393,7 +393,7 @@ def _worker_init(parent: int) -> None:
     On Linux the kernel kills it as soon as its parent process dies (prctl
     PR_SET_PDEATHSIG); everywhere a daemon thread also ends it within about
     WATCHDOG_SECONDS once its parent changes (it was re-parented) or the sweep's
-    pid is gone, so a SIGKILLed sweep leaves no worker behind (issue 16 item 6).
+    pid is gone, so a SIGKILLed sweep leaves no worker behind.
     Under the fork and spawn start methods the parent is the sweep; under
     forkserver it is the server, which exits with the sweep.
     """
@@ -512,7 +512,7 @@ def _probe_ray(address: str, timeout: float, shown: float) -> None:
     the SIGTERM handler it installs cannot run while its client waits. A child can be
     killed and its stderr kept; it dies with this process (PR_SET_PDEATHSIG on
     Linux), so SIGTERM, which keeps its default action here, ends both at once
-    (issue 16 item 7). ParameterError (one line) when it fails or times out.
+    ParameterError (one line) when it fails or times out.
     """
     import subprocess
 
@@ -596,7 +596,7 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
     A last line without its newline or that does not parse is what a kill during
     a write leaves; any other bad line raises DataFileError. A row whose (arm, init,
     seed) an earlier row already has is dropped (the first is kept), so no run is
-    counted twice (issue 16 item 4).
+    counted twice.
     """
     if not path.exists():
         return [], csv_text(RUN_COLUMNS, [])
