@@ -189,12 +189,6 @@ def control_note(learner: str) -> str:
     changes = ", ".join(f"{k} = {v:g}" for k, v in rule.control.items())
     if rule.control_text:
         return f"control arm ({learner}): {changes}: {rule.control_text}"
-    if rule.judges_candidate:
-        return (
-            f"control arm ({learner}): {changes}: the same perturbations around W(0) with "
-            "the same spreads and no update, judged like the learner on the candidate each "
-            "trial ran"
-        )
     also = f"; {rule.control_also}" if rule.control_also else ""
     return (
         f"control arm ({learner}): {changes}, so the gains W never change; theta_c still "
@@ -511,7 +505,7 @@ def _probe_ray(address: str, timeout: float, shown: float) -> None:
     no Ray head it retries for minutes, logging each attempt to stderr from C++, and
     the SIGTERM handler it installs cannot run while its client waits. A child can be
     killed and its stderr kept; it dies with this process (PR_SET_PDEATHSIG on
-    Linux), so SIGTERM, which keeps its default action here, ends both at once
+    Linux), so SIGTERM, which keeps its default action here, ends both at once.
     ParameterError (one line) when it fails or times out.
     """
     import subprocess

@@ -148,6 +148,10 @@ class PgpeRule(Rule):
     learns_theta_c = True
     judges_candidate = True
     mean_policy_only = "acts with the mean policy of perturbed gains"
+    control_text = (
+        "the same perturbations around W(0) with the same spreads and no update, judged "
+        "like the learner on the candidate each trial ran"
+    )
 
     def check(self, config: LearnerConfig) -> None:
         super().check(config)

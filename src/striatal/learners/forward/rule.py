@@ -71,15 +71,14 @@ class ForwardConfig:
 @dataclass(frozen=True)
 class Imagined:
     """What one round of imagination gave: the candidate ``W`` (6,) and ``theta_c``,
-    whether it passed in imagination (``solved``), the imagined ``simulations`` and
-    ``simulated_seconds`` it cost, and the ``fit`` it ran on."""
+    whether it passed in imagination (``solved``), and the imagined ``simulations`` and
+    ``simulated_seconds`` it cost."""
 
     W: tuple[float, ...]
     theta_c: float
     solved: bool
     simulations: int
     simulated_seconds: float
-    fit: StructuredFit
 
 
 def transitions_of(rows: np.ndarray, per_trial: int = PER_TRIAL) -> np.ndarray:
@@ -152,7 +151,6 @@ def imagine(
         solved=solved,
         simulations=simulations,
         simulated_seconds=seconds,
-        fit=fit,
     )
 
 
