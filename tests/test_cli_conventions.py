@@ -17,6 +17,7 @@ import pytest
 from striatal.cli import build_parser, config, main, progress
 from striatal.cli.ablation import variant_line
 from striatal.cli.helpformat import DefaultsHelpFormatter
+from striatal.experiments import sweeps
 from striatal.learners import default_config
 
 TINY_SWEEP = ["--seeds", "2", "--max-trials", "3", "--duration", "2", "--eval-draws", "0"]
@@ -177,7 +178,7 @@ def test_shared_options_have_one_default() -> None:
             if a.dest == dest and a.option_strings
         }
         assert len(found) >= 2 and len(set(found.values())) == 1, (dest, found)
-    assert config.SEEDS == 100 and config.WORKERS == 1
+    assert sweeps.SEEDS == 100 and config.WORKERS == 1
 
 
 # ---- item 5: --json and progress

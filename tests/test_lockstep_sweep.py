@@ -13,8 +13,9 @@ import pytest
 
 from striatal.cli import main
 from striatal.errors import ParameterError
-from striatal.experiments import runner as experiments
+from striatal.experiments import pool, runs_csv, sweeps
 from striatal.experiments.lockstep_sweep import BATCH_LEARNERS, execute_batch, unsupported
+from striatal.experiments.spec import RunSpec, spawn_seeds
 from striatal.learners import LearnerConfig, default_config
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
@@ -26,7 +27,7 @@ from striatal.params import (
 from striatal.sim import kernel
 
 SHORT = Simulation(duration=20.0)
-SEEDS = experiments.spawn_seeds(0, 4)
+SEEDS = spawn_seeds(0, 4)
 
 
 def _specs(
@@ -34,8 +35,8 @@ def _specs(
     seeds: tuple[int, ...] = SEEDS,
     methods: tuple[str, ...] = (),
     eval_draws: int = 3,
-) -> list[experiments.RunSpec]:
-    specs, _ = experiments.build_specs(
+) -> list[RunSpec]:
+    specs, _ = sweeps.build_specs(
         config=config,
         template=Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
         plant=Plant(),
@@ -87,8 +88,8 @@ CASES = {
 def test_batch_rows_equal_the_process_rows(case: str) -> None:
     """Every column but wall_seconds, bit for bit, for learner and control on both inits."""
     specs = _specs(CASES[case])
-    serial = experiments.sort_rows(experiments.execute(specs))
-    batch = experiments.sort_rows(execute_batch(specs))
+    serial = runs_csv.sort_rows(pool.execute(specs))
+    batch = runs_csv.sort_rows(execute_batch(specs))
     assert len(batch) == len(specs) == 16
     for a, b in zip(serial, batch, strict=True):
         assert _no_wall(b) == _no_wall(a), (a["arm"], a["init"], a["seed"])
@@ -115,7 +116,7 @@ def test_rows_come_as_runs_finish_and_share_the_wall_time() -> None:
 def test_the_batch_sweep_resumes_a_cut_sweep_of_either_engine(tmp_path: Path) -> None:
     specs = _specs(default_config("chapter", max_trials=6), seeds=SEEDS[:3], eval_draws=2)
     settings = {"test": "resume"}
-    full = experiments.sweep(specs, settings, out=tmp_path / "p", max_trials=6)
+    full = sweeps.run_sweep(specs, settings, out=tmp_path / "p", max_trials=6)
     for engine in ("batch", "processes"):
         out = tmp_path / engine
         out.mkdir()
@@ -125,11 +126,11 @@ def test_the_batch_sweep_resumes_a_cut_sweep_of_either_engine(tmp_path: Path) ->
         lines = runs.read_text().splitlines(keepends=True)
         # the header, 5 rows and a line a SIGKILL cut short
         runs.write_text("".join(lines[:6]) + lines[6][: len(lines[6]) // 2])
-        again = experiments.sweep(specs, settings, out=out, max_trials=6, engine="batch")
+        again = sweeps.run_sweep(specs, settings, out=out, max_trials=6, engine="batch")
         assert (again.skipped, again.ran) == (5, len(specs) - 5)
         assert _no_wall(again.summary) == _no_wall(full.summary)
-        assert len(experiments.read_runs(runs)[0]) == len(specs)
-        nothing = experiments.sweep(specs, settings, out=out, max_trials=6, engine="batch")
+        assert len(runs_csv.read_runs(runs)[0]) == len(specs)
+        nothing = sweeps.run_sweep(specs, settings, out=out, max_trials=6, engine="batch")
         assert nothing.ran == 0
 
 
@@ -149,11 +150,11 @@ def test_what_the_batch_engine_does_not_run_is_refused() -> None:
         flagged = replace(chapter, **{flag: True})
         assert f"--{flag}" in (unsupported(_specs(flagged)) or "")
     with pytest.raises(ParameterError, match="baselines hand"):
-        experiments.sweep(
+        sweeps.run_sweep(
             _specs(chapter, methods=("hand",)), {}, out=None, max_trials=3, engine="batch"
         )
     with pytest.raises(ParameterError, match="engine must be"):
-        experiments.sweep(_specs(chapter), {}, out=None, max_trials=3, engine="threads")  # type: ignore[arg-type]
+        sweeps.run_sweep(_specs(chapter), {}, out=None, max_trials=3, engine="threads")  # type: ignore[arg-type]
     assert set(BATCH_LEARNERS) == {"chapter", "rpe", "pgpe"}
 
 
@@ -181,7 +182,7 @@ def test_cli_engines_give_the_same_runs_csv(
     batch = json.loads(capsys.readouterr().out)
     assert _no_wall(batch) == _no_wall(processes)
     rows = {
-        name: experiments.sort_rows(experiments.read_runs(tmp_path / name / "runs.csv")[0])
+        name: runs_csv.sort_rows(runs_csv.read_runs(tmp_path / name / "runs.csv")[0])
         for name in ("p", "b")
     }
     assert len(rows["b"]) == 24
@@ -212,8 +213,8 @@ def test_the_simd_kernel_drifts_from_round_off_but_keeps_what_is_exact() -> None
     the difference over trials (here W of one run ends far away), which is why a folder
     never mixes the two kinds and "batch" keeps the exact kernel."""
     specs = _specs(default_config("chapter", max_trials=8), seeds=SEEDS[:2], eval_draws=2)
-    exact = experiments.sort_rows(execute_batch(specs))
-    fast = experiments.sort_rows(execute_batch(specs, trial_kernel="lockstep"))
+    exact = runs_csv.sort_rows(execute_batch(specs))
+    fast = runs_csv.sort_rows(execute_batch(specs, trial_kernel="lockstep"))
     assert [(r["arm"], r["init"], r["seed"]) for r in fast] == [
         (r["arm"], r["init"], r["seed"]) for r in exact
     ]
@@ -247,9 +248,9 @@ def test_the_w0_evaluation_a_learner_shares_with_its_control_is_run_once(
         real(*args)
 
     specs = _specs(default_config("chapter", max_trials=2), seeds=SEEDS[:1], eval_draws=4)
-    serial = experiments.sort_rows(experiments.execute(specs))
+    serial = runs_csv.sort_rows(pool.execute(specs))
     monkeypatch.setattr(kernel, "run_trials_batch", counting)
-    batch = experiments.sort_rows(execute_batch(specs))
+    batch = runs_csv.sort_rows(execute_batch(specs))
     assert _no_wall(batch) == _no_wall(serial)
     # 2 inits x (learner, control); the first of each pair evaluates W(0) and its final
     # gains (2 mean trials, 2 x 4 draws), the second only its final gains (1 + 4)
@@ -287,7 +288,7 @@ def test_cli_simd_engine_gives_the_same_statistics_not_the_same_rows(
     assert main(["sweep", "--from-summary", str(tmp_path / "s"), "--print-config"]) == 0
     assert 'engine = "simd"' in capsys.readouterr().out
     # the Python API records it too
-    specs, _ = experiments.build_specs(
+    specs, _ = sweeps.build_specs(
         config=default_config("chapter", max_trials=1),
         template=Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
         plant=Plant(),
@@ -296,5 +297,5 @@ def test_cli_simd_engine_gives_the_same_statistics_not_the_same_rows(
         inits=("chapter",),
         eval_draws=0,
     )
-    experiments.sweep(specs, {"x": 1}, out=tmp_path / "api", max_trials=1, engine="simd")
+    sweeps.run_sweep(specs, {"x": 1}, out=tmp_path / "api", max_trials=1, engine="simd")
     assert "trial_kernel" in json.loads((tmp_path / "api" / "sweep.json").read_text())

@@ -41,7 +41,7 @@ import pytest
 
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError, StriatalError
-from striatal.experiments.runner import WATCHDOG_SECONDS
+from striatal.experiments.pool import WATCHDOG_SECONDS
 from striatal.io.files import read_json
 from striatal.learners import LearnerConfig, initial_state, learning_step
 from striatal.learners.chapter import gain_update
@@ -1200,7 +1200,7 @@ def watchdog_without_pdeathsig(tmp: Path) -> tuple[bool, str]:
     This process forks a parent, which forks the worker (it runs the pool's
     initializer) and then exits at once with no clean-up, as a SIGKILL leaves it.
     """
-    import striatal.experiments.runner as experiments
+    from striatal.experiments import pool
 
     read_end, write_end = os.pipe()
     parent = os.fork()
@@ -1209,8 +1209,8 @@ def watchdog_without_pdeathsig(tmp: Path) -> tuple[bool, str]:
             worker = os.fork()
             if worker == 0:
                 try:
-                    experiments._die_with_parent = lambda: False  # the fallback alone
-                    experiments._worker_init(os.getppid())
+                    pool._die_with_parent = lambda: False  # the fallback alone
+                    pool._worker_init(os.getppid())
                     time.sleep(60)
                 finally:
                     os._exit(0)

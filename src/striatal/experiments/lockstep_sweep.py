@@ -1,6 +1,6 @@
 """Sweeps in lockstep (``striatal sweep --engine batch|simd``): an arm's seeds as one batch.
 
-The process engine (:func:`striatal.experiments.runner.execute`) runs each (arm, init, seed)
+The process engine (:func:`striatal.experiments.pool.execute`) runs each (arm, init, seed)
 as its own :func:`striatal.learners.learn` loop. Here the runs of the arms that
 differ only in their learning rate (``alpha``; for pgpe also ``sigma_rate``: a
 learner and its no-learning control, an alpha grid) advance together: trial k of
