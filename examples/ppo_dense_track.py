@@ -12,8 +12,8 @@ seeds 0, 1, ...), each state component moved by up to 0.05. The chapter's contro
 (:class:`striatal.envs.SwitchingController`, the mean action of eqs 21-23, divided by
 u_max) and the zero action act on the same episodes. A row gives the mean over
 training seeds of the per-seed mean return, its range over seeds, and what the
-episodes did: how many ended at the track, how many ended upright (|theta| < pi/9,
-eq 25's angle, at the last step) and the largest |x| at the end.
+episodes did: how many ended at the track, when they ended [s], how many ended
+upright (|theta| < pi/9, eq 25's angle, at the last step) and the largest final |x|.
 """
 
 from __future__ import annotations
@@ -45,6 +45,7 @@ class Episodes:
     """Returns, track ends, upright ends and final |x| [m] of one policy on the evaluation set."""
 
     returns: tuple[float, ...]
+    ends: tuple[float, ...]
     off_track: int
     upright: int
     max_final_x: float
@@ -52,7 +53,9 @@ class Episodes:
 
 def evaluate(policy: Policy, track: float | None, episodes: int) -> Episodes:
     env = gym.make(DENSE_ENV_ID, perturbation=PERTURBATION, track=track)
-    returns, off, up, far = [], 0, 0, 0.0
+    returns: list[float] = []
+    ends: list[float] = []
+    off, up, far = 0, 0, 0.0
     for e in range(episodes):
         obs, info = env.reset(seed=EVAL_SEED + e)
         total, done = 0.0, False
@@ -61,10 +64,11 @@ def evaluate(policy: Policy, track: float | None, episodes: int) -> Episodes:
             total += float(r)
             done = terminated or truncated
         returns.append(total)
+        ends.append(float(info["t"]))
         off += int(terminated and not info["fault"])
         up += int(abs(math.remainder(float(info["state"][2]), 2 * math.pi)) < math.pi / 9)
         far = max(far, abs(float(info["state"][0])))
-    return Episodes(tuple(returns), off, up, far)
+    return Episodes(tuple(returns), tuple(ends), off, up, far)
 
 
 def train_ppo(seed: int, steps: int, track: float | None) -> Policy:
@@ -90,10 +94,11 @@ def row(name: str, track: float | None, runs: list[Episodes], episodes: int) -> 
     off = sum(r.off_track for r in runs)
     up = sum(r.upright for r in runs)
     far = max(r.max_final_x for r in runs)
+    ends = [t for r in runs for t in r.ends]
     rails = "none" if track is None else f"+-{track:g} m"
     return (
         f"| {name} | {rails} | {len(runs)} | {np.mean(means):.1f} | {spread} | "
-        f"{off}/{n} | {up}/{n} | {far:.2f} |"
+        f"{off}/{n} | {min(ends):.2f} to {max(ends):.2f} | {up}/{n} | {far:.2f} |"
     )
 
 
@@ -109,8 +114,8 @@ def main() -> None:
     start = time.perf_counter()
     lines = [
         "| policy | track | training seeds | mean return | range over seeds | "
-        "ended at the track | ended upright | largest final \\|x\\| [m] |",
-        "|---|---|---|---|---|---|---|---|",
+        "ended at the track | episodes end at [s] | ended upright | largest final \\|x\\| [m] |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     arms: list[tuple[int, float | None]] = [(args.steps[0], None)]
     arms += [(steps, 1.8) for steps in args.steps]
