@@ -55,7 +55,7 @@ def observation_space(task: SwingUpTask) -> spaces.Box:
 
 
 def action_space(task: SwingUpTask) -> spaces.Box:
-    """Box(1) of ``task.dtype``: u in [-u_max, u_max] [m/s^2] (eq 13), or [-1, 1] if normalised."""
+    """Box(1) of ``task.dtype``: u in [-u_max, u_max], in m/s^2 (eq 13); [-1, 1] if normalised."""
     # Bounds built in the space's dtype: a u_max that float32 cannot hold is rounded
     # here, while the env clips to the float64 u_max itself.
     high = np.full(1, 1.0 if task.normalised_action else task.u_max, dtype=task.dtype)
@@ -63,7 +63,7 @@ def action_space(task: SwingUpTask) -> spaces.Box:
 
 
 def clip_action(action: Any, u_max: float, n: int, normalised: bool = False) -> np.ndarray:
-    """(n,) float64 u [m/s^2] from an action batch of n real scalars, clipped to +-u_max.
+    """(n,) float64 u, in m/s^2, from an action batch of n real scalars, clipped to +-u_max.
 
     Any real dtype is accepted (a float32 action of the action space, a float64 one of
     a controller) and used as float64. A normalised action a is clipped to [-1, 1]
