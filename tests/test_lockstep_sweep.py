@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import math
 import time
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +13,7 @@ import pytest
 from striatal.cli import main
 from striatal.errors import ParameterError
 from striatal.experiments import pool, runs_csv, sweeps
-from striatal.experiments.lockstep_sweep import BATCH_LEARNERS, execute_batch, unsupported
+from striatal.experiments.lockstep_sweep import execute_batch
 from striatal.experiments.spec import RunSpec, spawn_seeds
 from striatal.learners import LearnerConfig, default_config
 from striatal.params import (
@@ -134,40 +133,47 @@ def test_the_batch_sweep_resumes_a_cut_sweep_of_either_engine(tmp_path: Path) ->
         assert nothing.ran == 0
 
 
-def test_what_the_batch_engine_does_not_run_is_refused() -> None:
-    chapter = default_config("chapter", max_trials=3)
-    assert unsupported(_specs(chapter)) is None
-    why = unsupported(_specs(chapter, methods=("lqr", "cmaes")))
-    assert why is not None and "cmaes, lqr" in why and "--engine processes" in why
-    shaped = default_config("pgpe", max_trials=3)  # its preset: the shaped reward
-    assert "shaped" in (unsupported(_specs(shaped)) or "")
-    jitter = default_config("pgpe", max_trials=3, reward="sparse", plant_jitter=0.1)
-    assert "plant_jitter" in (unsupported(_specs(jitter)) or "")
-    for limit, flag_name in (("track", "--track"), ("max_force", "--max-force")):
-        limited = replace(chapter, **{limit: 2.0})
-        assert flag_name in (unsupported(_specs(limited)) or "")
-    for flag in ("robust", "symmetric"):
-        flagged = replace(chapter, **{flag: True})
-        assert f"--{flag}" in (unsupported(_specs(flagged)) or "")
-    with pytest.raises(ParameterError, match="baselines hand"):
-        sweeps.run_sweep(
-            _specs(chapter, methods=("hand",)), {}, out=None, max_trials=3, engine="batch"
-        )
+#: What the batch engine once refused: each now runs through the same run_steps, the
+#: trials that need more than a kernel summary inside their run.
+EVERY_KIND = {
+    "baselines": (default_config("chapter", max_trials=3), ("lqr", "hand", "random", "cmaes")),
+    "shaped": (default_config("pgpe", max_trials=3), ()),
+    "jitter": (default_config("pgpe", max_trials=3, reward="sparse", plant_jitter=0.1), ()),
+    "track": (default_config("chapter", max_trials=3, track=2.0, max_force=20.0), ()),
+    "robust": (default_config("pgpe", max_trials=3, robust=True), ()),
+    "symmetric": (default_config("pgpe", max_trials=3, symmetric=True), ()),
+    "ac": (default_config("ac", max_trials=2), ()),
+}
+
+
+@pytest.mark.parametrize("kind", list(EVERY_KIND))
+def test_every_arm_runs_in_lockstep_with_the_process_rows(kind: str) -> None:
+    config, methods = EVERY_KIND[kind]
+    specs = _specs(config, seeds=SEEDS[:1], methods=methods, eval_draws=2)
+    serial = runs_csv.sort_rows(pool.execute(specs))
+    batch = runs_csv.sort_rows(execute_batch(specs))
+    assert len(batch) == len(specs)
+    assert _no_wall(batch) == _no_wall(serial)
     with pytest.raises(ParameterError, match="engine must be"):
-        sweeps.run_sweep(_specs(chapter), {}, out=None, max_trials=3, engine="threads")  # type: ignore[arg-type]
-    assert set(BATCH_LEARNERS) == {"chapter", "rpe", "pgpe"}
+        sweeps.run_sweep(specs, {}, out=None, max_trials=3, engine="threads")  # type: ignore[arg-type]
 
 
-def test_a_rule_the_batch_engine_does_not_know_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
-    from striatal.learners import loop
-    from striatal.learners.chapter import ChapterRule
+def test_trials_of_different_runs_share_kernel_calls(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The point of the engine: the runs' trials go to the batch kernel together."""
+    sizes: list[int] = []
+    real = kernel.run_trials_batch
 
-    class Other(ChapterRule):
-        name = "other"
+    def counting(*args: Any) -> None:
+        sizes.append(args[0].shape[0])
+        real(*args)
 
-    monkeypatch.setitem(loop.RULES, "other", Other())
-    why = unsupported(_specs(LearnerConfig(learner="other", max_trials=3)))
-    assert why is not None and "'other'" in why and "chapter, rpe, pgpe" in why
+    monkeypatch.setattr(kernel, "run_trials_batch", counting)
+    specs = _specs(default_config("chapter", max_trials=4), eval_draws=3)
+    rows = list(execute_batch(specs))
+    trials = sum(r["simulations"] + r["eval_simulations"] for r in rows)
+    assert sum(sizes) == trials  # every trial of the sweep went through the batch kernel
+    assert max(sizes) >= len(specs)  # trial k of every run in one call
+    assert len(sizes) < trials / 4
 
 
 def test_cli_engines_give_the_same_runs_csv(
@@ -192,9 +198,8 @@ def test_cli_engines_give_the_same_runs_csv(
 @pytest.mark.parametrize(
     ("extra", "needle"),
     [
-        (["--baselines", "lqr"], "baselines lqr"),
         (["--workers", "2"], "--workers"),
-        (["--learner", "pgpe"], "shaped"),
+        (["--backend", "ray", "--address", "127.0.0.1:1"], "--backend ray"),
     ],
 )
 def test_cli_refusals_are_one_line_and_exit_2(
@@ -208,10 +213,10 @@ def test_cli_refusals_are_one_line_and_exit_2(
 
 
 def test_the_simd_kernel_drifts_from_round_off_but_keeps_what_is_exact() -> None:
-    """trial_kernel "lockstep" (``--engine simd``): every trial, evaluation included, on the
-    SIMD kernel, whose trials equal the scalar kernel's within round-off; learning amplifies
-    the difference over trials (here W of one run ends far away), which is why a folder
-    never mixes the two kinds and "batch" keeps the exact kernel."""
+    """trial_kernel "lockstep" (``--engine simd``): the trials on the SIMD kernel, whose
+    trials equal the scalar kernel's within round-off; learning amplifies the difference
+    over trials (here W of one run ends far away), which is why a folder never mixes the
+    two kinds and "batch" keeps the exact kernel."""
     specs = _specs(default_config("chapter", max_trials=8), seeds=SEEDS[:2], eval_draws=2)
     exact = runs_csv.sort_rows(execute_batch(specs))
     fast = runs_csv.sort_rows(execute_batch(specs, trial_kernel="lockstep"))
@@ -231,31 +236,6 @@ def test_the_simd_kernel_drifts_from_round_off_but_keeps_what_is_exact() -> None
         assert b["eval_simulations"] == a["eval_simulations"]
     with pytest.raises(ParameterError, match="trial_kernel"):
         list(execute_batch(specs, trial_kernel="simd"))
-
-
-def test_the_w0_evaluation_a_learner_shares_with_its_control_is_run_once(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """Learner and control of a seed start from the same W(0) and draw the same evaluation
-    noise: the batch engines run that evaluation once, and both rows still count it."""
-    draws: list[int] = []
-    real = kernel.run_trials_batch
-
-    def counting(*args: Any) -> None:
-        noise, learning = args[5], args[6]
-        if learning.gamma == 0.0 and noise.shape[1] > 0:  # an evaluation's noise draws
-            draws.append(noise.shape[0])
-        real(*args)
-
-    specs = _specs(default_config("chapter", max_trials=2), seeds=SEEDS[:1], eval_draws=4)
-    serial = runs_csv.sort_rows(pool.execute(specs))
-    monkeypatch.setattr(kernel, "run_trials_batch", counting)
-    batch = runs_csv.sort_rows(execute_batch(specs))
-    assert _no_wall(batch) == _no_wall(serial)
-    # 2 inits x (learner, control); the first of each pair evaluates W(0) and its final
-    # gains (2 mean trials, 2 x 4 draws), the second only its final gains (1 + 4)
-    assert sorted(draws) == [4, 4, 8, 8]
-    assert all(r["eval_simulations"] == 1 + 2 * (4 + 1) for r in batch)
 
 
 def test_cli_simd_engine_gives_the_same_statistics_not_the_same_rows(

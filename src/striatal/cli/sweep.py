@@ -69,13 +69,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--engine",
         choices=sweeps.ENGINES,
         default="processes",
-        help="processes: one learning loop per run (--workers, --backend); batch: the runs of "
-        "the learner arms advance in lockstep, trial k of every seed in one batched kernel "
-        "call on Numba's threads (the same runs.csv rows; learner arms of chapter, rpe, pgpe "
-        "with the sparse reward only); simd: batch on the SIMD kernel, about 3x faster; its "
-        "trials equal the exact kernel's within round-off, so rows differ run by run while "
-        "the arms' success rates agreed within their intervals where measured "
-        "(docs/performance.md)",
+        help="processes: one learning loop per run (--workers, --backend); batch: every run "
+        "in this process, advanced side by side, the trials they need next in batched kernel "
+        "calls on Numba's threads (the same runs.csv rows as processes); simd: batch on the "
+        "SIMD kernel; its trials equal the exact kernel's within round-off, so rows differ "
+        "run by run while the arms' success rates agreed within their intervals where "
+        "measured (docs/performance.md)",
     )
     eg.add_argument(
         "--out", type=options.out_path, default=None, help="write runs.csv, summary.json here"

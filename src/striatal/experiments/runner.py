@@ -37,14 +37,19 @@ import math
 import time
 from typing import Any
 
+import numpy as np
+
 from striatal.errors import ParameterError
 from striatal.experiments import baselines
-from striatal.experiments.evaluate import pass_probability
+from striatal.experiments.evaluate import pass_probability_steps
 from striatal.experiments.spec import RunSpec, initial_gains
-from striatal.learners import LearnerConfig, learn, rule_of
-from striatal.params import Controller, Plant, Simulation
+from striatal.learners import LearnerConfig, check_config, rule_of
+from striatal.learners.common import initial_state
+from striatal.learners.loop import learn_steps
+from striatal.params import N_GAINS, Controller, Plant, Simulation
+from striatal.sim.batch import Steps, TrialRequest, drive
 from striatal.sim.robust import check_robust
-from striatal.sim.rollout import Protocol, simulate
+from striatal.sim.rollout import Protocol
 
 METHODS: tuple[str, ...] = ("learn", *baselines.BASELINES)
 
@@ -77,8 +82,8 @@ NOTE_ROBUST = (
 
 
 NOTE_SIMD = (
-    "--engine simd: every trial on kernel.run_trials_lockstep (polynomial sin/cos, within "
-    "1 ulp of libm's), not on the exact scalar kernel; a trial equals the scalar kernel's "
+    "--engine simd: the trials on kernel.run_trials_lockstep (polynomial sin/cos, within "
+    "1 ulp of libm's) where the motor and track allow, not on the exact scalar kernel; a trial equals the scalar kernel's "
     "within round-off, which a chaotic swing-up and learning over many trials amplify, "
     "so a run's row differs from --engine processes/batch; where measured, the arms' "
     "success rates agreed within their 95 % intervals (docs/performance.md)"
@@ -101,34 +106,31 @@ def control_note(learner: str) -> str:
 NOTE_CONTROL = control_note("chapter")
 
 
-def learning_run(
+def learning_steps(
     plant: Plant, template: Controller, config: LearnerConfig, seed: int, sim: Simulation
-) -> dict[str, Any]:
-    """success, trials, W, theta_c, simulations and simulated_seconds of one finished
-    :func:`striatal.learners.learn` run.
-
-    train turns Ctrl-C into a partial result; a cut run must never be recorded as
-    finished, so it is raised again here as KeyboardInterrupt.
-    """
-    result = learn(plant, template, config, seed, sim=sim)
-    if result.interrupted:
-        raise KeyboardInterrupt
+) -> Steps[dict[str, Any]]:
+    """success, trials, W, theta_c, simulations and simulated_seconds of one learning run
+    from ``template``'s gains (:func:`striatal.learners.loop.learn_steps`)."""
+    start = initial_state(template.gains, template.theta_c, seed)
+    check_config(config)
+    state = yield from learn_steps(plant, template, config, start, sim, Protocol())
     return {
-        "success": result.success,
-        "trials": result.trials,
-        "W": result.W,
-        "theta_c": result.theta_c,
-        "simulations": result.state.simulations,
-        "simulated_seconds": result.state.simulated_seconds,
+        "success": state.success,
+        "trials": state.trials_done,
+        "W": state.W,
+        "theta_c": state.theta_c,
+        "simulations": state.simulations,
+        "simulated_seconds": state.simulated_seconds,
     }
 
 
-def search(spec: RunSpec, W0: tuple[float, ...]) -> dict[str, Any]:
-    """What the arm of ``spec`` finds from W(0) = ``W0``: a learning run or a baseline."""
+def search(spec: RunSpec, W0: tuple[float, ...]) -> Steps[dict[str, Any]]:
+    """What the arm of ``spec`` finds from W(0) = ``W0``: a learning run (its trials
+    yielded) or a baseline (run here)."""
     template = spec.template.with_gains(W0, spec.template.theta_c)
     cfg = spec.config
     if spec.method == "learn":
-        return learning_run(spec.plant, template, cfg, spec.seed, spec.sim)
+        return (yield from learning_steps(spec.plant, template, cfg, spec.seed, spec.sim))
     if spec.method in ("lqr", "hand"):
         if spec.method == "lqr":
             W, theta_c = baselines.lqr_controller(spec.plant)
@@ -174,8 +176,13 @@ def search(spec: RunSpec, W0: tuple[float, ...]) -> dict[str, Any]:
 
 
 def run_one(spec: RunSpec) -> dict[str, Any]:
-    """One run -> one row (RUN_COLUMNS). Pure: the same spec gives the same row
-    (except wall_seconds).
+    """One run -> one row (RUN_COLUMNS), its trials on the scalar kernel. Pure: the same
+    spec gives the same row (except wall_seconds). :func:`run_steps` for other drivers."""
+    return drive(run_steps(spec))
+
+
+def run_steps(spec: RunSpec) -> Steps[dict[str, Any]]:
+    """:func:`run_one` as :data:`striatal.sim.batch.Steps`.
 
     After the search: one noise-free re-simulation of the final gains
     (``mean_policy_success``) and, with ``spec.eval_draws`` > 0, the pass probability
@@ -188,18 +195,23 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     theta_c0 = spec.template.theta_c
     template = spec.template.with_gains(W0, theta_c0)
     cfg = spec.config
-    out = search(spec, W0)
+    out = yield from search(spec, W0)
     final = template.with_gains(out["W"], out["theta_c"]) if out["W"][0] > 0 else None
-    mean_ok = (
-        final is not None
-        and simulate(
-            spec.plant,
-            final,
-            spec.sim,
-            protocol=Protocol(),
-            hardware=cfg.hardware,
-        ).outcome.success
-    )
+    mean_ok = False
+    if final is not None:
+        (rerun,) = yield [
+            TrialRequest(
+                plant=spec.plant,
+                controller=final,
+                sim=spec.sim,
+                protocol=Protocol(),
+                trace=np.zeros(N_GAINS),
+                gamma=0.0,
+                rng=None,
+                hardware=cfg.hardware,
+            )
+        ]
+        mean_ok = rerun.success
     evals = 1 if final is not None else 0
     robust = math.nan
     if cfg.robust and final is not None:
@@ -207,12 +219,12 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
         robust, evals = float(report.robust), evals + report.simulations
     rate0 = rate = math.nan
     if spec.eval_draws > 0:
-        before = pass_probability(
+        before = yield from pass_probability_steps(
             spec.plant, template, spec.sim, Protocol(), spec.eval_draws, spec.seed
         )
         rate0, evals = before.rate, evals + before.simulations
         if final is not None:
-            after = pass_probability(
+            after = yield from pass_probability_steps(
                 spec.plant, final, spec.sim, Protocol(), spec.eval_draws, spec.seed
             )
             rate, evals = after.rate, evals + after.simulations

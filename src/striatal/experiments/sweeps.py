@@ -177,11 +177,11 @@ def run_sweep(
     then write ``out``/summary.json (atomically) from all rows.
 
     ``engine`` "processes": :func:`execute` (one learning loop per run, on ``backend``);
-    "batch": :func:`striatal.experiments.lockstep_sweep.execute_batch` (the runs of an arm advance
-    in lockstep in this process; the same rows but wall_seconds); "simd": the same on
-    the SIMD kernel (:func:`striatal.sim.kernel.run_trials_lockstep`), rows equal only
-    within round-off (docs/performance.md), so ``settings`` gets ``trial_kernel``
-    (:data:`NOTE_SIMD`) and a folder is never resumed across the two kinds.
+    "batch": :func:`striatal.experiments.lockstep_sweep.execute_batch` (every run in this
+    process, side by side, their trials batched; the same rows but wall_seconds); "simd":
+    the same on the SIMD kernel (:func:`striatal.sim.kernel.run_trials_lockstep`), rows
+    equal only within round-off (docs/performance.md), so ``settings`` gets
+    ``trial_kernel`` (:data:`NOTE_SIMD`) and a folder is never resumed across the two kinds.
 
     ``settings`` is stored in ``out``/sweep.json; a rerun in the same folder must use
     the same settings (ParameterError otherwise), ``settings["options"]`` aside: the
@@ -207,7 +207,7 @@ def run_sweep(
     if engine != "processes":
         from striatal.experiments.lockstep_sweep import check_specs
 
-        check_specs(specs, engine)
+        check_specs(specs)
     if engine == "simd":
         # its rows are not the exact kernel's: recorded, so a folder never mixes the two
         settings = {**settings, "trial_kernel": NOTE_SIMD}
