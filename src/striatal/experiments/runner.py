@@ -83,8 +83,9 @@ NOTE_ROBUST = (
 
 NOTE_SIMD = (
     "--engine simd: the trials on kernel.run_trials_lockstep (polynomial sin/cos, within "
-    "1 ulp of libm's) where the motor and track allow, not on the exact scalar kernel; a trial equals the scalar kernel's "
-    "within round-off, which a chaotic swing-up and learning over many trials amplify, "
+    "1 ulp of libm's) where the motor and track allow, not on the exact scalar kernel; "
+    "a trial equals the scalar kernel's within round-off, which a chaotic swing-up and "
+    "learning over many trials amplify, "
     "so a run's row differs from --engine processes/batch; where measured, the arms' "
     "success rates agreed within their 95 % intervals (docs/performance.md)"
 )
