@@ -14,9 +14,9 @@ import pytest
 
 from striatal import learners
 from striatal.cli.learner_options import (
-    LEARNER_DEFAULTS,
     add_learner_arguments,
     learner_config_from,
+    learner_defaults,
 )
 from striatal.errors import ParameterError
 from striatal.learners import LearnerConfig, initial_state, learning_step
@@ -35,6 +35,7 @@ from striatal.sim.rollout import Protocol, TrialOutcome, simulate
 
 START = Controller(CHAPTER_INITIAL_W, 0.6)
 RANDOM_START = Controller((0.55, -0.06, 0.39, 0.63, 0.08, 0.03), 0.6)
+LEARNER_DEFAULTS = learner_defaults()
 RPE = LEARNER_DEFAULTS["rpe"]
 PGPE = LEARNER_DEFAULTS["pgpe"]
 

@@ -13,11 +13,13 @@ from dataclasses import Field, fields
 from typing import Any
 
 from striatal.cli.helpformat import default_note, default_text
-from striatal.learners import LEARNERS, RULES, LearnerConfig, default_config
+from striatal.learners import RULES, LearnerConfig, default_config
 from striatal.learners.config import bounds_text, field_kind
 
-#: Defaults of each learner (the tuned presets live with each rule: striatal.learners).
-LEARNER_DEFAULTS: dict[str, LearnerConfig] = {name: default_config(name) for name in LEARNERS}
+
+def learner_defaults() -> dict[str, LearnerConfig]:
+    """The defaults of each registered learner (its tuned preset: striatal.learners)."""
+    return {name: default_config(name) for name in RULES}
 
 
 def option_fields() -> list[Field[Any]]:
@@ -56,12 +58,12 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
     )
     lg.add_argument(
         "--learner",
-        choices=LEARNERS,
+        choices=tuple(RULES),
         default="chapter",
         help="; ".join(f"{name}: {rule.summary}" for name, rule in RULES.items())
         + " (an option the chosen learner does not read is refused)",
     )
-    presets = LEARNER_DEFAULTS
+    presets = learner_defaults()
     for f in option_fields():
         kind, choices, _ = field_kind(f)
         flag, help_text = flag_of(f), _help(f, presets).replace("%", "%%")
