@@ -346,6 +346,7 @@ def test_simulations_equal_the_kernel_calls(
 ) -> None:
     """Issue 14: every simulated trial is counted, the mean-policy checks included."""
     from striatal.learners import default_config
+    from striatal.sim.batch import drive
 
     config = default_config(learner or "chapter", max_trials=12, success_on="mean")
     arm = sweeps.Arm("a", method, config, "learner" if method == "learn" else "baseline")
@@ -359,7 +360,7 @@ def test_simulations_equal_the_kernel_calls(
         eval_draws=3,
     )
     calls = KernelCalls(monkeypatch)
-    found = runner.search(spec, initial_gains("random", 4))
+    found = drive(runner.search(spec, initial_gains("random", 4)))
     assert found["simulations"] == calls.n
     if learner == "chapter":  # a noisy trial plus a mean-policy check per trial
         assert found["simulations"] == 2 * found["trials"]

@@ -22,8 +22,8 @@ from striatal.cli import main
 from striatal.errors import ParameterError
 from striatal.experiments import baselines
 from striatal.learners import LearnerConfig, default_config, learn
-from striatal.learners import loop as loop_module
 from striatal.params import Controller, Hardware, Plant, Simulation
+from striatal.sim import batch as batch_module
 from striatal.sim import online, rollout
 
 #: A controller pgpe learned with ``--robust`` (tests/test_robust_stop.py): robust.
@@ -126,14 +126,14 @@ def test_the_ac_online_trial_holds_u_under_the_runs_limits(hardwares: list[Hardw
 
 def test_a_half_metre_track_ends_trials_by_the_track(monkeypatch: pytest.MonkeyPatch) -> None:
     outcomes: list[Any] = []
-    real = loop_module.run_trial
+    real = batch_module.run_trial
 
     def noting(*args: Any, **kwargs: Any) -> Any:
         o = real(*args, **kwargs)
         outcomes.append(o)
         return o
 
-    monkeypatch.setattr(loop_module, "run_trial", noting)
+    monkeypatch.setattr(batch_module, "run_trial", noting)
     config = default_config("chapter", max_trials=4, track=0.5)
     result = learn(Plant(), Controller(), config, seed=0)
     ends = [o.end_reason for o in outcomes]

@@ -534,16 +534,16 @@ def fresh_over_old_run(tmp: Path) -> tuple[bool, str]:
 
     out = tmp / "OUT"
     assert cli_in_process("train", "--seed", "1", "--max-trials", "8", "--out", str(out)).rc == 0
-    real = loop.learning_step
+    real = loop.learning_steps
     calls = {"n": 0}
 
     def crash(*args: Any, **kwargs: Any) -> Any:
         calls["n"] += 1
         if calls["n"] == 3:
             raise MemoryError("simulated crash")
-        return real(*args, **kwargs)
+        return (yield from real(*args, **kwargs))
 
-    with mock.patch.object(loop, "learning_step", crash):
+    with mock.patch.object(loop, "learning_steps", crash):
         crashed = cli_in_process("train", "--seed", "2", "--max-trials", "40", "--out", str(out))
     left = sorted(p.name for p in out.iterdir())
     resumed = cli_in_process("train", "--resume", "--out", str(out))
@@ -837,17 +837,17 @@ def interrupt_inside_sweep_run(tmp: Path) -> tuple[bool, str]:
     import striatal.learners.loop as learn_module
 
     want = sweep_reference(tmp)
-    real = learn_module.learning_step
+    real = learn_module.learning_steps
     calls = {"n": 0}
 
-    def learning_step(*args: Any, **kwargs: Any) -> Any:
+    def learning_steps(*args: Any, **kwargs: Any) -> Any:
         calls["n"] += 1
         if calls["n"] == 30:
             raise KeyboardInterrupt
-        return real(*args, **kwargs)
+        return (yield from real(*args, **kwargs))
 
     out = tmp / "OUT"
-    with mock.patch.object(learn_module, "learning_step", learning_step):
+    with mock.patch.object(learn_module, "learning_steps", learning_steps):
         first = cli_in_process(*SWEEP, "--out", str(out))
     rows = _runs_without_wall(out / "runs.csv")
     cut_recorded = any(row not in want["runs"] for row in rows)

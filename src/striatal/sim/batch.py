@@ -24,7 +24,7 @@ driver runs them.
 from __future__ import annotations
 
 import time
-from collections.abc import Generator, Sequence
+from collections.abc import Callable, Generator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
 
@@ -34,6 +34,7 @@ import numpy as np
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
 from striatal.sim import kernel
+from striatal.sim.noise import row_parts, run_parts
 from striatal.sim.rollout import (
     Protocol,
     SensorNoise,
@@ -53,6 +54,8 @@ TRIAL_KERNELS: tuple[str, ...] = ("exact", "lockstep")
 #: Trials a kernel thread takes at a time (numba.set_parallel_chunksize): dynamic chunks,
 #: so a thread the OS takes away, or that gets the long trials, does not hold up the rest.
 CHUNK = 2
+#: From this many normals in one round, generators fill their rows on threads.
+PARALLEL_NORMALS = 50_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,16 +149,20 @@ def run_requests(
         )
     outcomes: list[TrialOutcome | None] = [None] * len(requests)
     groups: dict[tuple[Any, ...], list[int]] = {}
-    noise: list[np.ndarray] = []
-    for i, r in enumerate(requests):
-        # in request order, each draws from its generator what run_trial would draw
-        key = r.batch_key()
-        if key is None:
-            outcomes[i] = r.run()
-            noise.append(np.empty(0))
-            continue
-        noise.append(noise_arrays(r.sim, r.action_every, r.rng, r.sensor, r.mean_policy)[0])
-        groups.setdefault(key, []).append(i)
+    noise: dict[int, np.ndarray] = {}
+    if any(r.batch_key() is None for r in requests):
+        # a trial that runs alone draws as it runs: keep every draw in request order
+        for i, r in enumerate(requests):
+            key = r.batch_key()
+            if key is None:
+                outcomes[i] = r.run()
+                continue
+            noise[i] = noise_arrays(r.sim, r.action_every, r.rng, r.sensor, r.mean_policy)[0]
+            groups.setdefault(key, []).append(i)
+    else:
+        for i, r in enumerate(requests):
+            groups.setdefault(r.batch_key(), []).append(i)  # type: ignore[arg-type]
+        noise = _draw_noise(requests)
     for members in groups.values():
         first = requests[members[0]]
         gains = np.array(
@@ -193,6 +200,33 @@ def run_requests(
             requests[i].trace[:] = traces[j]
             outcomes[i] = TrialOutcome.from_row(out[j], first.sim)
     return outcomes  # type: ignore[return-value]
+
+
+def _draw_noise(requests: Sequence[TrialRequest]) -> dict[int, np.ndarray]:
+    """The action normals of every request that draws them, by index: each generator's
+    requests in their order (what run_trial draws), different generators on threads
+    (:func:`striatal.sim.noise.run_parts`) once there are enough normals to pay."""
+    by_rng: dict[int, list[int]] = {}
+    noise: dict[int, np.ndarray] = {}
+    for i, r in enumerate(requests):
+        if r.draws_actions:
+            by_rng.setdefault(id(r.rng), []).append(i)
+            noise[i] = np.empty(-(-r.sim.n_steps // r.action_every))
+    chains = list(by_rng.values())
+
+    def part(chain_ids: range) -> Callable[[], None]:
+        def fill() -> None:
+            for c in chain_ids:
+                for i in chains[c]:
+                    requests[i].rng.standard_normal(out=noise[i])  # type: ignore[union-attr]
+
+        return fill
+
+    if sum(a.size for a in noise.values()) < PARALLEL_NORMALS:
+        part(range(len(chains)))()
+    else:
+        run_parts([part(ids) for ids in row_parts(len(chains))])
+    return noise
 
 
 class Lockstep:
