@@ -72,7 +72,7 @@ test-floor: $(TEST_STAMP)
 docs: $(TEST_STAMP)
 	$(BIN)/mkdocs build --strict --site-dir site
 
-# Re-execute docs/tutorial.ipynb and store it with its outputs (about 1.5 minutes)
+# Re-execute docs/tutorial.ipynb and store it with its outputs (under a minute)
 tutorial: $(TEST_STAMP)
 	$(BIN)/jupyter execute --inplace --timeout=600 docs/tutorial.ipynb
 
