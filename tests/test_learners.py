@@ -347,7 +347,8 @@ def test_a_rule_registered_by_the_recipe_runs_in_the_shared_loop(
                 W=W + eps, theta_c=state.theta_c, trace=np.zeros(6), gamma=0.0, rng=None
             )
 
-        def update(self, state, config, plan, outcome, reward, success):  # type: ignore[no-untyped-def]
+        def update(self, state, config, trial):  # type: ignore[no-untyped-def]
+            plan, reward, success = trial.plan, trial.reward, trial.success
             best = state.get("best")[0] if state.get("best") else -math.inf
             keep = not success and config.alpha > 0 and reward > best
             W = tuple(float(w) for w in plan.W) if keep else state.W

@@ -47,7 +47,8 @@ class HillRule(Rule):
         return TrialPlan(W=W, theta_c=state.theta_c, trace=np.zeros(6), gamma=0.0, rng=rng,
                          scratch={"step": step})
 
-    def update(self, state, config, plan, outcome, reward, success):
+    def update(self, state, config, trial):
+        plan, reward, success = trial.plan, trial.reward, trial.success
         best = dict(state.memory).get("best")
         if success or (best is not None and reward <= best[0]):
             return Update(W=state.W, theta_c=state.theta_c, memory=state.memory)

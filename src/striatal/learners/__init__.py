@@ -42,7 +42,7 @@ from striatal.learners.loop import (
     register,
     rule_of,
 )
-from striatal.learners.rule import Rule, TrialPlan, Update
+from striatal.learners.rule import Rule, Trial, TrialPlan, Update
 from striatal.learners.state import History, LearnerState, TrainResult, TrialRecord
 
 __all__ = [
@@ -54,6 +54,7 @@ __all__ = [
     "LearnerState",
     "Rule",
     "TrainResult",
+    "Trial",
     "TrialPlan",
     "TrialRecord",
     "Update",

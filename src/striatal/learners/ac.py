@@ -37,7 +37,7 @@ import numpy as np
 from striatal.learners.chapter import finite_trace, policy_plan
 from striatal.learners.common import theta_c_rule
 from striatal.learners.config import Eligibility, LearnerConfig, ThetaCRule, pick
-from striatal.learners.rule import Rule, TrialPlan, Update
+from striatal.learners.rule import Rule, Trial, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import Plant
 from striatal.sim.kernel import sigma_of
@@ -163,15 +163,8 @@ class AcRule(Rule):
         np.copyto(plan.scratch["stats"], result.stats)
         return result.outcome
 
-    def update(
-        self,
-        state: LearnerState,
-        config: LearnerConfig,
-        plan: TrialPlan,
-        outcome: TrialOutcome,
-        reward: float,
-        success: bool,
-    ) -> Update:
+    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
+        plan, outcome, success = trial.plan, trial.outcome, trial.success
         c = pick(AcConfig, config)
         W, theta_c = np.array(state.W, dtype=float), state.theta_c
         if not success:

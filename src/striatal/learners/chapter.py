@@ -17,11 +17,10 @@ import numpy as np
 
 from striatal.learners.common import theta_c_rule
 from striatal.learners.config import Eligibility, LearnerConfig, ThetaCRule, pick
-from striatal.learners.rule import Rule, TrialPlan, Update
+from striatal.learners.rule import Rule, Trial, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Plant
 from striatal.sim.kernel import sigma_of
-from striatal.sim.rollout import TrialOutcome
 
 __all__ = ["CHAPTER", "ChapterConfig", "ChapterRule", "gain_update", "policy_plan", "policy_trace"]
 
@@ -114,15 +113,8 @@ class ChapterRule(Rule):
     ) -> TrialPlan:
         return policy_plan(state, config, rng)
 
-    def update(
-        self,
-        state: LearnerState,
-        config: LearnerConfig,
-        plan: TrialPlan,
-        outcome: TrialOutcome,
-        reward: float,
-        success: bool,
-    ) -> Update:
+    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
+        plan, outcome, reward, success = trial.plan, trial.outcome, trial.reward, trial.success
         c = pick(ChapterConfig, config)
         W, theta_c = plan.W, state.theta_c
         if not success:

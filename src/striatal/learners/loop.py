@@ -41,7 +41,7 @@ from striatal.learners.common import shaped_reward as shaped_reward
 from striatal.learners.config import LearnerConfig
 from striatal.learners.pgpe import PGPE
 from striatal.learners.rpe import RPE
-from striatal.learners.rule import Rule, Update
+from striatal.learners.rule import Rule, Trial, Update
 from striatal.learners.state import LearnerState, TrainResult, TrialRecord
 from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Plant, Simulation
 from striatal.sim.batch import Steps, TrialRequest, drive
@@ -275,7 +275,7 @@ def learning_steps(
         simulations += verdict.simulations
         seconds += verdict.simulated_seconds
         success = verdict.robust
-    update = _finite(rule.update(state, config, plan, outcome, reward, success), state)
+    update = _finite(rule.update(state, config, Trial(plan, outcome, reward, success)), state)
     record = TrialRecord(
         trial=state.trials_done + 1,
         reward=reward,

@@ -43,11 +43,10 @@ from striatal.learners.common import (
     three_factor_update,
 )
 from striatal.learners.config import LearnerConfig, RewardKind, ThetaCRule, pick
-from striatal.learners.rule import Rule, TrialPlan, Update
+from striatal.learners.rule import Rule, Trial, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Plant
 from striatal.sim import kernel
-from striatal.sim.rollout import TrialOutcome
 
 __all__ = [
     "EXPLORE_RANGE",
@@ -195,15 +194,8 @@ class PgpeRule(Rule):
             scratch={"p": p, "eps": p_trial - p, "s": s, "z": z, "scale": scale},
         )
 
-    def update(
-        self,
-        state: LearnerState,
-        config: LearnerConfig,
-        plan: TrialPlan,
-        outcome: TrialOutcome,
-        reward: float,
-        success: bool,
-    ) -> Update:
+    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
+        plan, outcome, reward, success = trial.plan, trial.outcome, trial.reward, trial.success
         c = pick(PgpeConfig, config)
         if c.symmetric:
             return self._symmetric_update(state, c, plan, reward, success)

@@ -24,11 +24,10 @@ from striatal.learners.common import (
     three_factor_update,
 )
 from striatal.learners.config import Eligibility, LearnerConfig, RewardKind, ThetaCRule, pick
-from striatal.learners.rule import Rule, TrialPlan, Update
+from striatal.learners.rule import Rule, Trial, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import Plant
 from striatal.sim.kernel import sigma_of
-from striatal.sim.rollout import TrialOutcome
 
 __all__ = ["RPE", "RpeConfig", "RpeRule"]
 
@@ -83,15 +82,8 @@ class RpeRule(Rule):
     ) -> TrialPlan:
         return policy_plan(state, config, rng)
 
-    def update(
-        self,
-        state: LearnerState,
-        config: LearnerConfig,
-        plan: TrialPlan,
-        outcome: TrialOutcome,
-        reward: float,
-        success: bool,
-    ) -> Update:
+    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
+        plan, outcome, reward, success = trial.plan, trial.outcome, trial.reward, trial.success
         c = pick(RpeConfig, config)
         factor, b, square = prediction_error(state, reward, c.rpe_rate, c.normalise)
         W, theta_c = plan.W, state.theta_c

@@ -25,7 +25,7 @@ from striatal.learners.state import LearnerState, Memory
 from striatal.params import Plant
 from striatal.sim.rollout import TrialOutcome
 
-__all__ = ["LOOP_OPTIONS", "Rule", "TrialPlan", "Update"]
+__all__ = ["LOOP_OPTIONS", "Rule", "Trial", "TrialPlan", "Update"]
 
 #: LearnerConfig fields the loop itself reads, whatever the rule.
 LOOP_OPTIONS = (
@@ -58,6 +58,17 @@ class TrialPlan:
     eligibility: str = "score"
     plant: Plant | None = None
     scratch: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Trial:
+    """A trial as the loop hands it to :meth:`Rule.update`: the plan it ran, its outcome,
+    its reward (eqs 24-25, or the shaped reward) and the success test's verdict."""
+
+    plan: TrialPlan
+    outcome: TrialOutcome
+    reward: float
+    success: bool
 
 
 @dataclass(frozen=True)
@@ -163,15 +174,7 @@ class Rule:
         trial's sparse reward (eqs 24-25) is the outcome's."""
         raise NotImplementedError
 
-    def update(
-        self,
-        state: LearnerState,
-        config: LearnerConfig,
-        plan: TrialPlan,
-        outcome: TrialOutcome,
-        reward: float,
-        success: bool,
-    ) -> Update:
+    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
         """The next W, theta_c and memory; with ``success`` W and theta_c must stay
         (or, with :attr:`judges_candidate`, become the plan's: the controller judged)."""
         raise NotImplementedError

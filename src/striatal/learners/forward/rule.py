@@ -43,7 +43,7 @@ import numpy as np
 from striatal.learners.config import LearnerConfig, pick
 from striatal.learners.forward.model import StructuredFit, Transitions, fit_structured
 from striatal.learners.loop import default_config, learn
-from striatal.learners.rule import Rule, TrialPlan, Update
+from striatal.learners.rule import Rule, Trial, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Controller, Plant, Simulation
 from striatal.sim.robust import stop_check
@@ -206,15 +206,8 @@ class ForwardRule(Rule):
         plan.scratch["n"][0] = len(kept)
         return outcome
 
-    def update(
-        self,
-        state: LearnerState,
-        config: LearnerConfig,
-        plan: TrialPlan,
-        outcome: TrialOutcome,
-        reward: float,
-        success: bool,
-    ) -> Update:
+    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
+        plan, success = trial.plan, trial.success
         c = pick(ForwardConfig, config)
         new = plan.scratch["rows"][: int(plan.scratch["n"][0])]
         data = np.concatenate([kept_data(state), new])[-MAX_TRANSITIONS:]
@@ -222,12 +215,12 @@ class ForwardRule(Rule):
         W, theta_c = tuple(float(w) for w in plan.W), plan.theta_c
         report = plan.scratch["report"]
         if not success and c.imagine_trials > 0 and len(data) > 0:
-            trial: Mapping[str, Any] = plan.scratch["context"].item()
-            sim: Simulation = trial["sim"]
+            context: Mapping[str, Any] = plan.scratch["context"].item()
+            sim: Simulation = context["sim"]
             fit = fit_structured(Transitions(data[:, :4], data[:, 4], data[:, 5:], sim.dt))
-            template = replace(trial["controller"], gains=W, theta_c=theta_c)
+            template = replace(context["controller"], gains=W, theta_c=theta_c)
             seed = int(plan.scratch["seed"][0])
-            dream = imagine(fit, template, config, sim, trial["protocol"], seed)
+            dream = imagine(fit, template, config, sim, context["protocol"], seed)
             W, theta_c = dream.W, dream.theta_c
             done = (done[0] + dream.simulations, done[1] + dream.simulated_seconds)
             report[:] = (dream.simulations, fit.plant.pole_mass, fit.plant.length, dream.solved)
