@@ -168,6 +168,21 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def options_given(command: str, words: Sequence[str]) -> frozenset[str]:
+    """The dests of the options of ``command`` that ``words`` (the whole command line) give.
+
+    An option given at its default value counts as given: it is found by parsing
+    ``words`` again with every default of the command left out, not by comparing values.
+    """
+    parser = build_parser(only=command)
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    own = sub.choices[command]
+    dests = {a.dest for a in own._actions if a.option_strings}
+    for action in own._actions:
+        action.default = argparse.SUPPRESS
+    return frozenset(vars(parser.parse_args(list(words)))) & dests
+
+
 def tolerate_any_encoding() -> None:
     """Make stdout and stderr print what they cannot encode as an escape, not raise.
 
@@ -222,6 +237,7 @@ def _main(argv: Sequence[str] | None) -> int:
         words = sys.argv[1:] if argv is None else argv
         parser = build_parser(only=command_of(words) or "")
         args = parser.parse_args(argv)
+        args._given = options_given(args.command, words)
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
     except Exception:
@@ -230,7 +246,9 @@ def _main(argv: Sequence[str] | None) -> int:
         raise
     try:
         if config.wants_file(args):
+            given = args._given
             args = config.apply(parser, args, sys.argv[1:] if argv is None else argv)
+            args._given = given
             if args.print_config:
                 sys.stdout.write(config.toml_text(args.command, args))
                 return 0

@@ -116,11 +116,9 @@ _START = ("learner", "init", "init_gains", "theta_c0", "seed")
 
 
 def _explicit(args: argparse.Namespace) -> set[str]:
-    """The options given on the command line (those that differ from their defaults)."""
-    parser = argparse.ArgumentParser()
-    add_arguments(parser)
-    defaults = vars(parser.parse_args([]))
-    return {k for k, v in vars(args).items() if k in defaults and v != defaults[k]}
+    """The options given on the command line, also those given at their default value
+    (:func:`striatal.cli.options_given`, which ``main`` stores as ``args._given``)."""
+    return set(args._given)
 
 
 def _train_arguments(args: argparse.Namespace) -> dict[str, Any]:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -226,6 +226,13 @@ def _resume_changes(
         elif name == "init_gains":
             if have[name] is None or floor_w1(value) != have[name]:
                 differ.append(f"{_flag(name)}")
+        elif name in ("plant", "sim") and isinstance(value, Plant | Simulation):
+            # name the fields (the options of striatal train), not the whole record
+            differ += [
+                f"{_flag(f.name)} (the run has {getattr(have[name], f.name)!r})"
+                for f in fields(value)
+                if getattr(value, f.name) != getattr(have[name], f.name)
+            ]
         elif value != have[name]:
             differ.append(f"{_flag(name)} (the run has {have[name]!r})")
     if differ:

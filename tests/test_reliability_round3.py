@@ -1,0 +1,76 @@
+"""Reliability, round 3: options given at their default, outputs over inputs, typed files.
+
+Each scenario tries one thing a user can do and records what happened, with the
+machinery of tests/test_reliability.py; this module checks them and the "round3"
+table of docs/reliability.md (regenerate with
+``STRIATAL_WRITE_RELIABILITY=1 pytest tests/test_reliability_round3.py``).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+from test_reliability import (
+    Scenario,
+    check_doc_section,
+    cli_in_process,
+    outcome,
+    params_of,
+    usage_error,
+)
+
+#: A short training run (2 s of trials) whose folder the scenarios below start from.
+SHORT = ("--duration", "5", "--max-trials", "3", "--no-progress")
+
+
+def _trained(*extra: str) -> Callable[[Path], None]:
+    """OUT holds a finished ``striatal train`` run of SHORT with ``extra`` options."""
+
+    def prepare(out: Path) -> None:
+        r = cli_in_process("train", *SHORT, *extra, "--out", str(out))
+        assert r.rc == 0, r.err
+
+    return prepare
+
+
+def _edited(prepare: Callable[[Path], None], name: str, change: Callable[[dict[str, Any]], None]):
+    """``prepare``, then the JSON file OUT/``name`` loaded, changed and saved."""
+
+    def run(out: Path) -> None:
+        prepare(out)
+        path = out / name
+        data = json.loads(path.read_text())
+        change(data)
+        path.write_text(json.dumps(data))
+
+    return run
+
+
+S = Scenario
+ROUND3: tuple[Scenario, ...] = (
+    S("resume-at-default", "runs", "`striatal train --seed 4 --duration 5 --max-trials 3 --out "
+      "DIR`, then `--resume --out DIR --seed 0 --duration 60 --max-trials 4` (options given at "
+      "their default value)", "exit 2, one line naming --seed and --duration; files untouched",
+      usage_error(("train", "--resume", "--out", "OUT", "--seed", "0", "--duration", "60",
+                   "--max-trials", "4", "--no-progress"), prepare=_trained("--seed", "4"),
+                  says="--seed (the run has 4), --duration (the run has 5.0)")),
+)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def round3_tmp(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("round3")
+
+
+@pytest.mark.parametrize("scenario", params_of(ROUND3))
+def test_round3(scenario: Scenario, round3_tmp: Path) -> None:
+    ok, observed = outcome(scenario, round3_tmp)
+    assert ok, observed
+
+
+def test_doc_matches_round3(round3_tmp: Path) -> None:
+    check_doc_section("round3", ROUND3, round3_tmp, "test_reliability_round3.py")
