@@ -50,6 +50,16 @@ def _edited(prepare: Callable[[Path], None], name: str, change: Callable[[dict[s
     return run
 
 
+#: A small sweep (2 seeds, 3 trials of 5 s, the learner and its control).
+SWEEP = ("sweep", "--seeds", "2", "--max-trials", "3", "--duration", "5", "--eval-draws", "0",
+         "--no-progress")  # fmt: skip
+
+
+def _swept(out: Path) -> None:
+    r = cli_in_process(*SWEEP, "--out", str(out))
+    assert r.rc == 0, r.err
+
+
 S = Scenario
 ROUND3: tuple[Scenario, ...] = (
     S("resume-at-default", "runs", "`striatal train --seed 4 --duration 5 --max-trials 3 --out "
@@ -58,6 +68,15 @@ ROUND3: tuple[Scenario, ...] = (
       usage_error(("train", "--resume", "--out", "OUT", "--seed", "0", "--duration", "60",
                    "--max-trials", "4", "--no-progress"), prepare=_trained("--seed", "4"),
                   says="--seed (the run has 4), --duration (the run has 5.0)")),
+    S("out-over-input", "bad file", "`striatal robustness R/result.json --repeats 1 --out "
+      "R/result.json`", "exit 2, one line; result.json untouched (it was replaced by the table)",
+      usage_error(("robustness", "OUT/result.json", "--repeats", "1", "--out", "OUT/result.json"),
+                  prepare=_trained(), says="would overwrite the input")),
+    S("out-over-run-file", "bad file", "`striatal compare W --out W/summary.json`, W a sweep "
+      "folder (the same for result.json, checkpoint.json, history.csv, sweep.json, runs.csv)",
+      "exit 2, one line; the sweep untouched",
+      usage_error(("compare", "OUT", "--out", "OUT/summary.json"), prepare=_swept,
+                  says="would replace the summary.json of a run or sweep")),
 )  # fmt: skip
 
 

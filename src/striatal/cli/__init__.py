@@ -23,7 +23,7 @@ from types import ModuleType
 from typing import Any, NamedTuple, NoReturn
 
 from striatal import interrupts
-from striatal.cli import config, jit
+from striatal.cli import config, jit, outputs
 from striatal.cli.helpformat import DefaultsHelpFormatter
 from striatal.errors import StriatalError
 from striatal.io.files import check_no_dangling_link
@@ -252,6 +252,7 @@ def _main(argv: Sequence[str] | None) -> int:
             if args.print_config:
                 sys.stdout.write(config.toml_text(args.command, args))
                 return 0
+        outputs.check_out(args, getattr(command_module(args.command), "OUT_FILES", None))
         out = getattr(args, "out", None)
         if isinstance(out, str | os.PathLike) and str(out):
             # every --out (a folder or a file): a link to nothing above it can never be

@@ -17,6 +17,9 @@ from striatal.learners import rule_of
 from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W, Simulation
 from striatal.sim.rollout import Protocol
 
+#: The files that ``--out DIR`` gets.
+OUT_FILES = ("sweep.json", "runs.csv", "summary.json")
+
 DESCRIPTION = (
     "Run the learner for N seeds spawned from --seed (SeedSequence), for each --init and "
     "each alpha x gamma of the grid, plus the learner's declared no-learning control arm "

@@ -18,9 +18,12 @@ from striatal.cli import EXIT_INTERRUPTED, learner_options, options
 from striatal.errors import ParameterError
 from striatal.experiments.training import DEFAULT_CHECKPOINT_EVERY, train
 from striatal.io.files import check_out_dir, dumps_json
-from striatal.io.rundir import RunDir
+from striatal.io.rundir import RUN_FILES, RunDir
 from striatal.learners import LearnerState, TrialRecord, default_config
 from striatal.params import CHAPTER_INITIAL_THETA_C, Plant, Simulation
+
+#: The files that ``--out DIR`` gets.
+OUT_FILES = RUN_FILES
 
 DESCRIPTION = """\
 Learn the six gains and theta_c with the chapter's REINFORCE rule (eqs 1-5, 21-25): 60-s
