@@ -9,6 +9,7 @@ table of docs/reliability.md (regenerate with
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -60,6 +61,18 @@ def _swept(out: Path) -> None:
     assert r.rc == 0, r.err
 
 
+def _config_fifo(out: Path) -> None:
+    out.mkdir(parents=True)
+    os.mkfifo(out / "exp.toml")
+
+
+def _config_huge(out: Path) -> None:
+    """A sparse 300 MB experiment file: refused by its size, never read."""
+    out.mkdir(parents=True)
+    with (out / "exp.toml").open("wb") as fh:
+        fh.truncate(300 * 10**6)
+
+
 S = Scenario
 ROUND3: tuple[Scenario, ...] = (
     S("resume-at-default", "runs", "`striatal train --seed 4 --duration 5 --max-trials 3 --out "
@@ -77,6 +90,18 @@ ROUND3: tuple[Scenario, ...] = (
       "exit 2, one line; the sweep untouched",
       usage_error(("compare", "OUT", "--out", "OUT/summary.json"), prepare=_swept,
                   says="would replace the summary.json of a run or sweep")),
+    S("config-fifo", "bad file", "`striatal sweep --config FIFO` (no writer: a read would wait "
+      "for ever)", "exit 2, one line, no hang",
+      usage_error(("sweep", "--config", "OUT/exp.toml", "--out", "OUT/w"), process=True,
+                  prepare=_config_fifo, says="not a regular file")),
+    S("config-dev-zero", "bad file", "`striatal ablation --config /dev/zero`",
+      "exit 2, one line, nothing read",
+      usage_error(("ablation", "--config", "/dev/zero", "--out", "OUT"),
+                  says="not a regular file")),
+    S("config-huge", "bad file", "`striatal sweep --config FILE`, FILE 300 MB",
+      "exit 2, one line, nothing read",
+      usage_error(("sweep", "--config", "OUT/exp.toml", "--out", "OUT/w"), prepare=_config_huge,
+                  says="larger than 1 MiB")),
 )  # fmt: skip
 
 
