@@ -102,6 +102,27 @@ ROUND3: tuple[Scenario, ...] = (
       "exit 2, one line, nothing read",
       usage_error(("sweep", "--config", "OUT/exp.toml", "--out", "OUT/w"), prepare=_config_huge,
                   says="larger than 1 MiB")),
+    S("result-w-text", "bad file", "`striatal simulate --result result.json` whose `\"W\"` is "
+      "`\"123456\"` (was read as the gains 1..6)", "exit 2, one line naming W",
+      usage_error(("simulate", "--result", "OUT/result.json", "--duration", "5"),
+                  prepare=_edited(_trained(), "result.json", lambda d: d.update(W="123456")),
+                  says="W must be a list of six numbers")),
+    S("result-w-text-figure", "bad file", "`striatal figure --result result.json`, W as above",
+      "exit 2, one line naming W",
+      usage_error(("figure", "--result", "OUT/result.json", "--out", "OUT/f.png"),
+                  prepare=_edited(_trained(), "result.json", lambda d: d.update(W="123456")),
+                  says="W must be a list of six numbers")),
+    S("result-theta-c-text", "bad file", "`striatal evaluate --result result.json` whose "
+      "`\"theta_c\"` is `\"0.6\"`", "exit 2, one line naming theta_c",
+      usage_error(("evaluate", "--result", "OUT/result.json"),
+                  prepare=_edited(_trained(), "result.json", lambda d: d.update(theta_c="0.6")),
+                  says="theta_c must be a number")),
+    S("result-w-bool", "bad file", "`striatal interpret result.json` whose `\"W\"` holds "
+      "`true`", "exit 2, one line naming W",
+      usage_error(("interpret", "OUT/result.json"),
+                  prepare=_edited(_trained(), "result.json",
+                                  lambda d: d["W"].__setitem__(0, True)),
+                  says="W must be a list of six numbers")),
 )  # fmt: skip
 
 

@@ -419,12 +419,22 @@ class ResultFile:
     data: dict[str, Any]
 
 
+def _is_number(value: object) -> bool:
+    """Whether ``value`` is a number as JSON holds one (not text, not true/false)."""
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
 def result_of(data: Any, path: str | Path) -> ResultFile:
     """:func:`read_result` of already-parsed JSON ``data`` read from ``path``."""
     p = Path(path)
     where = f"result {p}" if str(path) else "result"
     if not isinstance(data, dict) or "W" not in data or "theta_c" not in data:
         raise DataFileError(f"{where} is not a striatal result.json (no W and theta_c)")
+    W, theta_c = data["W"], data["theta_c"]
+    if not (isinstance(W, list) and len(W) == 6 and all(_is_number(w) for w in W)):
+        raise DataFileError(f"{where}: W must be a list of six numbers, got {W!r}")
+    if not _is_number(theta_c):
+        raise DataFileError(f"{where}: theta_c must be a number, got {theta_c!r}")
     settings = data.get("settings", {})
     if not isinstance(settings, dict):
         raise DataFileError(f"{where}: its settings must be an object, got {settings!r}")
@@ -434,8 +444,8 @@ def result_of(data: Any, path: str | Path) -> ResultFile:
         raise DataFileError(f"{where}: settings.controller and settings.plant must be objects")
     try:
         controller = Controller(
-            gains=tuple(data["W"]),
-            theta_c=data["theta_c"],
+            gains=tuple(W),
+            theta_c=theta_c,
             balance_sign=ctrl.get("balance_sign", "corrected"),
             switch=ctrl.get("switch", "hard"),
             inhibition=ctrl.get("inhibition", 50.0),
