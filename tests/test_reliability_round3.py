@@ -19,10 +19,14 @@ from test_reliability import (
     Scenario,
     check_doc_section,
     cli_in_process,
+    library_error,
     outcome,
     params_of,
     usage_error,
 )
+
+from striatal.errors import ParameterError
+from striatal.experiments.training import train
 
 #: A short training run (2 s of trials) whose folder the scenarios below start from.
 SHORT = ("--duration", "5", "--max-trials", "3", "--no-progress")
@@ -71,6 +75,18 @@ def _config_huge(out: Path) -> None:
     out.mkdir(parents=True)
     with (out / "exp.toml").open("wb") as fh:
         fh.truncate(300 * 10**6)
+
+
+def _config_entry(name: str, value: Any) -> Callable[[dict[str, Any]], None]:
+    def change(d: dict[str, Any]) -> None:
+        d["settings"]["config"][name] = value
+
+    return change
+
+
+def _checkpoint_with(name: str, value: Any) -> Callable[[Path], None]:
+    """A checkpointed run in OUT whose settings.config[name] is ``value``."""
+    return _edited(_trained(), "checkpoint.json", _config_entry(name, value))
 
 
 S = Scenario
@@ -123,6 +139,32 @@ ROUND3: tuple[Scenario, ...] = (
                   prepare=_edited(_trained(), "result.json",
                                   lambda d: d["W"].__setitem__(0, True)),
                   says="W must be a list of six numbers")),
+    S("resume-gamma-text", "bad file", "`striatal train --resume`, checkpoint `\"gamma\": "
+      "\"0.9\"` (was an 82-line Numba TypingError)", "exit 2, one line naming gamma",
+      usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
+                  prepare=_checkpoint_with("gamma", "0.9"), says="gamma must be a number")),
+    S("resume-alpha-text", "bad file", "`striatal train --resume`, checkpoint `\"alpha\": "
+      "\"5\"`", "exit 2, one line naming alpha",
+      usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
+                  prepare=_checkpoint_with("alpha", "5"), says="alpha must be a number")),
+    S("resume-max-step-text", "bad file", "`striatal train --resume`, checkpoint "
+      "`\"max_step\": \"1\"`", "exit 2, one line naming max_step",
+      usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
+                  prepare=_checkpoint_with("max_step", "1"), says="max_step must be a number")),
+    S("resume-count-float", "bad file", "`striatal train --resume`, checkpoint "
+      "`\"action_every\": 1.0`", "exit 2, one line naming action_every",
+      usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
+                  prepare=_checkpoint_with("action_every", 1.0), says="action_every must be")),
+    S("resume-rate-bool", "bad file", "`striatal train --resume`, checkpoint "
+      "`\"alpha\": true`", "exit 2, one line naming alpha",
+      usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
+                  prepare=_checkpoint_with("alpha", True), says="alpha must be a number")),
+    S("api-gamma-text", "bad input", "`striatal.train(gamma=\"0.9\")`",
+      "ParameterError naming gamma",
+      library_error(lambda _: train(gamma="0.9", max_trials=1), ParameterError)),
+    S("api-explore-text", "bad input", "`striatal.train(learner=\"pgpe\", explore=\"1\")`",
+      "ParameterError naming explore",
+      library_error(lambda _: train(learner="pgpe", explore="1", max_trials=1), ParameterError)),
 )  # fmt: skip
 
 

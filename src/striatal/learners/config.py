@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
 import types
 from dataclasses import Field, asdict, dataclass, field, fields
 from typing import Any, Literal, TypeVar, get_args, get_origin, get_type_hints
@@ -344,11 +345,18 @@ def check_field(f: Field[Any], value: Any) -> Any:
         if not isinstance(value, bool):
             raise ParameterError(f"{name} must be true or false, got {value!r}")
     elif kind is int:
-        require_count(name, value, 0 if f.metadata.get("bounds") == ">= 0" else 1)
+        low = 0 if f.metadata.get("bounds") == ">= 0" else 1
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            # 5.0 or "5" is not a count: a hand-edited file would otherwise pass it on
+            raise ParameterError(f"{name} must be a whole number >= {low}, got {value!r}")
+        require_count(name, value, low)
     elif kind is str:
         if not isinstance(value, str):
             raise ParameterError(f"{name} must be a name, got {value!r}")
     elif kind is float:
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            # "0.9" would reach the compiled kernel as text, true as 1
+            raise ParameterError(f"{name} must be a number, got {value!r}")
         number = (
             require_finite(name, value) if f.metadata.get("finite", True) else as_float(name, value)
         )
