@@ -331,6 +331,11 @@ def bounds_of(f: Field[Any]) -> tuple[float, float, bool, bool] | None:
     return float(low), float(high), text[0] == "(", text[-1] == ")"
 
 
+def _is_a(value: object, kind: type) -> bool:
+    """Whether ``value`` is a ``kind`` (numbers.Real, numbers.Integral) and not a bool."""
+    return isinstance(value, kind) and not isinstance(value, bool)
+
+
 def check_field(f: Field[Any], value: Any) -> Any:
     """``value`` if it is allowed for field ``f`` (a limit as float), else ParameterError."""
     kind, choices, optional = field_kind(f)
@@ -346,7 +351,7 @@ def check_field(f: Field[Any], value: Any) -> Any:
             raise ParameterError(f"{name} must be true or false, got {value!r}")
     elif kind is int:
         low = 0 if f.metadata.get("bounds") == ">= 0" else 1
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        if not _is_a(value, numbers.Integral):
             # 5.0 or "5" is not a count: a hand-edited file would otherwise pass it on
             raise ParameterError(f"{name} must be a whole number >= {low}, got {value!r}")
         require_count(name, value, low)
@@ -354,7 +359,7 @@ def check_field(f: Field[Any], value: Any) -> Any:
         if not isinstance(value, str):
             raise ParameterError(f"{name} must be a name, got {value!r}")
     elif kind is float:
-        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        if not _is_a(value, numbers.Real):
             # "0.9" would reach the compiled kernel as text, true as 1
             raise ParameterError(f"{name} must be a number, got {value!r}")
         number = (
