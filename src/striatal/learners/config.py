@@ -350,11 +350,11 @@ def check_field(f: Field[Any], value: Any) -> Any:
         if not isinstance(value, bool):
             raise ParameterError(f"{name} must be true or false, got {value!r}")
     elif kind is int:
-        low = 0 if f.metadata.get("bounds") == ">= 0" else 1
+        least = 0 if f.metadata.get("bounds") == ">= 0" else 1
         if not _is_a(value, numbers.Integral):
             # 5.0 or "5" is not a count: a hand-edited file would otherwise pass it on
-            raise ParameterError(f"{name} must be a whole number >= {low}, got {value!r}")
-        require_count(name, value, low)
+            raise ParameterError(f"{name} must be a whole number >= {least}, got {value!r}")
+        require_count(name, value, least)
     elif kind is str:
         if not isinstance(value, str):
             raise ParameterError(f"{name} must be a name, got {value!r}")
