@@ -89,6 +89,16 @@ def _checkpoint_with(name: str, value: Any) -> Callable[[Path], None]:
     return _edited(_trained(), "checkpoint.json", _config_entry(name, value))
 
 
+def _settings_entry(name: str, value: Any) -> Callable[[dict[str, Any]], None]:
+    def change(d: dict[str, Any]) -> None:
+        if value is None:
+            del d["settings"][name]
+        else:
+            d["settings"][name] = value
+
+    return change
+
+
 S = Scenario
 ROUND3: tuple[Scenario, ...] = (
     S("resume-at-default", "runs", "`striatal train --seed 4 --duration 5 --max-trials 3 --out "
@@ -165,6 +175,21 @@ ROUND3: tuple[Scenario, ...] = (
     S("api-explore-text", "bad input", "`striatal.train(learner=\"pgpe\", explore=\"1\")`",
       "ParameterError naming explore",
       library_error(lambda _: train(learner="pgpe", explore="1", max_trials=1), ParameterError)),
+    S("resume-plant-text", "bad file", "`striatal train --resume --length 2`, checkpoint "
+      "`\"plant\": \"x\"`", "exit 2, one line naming the plant",
+      usage_error(("train", "--resume", "--out", "OUT", "--length", "2", "--no-progress"),
+                  prepare=_edited(_trained(), "checkpoint.json", _settings_entry("plant", "x")),
+                  says="settings.plant is not an object")),
+    S("resume-plant-gone", "bad file", "`striatal train --resume --length 2`, checkpoint "
+      "without `\"plant\"`", "exit 2, one line naming the plant",
+      usage_error(("train", "--resume", "--out", "OUT", "--length", "2", "--no-progress"),
+                  prepare=_edited(_trained(), "checkpoint.json", _settings_entry("plant", None)),
+                  says="lack 'plant'")),
+    S("resume-trial-list", "bad file", "`striatal train --resume --duration 5`, checkpoint "
+      "`\"trial\": [1, 2]`", "exit 2, one line naming the trial",
+      usage_error(("train", "--resume", "--out", "OUT", "--duration", "5", "--no-progress"),
+                  prepare=_edited(_trained(), "checkpoint.json", _settings_entry("trial", [1, 2])),
+                  says="settings.trial is not an object")),
 )  # fmt: skip
 
 

@@ -148,6 +148,12 @@ def setup_of(settings: Any, where: str) -> Setup:
             f"{where} has settings schema {settings.get('schema')!r}; this striatal reads "
             f"schema {SETTINGS_SCHEMA} (start a fresh run)"
         )
+    for part in ("config", "controller", "plant", "trial", "protocol"):
+        if part in settings and not isinstance(settings[part], dict):
+            raise DataFileError(
+                f"{where} is corrupted: its settings.{part} is not an object, "
+                f"got {settings[part]!r}"
+            )
     try:
         fields = dict(settings["config"])
         if "max_step" in fields and fields["max_step"] is None:
