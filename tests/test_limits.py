@@ -183,3 +183,18 @@ def test_import_striatal_is_light_and_still_registers_the_env() -> None:
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert r.stdout.split() == ["[]", "True", "1.0", "striatal.sim.kernel"]
+
+
+def test_every_int_option_is_bounded(capsys: pytest.CaptureFixture[str]) -> None:
+    """``type=int`` of every parser is cli.guards.whole_number: at most 2**31 - 1."""
+    from striatal.cli import build_parser
+    from striatal.cli.guards import MAX_WHOLE
+
+    parser = build_parser(only="robustness")
+    ok = parser.parse_args(["robustness", "r.json", "--seed", str(MAX_WHOLE)])
+    assert ok.seed == MAX_WHOLE
+    for bad, says in ((str(MAX_WHOLE + 1), "at most 2,147,483,647"), ("1.5", "invalid int")):
+        with pytest.raises(SystemExit) as exc:
+            parser.parse_args(["robustness", "r.json", "--seed", bad])
+        assert exc.value.code == 2
+        assert says in capsys.readouterr().err

@@ -190,6 +190,18 @@ ROUND3: tuple[Scenario, ...] = (
       usage_error(("train", "--resume", "--out", "OUT", "--duration", "5", "--no-progress"),
                   prepare=_edited(_trained(), "checkpoint.json", _settings_entry("trial", [1, 2])),
                   says="settings.trial is not an object")),
+    S("int-huge", "bad input", "`striatal train --max-trials 2 --duration 5 --action-every "
+      "100000000000000000000` (was Numba's \"Int value is too large\")",
+      "exit 2, one line naming --action-every",
+      usage_error(("train", "--max-trials", "2", "--duration", "5", "--action-every",
+                   "100000000000000000000", "--out", "OUT"), says="argument --action-every")),
+    S("int-huge-any", "bad input", "`striatal curves history.csv --window 2147483648` (every "
+      "whole-number option of every command)", "exit 2, one line naming --window",
+      usage_error(("curves", "OUT/history.csv", "--window", "2147483648", "--out", "OUT/c.png"),
+                  prepare=_trained(), says="argument --window")),
+    S("api-int-huge", "bad input", "`striatal.train(action_every=10**20)`",
+      "ParameterError naming action_every",
+      library_error(lambda _: train(action_every=10**20, max_trials=1), ParameterError)),
 )  # fmt: skip
 
 

@@ -23,7 +23,7 @@ from types import ModuleType
 from typing import Any, NamedTuple, NoReturn
 
 from striatal import interrupts
-from striatal.cli import config, jit, outputs
+from striatal.cli import config, guards, jit, outputs
 from striatal.cli.helpformat import DefaultsHelpFormatter
 from striatal.errors import StriatalError
 from striatal.io.files import check_no_dangling_link
@@ -45,7 +45,8 @@ class OneLineParser(argparse.ArgumentParser):
 
     Every command's parser is one of these, so a negative value reads as a value
     everywhere: argparse's own test knows only ``-1`` and ``-1.5`` and takes
-    ``-2e-1``, ``-inf`` or ``-1,2`` for an unknown option. Their help is formatted by
+    ``-2e-1``, ``-inf`` or ``-1,2`` for an unknown option; ``type=int`` is read by
+    :func:`~striatal.cli.guards.whole_number` (at most 2**31 - 1). Their help is formatted by
     :class:`~striatal.cli.helpformat.DefaultsHelpFormatter` (each default stated once).
     """
 
@@ -53,6 +54,8 @@ class OneLineParser(argparse.ArgumentParser):
         kwargs.setdefault("formatter_class", DefaultsHelpFormatter)
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = NEGATIVE_VALUE
+        # ``type=int`` of every option is bounded (cli.guards.MAX_WHOLE)
+        self.register("type", int, guards.whole_number)
 
     def error(self, message: str) -> NoReturn:
         sys.stderr.write(f"{self.prog}: error: {message}\n")

@@ -18,6 +18,7 @@ from striatal.errors import ParameterError
 from striatal.params import Hardware, as_float, require_finite
 
 __all__ = [
+    "MAX_COUNT",
     "STORED_ALWAYS",
     "W1_FLOOR",
     "Eligibility",
@@ -38,6 +39,9 @@ SuccessOn = Literal["noisy", "mean"]
 ThetaCRule = Literal["swingup", "trial", "clamped", "fixed", "learned"]
 Eligibility = Literal["score", "chapter"]
 RewardKind = Literal["sparse", "shaped"]
+
+#: The largest value of a count field: 2**31 - 1, what the compiled kernel's int32 holds.
+MAX_COUNT = 2**31 - 1
 
 #: Floor that keeps W1 > 0 for sqrt(W1 g) (eq 22): the documented guard.
 W1_FLOOR = 1e-3
@@ -355,6 +359,8 @@ def check_field(f: Field[Any], value: Any) -> Any:
             # 5.0 or "5" is not a count: a hand-edited file would otherwise pass it on
             raise ParameterError(f"{name} must be a whole number >= {least}, got {value!r}")
         require_count(name, value, least)
+        if value > MAX_COUNT:
+            raise ParameterError(f"{name} must be at most {MAX_COUNT:,}, got {value:,}")
     elif kind is str:
         if not isinstance(value, str):
             raise ParameterError(f"{name} must be a name, got {value!r}")
