@@ -202,6 +202,16 @@ ROUND3: tuple[Scenario, ...] = (
     S("api-int-huge", "bad input", "`striatal.train(action_every=10**20)`",
       "ParameterError naming action_every",
       library_error(lambda _: train(action_every=10**20, max_trials=1), ParameterError)),
+    S("seeds-billion", "bad input", "`striatal sweep --seeds 1000000000` (memory grew while the "
+      "seed sequences were spawned)", "exit 2, one line naming --seeds, at once",
+      usage_error(("sweep", "--seeds", "1000000000", "--out", "OUT"), says="argument --seeds")),
+    S("seeds-overflow", "bad input", "`striatal ablation --seeds 10**30` (was an OverflowError)",
+      "exit 2, one line naming --seeds",
+      usage_error(("ablation", "--seeds", str(10**30), "--out", "OUT"), says="argument --seeds")),
+    S("workers-many", "bad input", "`striatal sweep --seeds 2 --workers 1000` (forked 1000 "
+      "workers for 4 runs)", "exit 2, one line naming --workers",
+      usage_error(("sweep", "--seeds", "2", "--workers", "1000", "--out", "OUT"),
+                  says="argument --workers")),
 )  # fmt: skip
 
 

@@ -14,6 +14,7 @@ import sys
 from typing import Any
 
 from striatal.cli import config, options
+from striatal.cli.guards import bounded_int
 from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
 from striatal.experiments import runner as experiments
@@ -34,7 +35,12 @@ DESCRIPTION = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seeds", type=int, default=config.SEEDS, help="number of seeds N")
+    parser.add_argument(
+        "--seeds",
+        type=bounded_int(1, config.MAX_SEEDS),
+        default=config.SEEDS,
+        help=f"number of seeds N (at most {config.MAX_SEEDS:,})",
+    )
     parser.add_argument(
         "--first-seed", type=int, default=0, help="seeds S..S+N-1 (a fresh set: S = 100)"
     )

@@ -30,6 +30,11 @@ from striatal.errors import DataFileError, ParameterError
 #: (the workers change the wall time, never the results).
 SEEDS = 100
 WORKERS = 1
+#: The most ``--seeds`` takes: 10,000 seeds per arm and init (the largest documented
+#: sweep has 500); more would hold that many seed sequences before the first run.
+MAX_SEEDS = 10_000
+#: The most ``--workers`` takes: each is a process with its own compiled kernel.
+MAX_WORKERS = 256
 #: The options of this module: never in a file, never recorded.
 CONFIG_DESTS = ("config", "from_summary", "print_config")
 #: Options that say where and how a run goes, not what it computes: not recorded in

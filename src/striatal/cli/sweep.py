@@ -8,6 +8,7 @@ from typing import Any
 
 from striatal.cli import config, learner_options, options
 from striatal.cli.config import SEEDS
+from striatal.cli.guards import bounded_int
 from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
 from striatal.experiments import baselines
@@ -35,7 +36,12 @@ DESCRIPTION = (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("sweep")
-    g.add_argument("--seeds", type=int, default=SEEDS, help="number of seeds N per arm and init")
+    g.add_argument(
+        "--seeds",
+        type=bounded_int(1, config.MAX_SEEDS),
+        default=SEEDS,
+        help=f"number of seeds N per arm and init (at most {config.MAX_SEEDS:,})",
+    )
     g.add_argument("--seed", type=int, default=0, help="root seed of SeedSequence")
     g.add_argument(
         "--init",
