@@ -212,6 +212,19 @@ ROUND3: tuple[Scenario, ...] = (
       "workers for 4 runs)", "exit 2, one line naming --workers",
       usage_error(("sweep", "--seeds", "2", "--workers", "1000", "--out", "OUT"),
                   says="argument --workers")),
+    S("learner-dict-curves", "bad file", "`striatal curves R/history.csv --out c.png`, R's "
+      "result.json with `settings.learner = {\"a\": 1}` (was TypeError: unhashable dict)",
+      "exit 2, one line naming the learner",
+      usage_error(("curves", "OUT/history.csv", "--out", "OUT/c.png"),
+                  prepare=_edited(_trained(), "result.json",
+                                  _settings_entry("learner", {"a": 1})),
+                  says="learner must be a name")),
+    S("learner-dict-interpret", "bad file", "`striatal interpret R/result.json`, the same",
+      "exit 2, one line naming the learner",
+      usage_error(("interpret", "OUT/result.json"),
+                  prepare=_edited(_trained(), "result.json",
+                                  _settings_entry("learner", {"a": 1})),
+                  says="learner must be a name")),
 )  # fmt: skip
 
 

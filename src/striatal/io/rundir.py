@@ -394,6 +394,13 @@ def read_history(path: str | Path, *, learner: str | None = None) -> History:
     return History(learner=learner, columns=columns, rows=tuple(out), reward_kind=reward_kind)
 
 
+def _learner_name(value: object, where: str) -> str | None:
+    """``value`` if it can name a learner (text, or None: not stated), else DataFileError."""
+    if value is None or isinstance(value, str):
+        return value
+    raise DataFileError(f"{where}: learner must be a name, got {value!r}")
+
+
 def _sibling_settings(history_path: Path) -> dict[str, Any] | None:
     """The settings in the result.json or checkpoint.json beside a history.csv, if readable."""
     for name in (RESULT, CHECKPOINT):
@@ -405,6 +412,7 @@ def _sibling_settings(history_path: Path) -> dict[str, Any] | None:
                 continue
             s = data.get("settings") if isinstance(data, dict) else None
             if isinstance(s, dict):
+                _learner_name(s.get("learner"), f"{f}, beside {history_path}: its settings")
                 return s
     return None
 
@@ -467,7 +475,10 @@ def result_of(data: Any, path: str | Path) -> ResultFile:
         raise DataFileError(f"{where} holds an unusable controller: {exc}") from None
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise DataFileError(f"{where} lacks W, theta_c or settings: {exc!r}") from None
-    learner = data.get("learner", settings.get("learner")) or "chapter"
+    stated = _learner_name(settings.get("learner"), f"{where}: its settings")
+    if "learner" in data:
+        stated = _learner_name(data["learner"], where)
+    learner = stated or "chapter"
     success = data.get("success")
     trials = data.get("trials")
     return ResultFile(
