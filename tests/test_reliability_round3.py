@@ -26,7 +26,8 @@ from test_reliability import (
 )
 
 from striatal.errors import ParameterError
-from striatal.experiments.training import train
+from striatal.experiments.training import simulate, train
+from striatal.sim.robust import check_robust
 
 #: A short training run (2 s of trials) whose folder the scenarios below start from.
 SHORT = ("--duration", "5", "--max-trials", "3", "--no-progress")
@@ -225,6 +226,33 @@ ROUND3: tuple[Scenario, ...] = (
                   prepare=_edited(_trained(), "result.json",
                                   _settings_entry("learner", {"a": 1})),
                   says="learner must be a name")),
+    S("api-action-every-0", "bad input", "`striatal.simulate(action_every=0)` (was "
+      "ZeroDivisionError)", "ParameterError naming action_every",
+      library_error(lambda _: simulate(action_every=0), ParameterError)),
+    S("api-simulate-plant", "bad input", "`striatal.simulate(plant=\"x\")`",
+      "ParameterError naming plant", library_error(lambda _: simulate(plant="x"), ParameterError)),
+    S("api-train-plant", "bad input", "`striatal.train(plant=\"heavy\")` (was TypeError from "
+      "asdict)", "ParameterError naming plant",
+      library_error(lambda _: train(plant="heavy", max_trials=1), ParameterError)),
+    S("api-train-sim", "bad input", "`striatal.train(sim={})` (was taken for the default)",
+      "ParameterError naming sim",
+      library_error(lambda _: train(sim={}, max_trials=1), ParameterError)),
+    S("api-train-learner", "bad input", "`striatal.train(learner=5)` (was AttributeError)",
+      "ParameterError naming learner",
+      library_error(lambda _: train(learner=5, max_trials=1), ParameterError)),
+    S("api-train-out", "bad input", "`striatal.train(out=5)` (was TypeError)",
+      "ParameterError naming out",
+      library_error(lambda _: train(out=5, max_trials=1), ParameterError)),
+    S("api-normalise-text", "bad input", "`striatal.train(learner=\"rpe\", normalise=\"false\")`",
+      "ParameterError naming normalise",
+      library_error(lambda _: train(learner="rpe", normalise="false", max_trials=1),
+                    ParameterError)),
+    S("api-max-trials-bool", "bad input", "`striatal.train(max_trials=True)` (was one trial)",
+      "ParameterError naming max_trials",
+      library_error(lambda _: train(max_trials=True), ParameterError)),
+    S("api-check-robust", "bad input", "`striatal.check_robust(\"x\")` (was AttributeError)",
+      "ParameterError naming the controller",
+      library_error(lambda _: check_robust("x"), ParameterError)),
 )  # fmt: skip
 
 
