@@ -198,3 +198,36 @@ def test_every_int_option_is_bounded(capsys: pytest.CaptureFixture[str]) -> None
             parser.parse_args(["robustness", "r.json", "--seed", bad])
         assert exc.value.code == 2
         assert says in capsys.readouterr().err
+
+
+def test_a_full_disk_names_history_csv(tmp_path: Path) -> None:
+    """ENOSPC while history.csv is appended to (buffered writes) names the file."""
+    import errno
+    from types import SimpleNamespace
+
+    from striatal.io.rundir import RunDir
+
+    def no_space(*_: object) -> None:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    full_disk = SimpleNamespace(write=no_space, flush=no_space, close=no_space)
+    record = SimpleNamespace(columns=("trial", "reward"), row=lambda: (1, 10.0))
+    rundir = RunDir(tmp_path / "run")
+    rundir.start_history(["trial", "reward"])
+    rundir.close_history()
+    says = r"cannot write .*history\.csv: No space left on device"
+    rundir._history = full_disk
+    with pytest.raises(DataFileError, match=says):
+        rundir.append(record)  # type: ignore[arg-type]
+    with pytest.raises(DataFileError, match=says):
+        rundir.close_history()
+    assert rundir._history is None
+
+
+def test_a_byte_order_mark_is_not_part_of_the_text(tmp_path: Path) -> None:
+    from striatal.io.files import read_csv, read_json
+
+    (tmp_path / "a.json").write_bytes(b'\xef\xbb\xbf{"a": 1}')
+    (tmp_path / "a.csv").write_bytes(b"\xef\xbb\xbftrial,reward\n1,10\n")
+    assert read_json(tmp_path / "a.json") == {"a": 1}
+    assert read_csv(tmp_path / "a.csv") == [{"trial": "1", "reward": "10"}]

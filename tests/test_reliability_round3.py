@@ -8,6 +8,7 @@ table of docs/reliability.md (regenerate with
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 from collections.abc import Callable
@@ -98,6 +99,39 @@ def _settings_entry(name: str, value: Any) -> Callable[[dict[str, Any]], None]:
             d["settings"][name] = value
 
     return change
+
+
+def bom_history(tmp: Path) -> tuple[bool, str]:
+    """history.csv with a UTF-8 byte-order mark first (as some editors save it) reads."""
+    out = tmp / "OUT"
+    _trained()(out)
+    history = out / "history.csv"
+    history.write_bytes(b"\xef\xbb\xbf" + history.read_bytes())
+    r = cli_in_process("curves", str(history), "--out", str(out / "c.png"))
+    line = r.out.strip().replace(str(out), "OUT") or r.err.strip()
+    return r.rc == 0 and (out / "c.png").exists(), f"exit {r.rc}: `{line}`"
+
+
+def full_disk(*argv: str, names: str) -> Callable[[Path], tuple[bool, str]]:
+    """``striatal ARGV`` with every fsync failing as on a full disk (ENOSPC)."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        out = tmp / "OUT"
+
+        def no_space(fd: int) -> None:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+        words = [a.replace("OUT", str(out)) for a in argv]
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(os, "fsync", no_space)
+            r = cli_in_process(*words)
+        lines = r.err.strip().splitlines()
+        line = (lines[-1] if lines else "").replace(str(out), "OUT")
+        hidden = [p.name for p in out.rglob(".*.tmp")] if out.exists() else []
+        ok = r.rc == 2 and len(lines) == 1 and names in line and not hidden
+        return ok, f"exit {r.rc}, {len(lines)} line: `{line}`; temporary files left: {len(hidden)}"
+
+    return run
 
 
 S = Scenario
@@ -253,6 +287,19 @@ ROUND3: tuple[Scenario, ...] = (
     S("api-check-robust", "bad input", "`striatal.check_robust(\"x\")` (was AttributeError)",
       "ParameterError naming the controller",
       library_error(lambda _: check_robust("x"), ParameterError)),
+    S("connect-timeout-inf", "bad input", "`striatal sweep --backend ray --address "
+      "127.0.0.1:1 --connect-timeout inf`", "exit 2, one line saying finite",
+      usage_error(("sweep", "--backend", "ray", "--address", "127.0.0.1:1", "--connect-timeout",
+                   "inf", "--seeds", "1", "--out", "OUT"), says="finite number of seconds")),
+    S("history-bom", "bad file", "`striatal curves history.csv`, the file starting with a UTF-8 "
+      "byte-order mark", "read as without it", bom_history),
+    S("enospc-simulate", "bad file", "`striatal simulate --duration 5 --out DIR` on a full disk "
+      "(every fsync fails with ENOSPC)", "exit 2, one line naming the file",
+      full_disk("simulate", "--duration", "5", "--out", "OUT", names="OUT/trajectory.csv")),
+    S("enospc-train", "bad file", "`striatal train --max-trials 2 --duration 5 --out DIR` on "
+      "the same full disk", "exit 2, one line naming the file",
+      full_disk("train", "--max-trials", "2", "--duration", "5", "--out", "OUT",
+                names="OUT/history.csv")),
 )  # fmt: skip
 
 

@@ -126,11 +126,15 @@ def atomic_write_stream(path: str | os.PathLike[str], write: Callable[[TextIO], 
     except OSError as exc:
         raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
     try:
-        os.fchmod(fd, 0o666 & ~_umask())
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            write(fh)
-            fh.flush()
-            os.fsync(fh.fileno())
+        try:
+            os.fchmod(fd, 0o666 & ~_umask())
+            with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+                write(fh)
+                fh.flush()
+                os.fsync(fh.fileno())
+        except OSError as exc:
+            # a full disk (ENOSPC) or a quota: the error names no file, so name the target
+            raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
         replace_into(tmp, target)
     except BaseException:
         if os.path.exists(tmp):
@@ -198,7 +202,8 @@ def read_text(
             _check_regular(p, os.fstat(fh.fileno()), what, max_bytes)
             data = fh.read(max_bytes + 1)
         _check_size(p, len(data), what, max_bytes)
-        return data.decode("utf-8")
+        # utf-8-sig: a byte-order mark that an editor put first is not part of the text
+        return data.decode("utf-8-sig")
     except FileNotFoundError:
         raise DataFileError(f"{what} {p} does not exist") from None
     except (OSError, UnicodeDecodeError) as exc:

@@ -227,7 +227,8 @@ class RunDir:
     def write_checkpoint(self, run: str, settings: Mapping[str, Any], state: LearnerState) -> None:
         """checkpoint.json for ``state``: flushes history.csv first, so it covers its rows."""
         if self._history is not None:
-            self._history.flush()
+            with self._naming_history():
+                self._history.flush()
         write_json(
             self.checkpoint_path,
             {
@@ -294,20 +295,33 @@ class RunDir:
         self._hash = h
         self._open()
 
+    @contextlib.contextmanager
+    def _naming_history(self) -> Iterator[None]:
+        """An OSError of history.csv (a full disk: ENOSPC names no file) as DataFileError."""
+        try:
+            yield
+        except OSError as exc:
+            raise DataFileError(
+                f"cannot write {self.history_path}: {exc.strerror or exc}"
+            ) from None
+
     def _open(self) -> None:
-        self._history = self.history_path.open("a", encoding="utf-8", newline="")
+        with self._naming_history():
+            self._history = self.history_path.open("a", encoding="utf-8", newline="")
 
     def append(self, record: TrialRecord) -> None:
         """One row of history.csv (buffered; flushed at each checkpoint and at close)."""
         line = history_line(record)
         if self._history is not None:
-            self._history.write(line)
+            with self._naming_history():
+                self._history.write(line)
         self._hash.update(line.encode("utf-8"))
 
     def close_history(self) -> None:
         if self._history is not None:
-            self._history.close()
-            self._history = None
+            history, self._history = self._history, None
+            with self._naming_history():
+                history.close()
 
     def read_history(self) -> History:
         return read_history(self.history_path)
