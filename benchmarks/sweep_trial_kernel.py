@@ -18,7 +18,7 @@ from pathlib import Path
 
 from striatal.cli import build_parser
 from striatal.cli.sweep import prepare
-from striatal.experiments import runner as experiments
+from striatal.experiments import runs_csv
 from striatal.experiments.lockstep_sweep import execute_batch
 
 
@@ -26,10 +26,10 @@ def main(argv: list[str]) -> int:
     ref_path, rest = Path(argv[0]), argv[argv.index("--") + 1 :]
     specs, _, _ = prepare(build_parser().parse_args(["sweep", *rest]))
     t0 = time.perf_counter()
-    rows = experiments.sort_rows(execute_batch(specs, trial_kernel="lockstep"))
+    rows = runs_csv.sort_rows(execute_batch(specs, trial_kernel="lockstep"))
     wall = time.perf_counter() - t0
-    ref = experiments.sort_rows(experiments.read_runs(ref_path)[0])
-    cols = [c for c in experiments.RUN_COLUMNS if c != "wall_seconds"]
+    ref = runs_csv.sort_rows(runs_csv.read_runs(ref_path)[0])
+    cols = [c for c in runs_csv.RUN_COLUMNS if c != "wall_seconds"]
 
     def same(a: object, b: object) -> bool:
         return a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b))  # type: ignore[arg-type]

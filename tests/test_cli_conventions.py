@@ -17,6 +17,7 @@ import pytest
 from striatal.cli import build_parser, config, main, progress
 from striatal.cli.ablation import variant_line
 from striatal.cli.helpformat import DefaultsHelpFormatter
+from striatal.experiments import sweeps
 from striatal.learners import default_config
 
 TINY_SWEEP = ["--seeds", "2", "--max-trials", "3", "--duration", "2", "--eval-draws", "0"]
@@ -177,7 +178,7 @@ def test_shared_options_have_one_default() -> None:
             if a.dest == dest and a.option_strings
         }
         assert len(found) >= 2 and len(set(found.values())) == 1, (dest, found)
-    assert config.SEEDS == 100 and config.WORKERS == 1
+    assert sweeps.SEEDS == 100 and config.WORKERS == 1
 
 
 # ---- item 5: --json and progress
@@ -354,7 +355,7 @@ def test_command_line_wins_over_the_file(
         ("seeds = 2\nfoo = 1\n", "unknown option 'foo'"),
         ("print-config = true\n", "unknown option 'print-config'"),
         ("[plant]\nlength = 2\n", "[plant] is a table"),
-        ('seeds = "many"\n', "--seeds: expected a whole number, got 'many'"),
+        ('seeds = "many"\n', "invalid int value: 'many'"),
         ("no-control = 1\n", "no-control must be true or false"),
         ("seeds = true\n", "seeds takes a value"),
         ("seeds = [1, 2]\n", "seeds takes one value"),

@@ -86,7 +86,11 @@ def test_default_start_is_the_chapters() -> None:
     env = CartPoleSwingUpEnv()
     obs, info = env.reset(seed=1)
     assert np.array_equal(info["state"], [0.0, 0.0, 3.12, 0.0])
-    assert np.allclose(obs, [0.0, 0.0, math.sin(3.12), math.cos(3.12), 0.0], atol=0, rtol=0)
+    # The observation is the float64 one rounded once to float32.
+    expected = np.array([0.0, 0.0, math.sin(3.12), math.cos(3.12), 0.0])
+    assert obs.dtype == np.float32 and np.array_equal(obs, expected.astype(np.float32))
+    obs64, _ = CartPoleSwingUpEnv(dtype="float64").reset(seed=1)
+    assert obs64.dtype == np.float64 and np.array_equal(obs64, expected)
     obs, info = env.reset(options={"initial_state": [0.5, 0.0, 1.0, 0.2]})
     assert np.array_equal(info["state"], [0.5, 0.0, 1.0, 0.2])
     with pytest.raises(ParameterError):
@@ -128,8 +132,9 @@ def test_same_seed_same_episode_with_perturbation() -> None:
 
 
 def test_env_equals_simulate_bit_for_bit_raw(chapter_run: Trajectory) -> None:
-    """Raw observations: the env trajectory is simulate's, bit for bit (same rk4_step, u held)."""
-    env = CartPoleSwingUpEnv(observation="raw")
+    """Raw float64 observations: the env trajectory is simulate's, bit for bit (same
+    rk4_step, u held)."""
+    env = CartPoleSwingUpEnv(observation="raw", dtype="float64")
     states, us, rewards, terminated, truncated = _rollout(
         env, SwitchingController(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C, observation="raw")
     )
@@ -139,18 +144,26 @@ def test_env_equals_simulate_bit_for_bit_raw(chapter_run: Trajectory) -> None:
     assert rewards[-1] == 10.0 and sum(rewards) == 10.0
 
 
-def test_env_equals_simulate_trig_and_chapter_success(chapter_run: Trajectory) -> None:
-    """Trig observations: theta from atan2(sin, cos) differs by rounding only (< 1e-12).
+@pytest.mark.parametrize(("dtype", "gap"), [("float64", 1e-12), ("float32", None)])
+def test_env_equals_simulate_trig_and_chapter_success(
+    chapter_run: Trajectory, dtype: str, gap: float | None
+) -> None:
+    """Trig float64 observations: theta from atan2(sin, cos) differs by rounding only
+    (< 1e-12). With the default float32 observations the controller sees the state
+    rounded to float32, and the trajectory departs from simulate's.
 
-    The chapter's final controller swings up and balances: the chapter's success
-    test passes at 60 s in the environment.
+    Either way the chapter's final controller swings up and balances: the chapter's
+    success test passes at 60 s in the environment.
     """
-    env = gym.make(ENV_ID)
+    env = gym.make(ENV_ID, dtype=dtype)
     states, us, rewards, terminated, truncated = _rollout(env, SwitchingController())
     assert truncated and not terminated
     assert states.shape == chapter_run.states.shape
-    assert np.max(np.abs(states - chapter_run.states)) < 1e-12
-    assert np.max(np.abs(us - chapter_run.column("u")[:-1])) < 1e-12
+    if gap is not None:
+        assert np.max(np.abs(states - chapter_run.states)) < gap
+        assert np.max(np.abs(us - chapter_run.column("u")[:-1])) < gap
+    else:
+        assert np.max(np.abs(states - chapter_run.states)) > 1e-9
     final = states[-1].copy()
     final[2] = math.remainder(final[2], 2 * math.pi)
     assert Simulation().success.passed(final)
@@ -189,7 +202,7 @@ def test_sparse_reward_matches_kernel_protocol(
     traj = simulate(Plant(), ctrl, Simulation(x0=x0), protocol=Protocol())
     assert traj.outcome.reward == -5.0 and traj.outcome.early == early
     assert not traj.outcome.fault
-    env = CartPoleSwingUpEnv(observation="raw", initial_state=(x0, 0.0, 3.12, 0.0))
+    env = CartPoleSwingUpEnv(observation="raw", initial_state=(x0, 0.0, 3.12, 0.0), dtype="float64")
     states, _, rewards, terminated, truncated = _rollout(
         env, SwitchingController.from_controller(ctrl, observation="raw")
     )
@@ -200,10 +213,19 @@ def test_sparse_reward_matches_kernel_protocol(
 
 
 def test_blow_up_is_termination() -> None:
-    env = CartPoleSwingUpEnv(observation="raw", u_max=1e300)
+    env = CartPoleSwingUpEnv(observation="raw", u_max=1e300, dtype="float64")
     env.reset(seed=0, options={"initial_state": [0.0, 0.0, 0.0, 0.0]})
     _, r, terminated, truncated, info = env.step(np.array([1e300]))
     assert terminated and not truncated and info["fault"] and r == -5.0
+    # In float32 the blown-up observation is inf, still a fault.
+    env = CartPoleSwingUpEnv(observation="raw", u_max=1e300, normalised_action=True)
+    env.reset(seed=0, options={"initial_state": [0.0, 0.0, 0.0, 0.0]})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        obs, r, terminated, truncated, info = env.step(np.ones(1))
+    assert terminated and info["fault"] and r == -5.0 and np.isinf(obs[0])
+    with pytest.raises(ParameterError, match="does not fit the float32"):
+        CartPoleSwingUpEnv(u_max=1e300)
 
 
 def test_dense_reward_is_in_unit_interval_and_prefers_upright() -> None:

@@ -15,8 +15,7 @@ import pytest
 
 from striatal.cli.learner_options import add_learner_arguments, learner_config_from
 from striatal.errors import ParameterError
-from striatal.experiments import baselines
-from striatal.experiments import runner as experiments
+from striatal.experiments import baselines, runner
 from striatal.experiments.ablation import VARIANTS, build, markdown_table, runs_of, summary, variant
 from striatal.learners import random_initial_gains
 from striatal.params import Controller, Plant, Simulation
@@ -28,7 +27,7 @@ def run_seed(name: str, seed: int, max_trials: int) -> dict[str, object]:
     """One run of variant ``name`` through the sweep's runner, as ablation.json holds it."""
     specs, _ = build([variant(name)], [seed], max_trials)
     (spec,) = specs
-    return runs_of([experiments.run_one(spec)])[0]
+    return runs_of([runner.run_one(spec)])[0]
 
 
 @pytest.mark.parametrize("v", LEARNER_VARIANTS, ids=[v.name for v in LEARNER_VARIANTS])

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import math
 import time
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -13,8 +12,9 @@ import pytest
 
 from striatal.cli import main
 from striatal.errors import ParameterError
-from striatal.experiments import runner as experiments
-from striatal.experiments.lockstep_sweep import BATCH_LEARNERS, execute_batch, unsupported
+from striatal.experiments import pool, runs_csv, sweeps
+from striatal.experiments.lockstep_sweep import execute_batch
+from striatal.experiments.spec import RunSpec, spawn_seeds
 from striatal.learners import LearnerConfig, default_config
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
@@ -26,7 +26,7 @@ from striatal.params import (
 from striatal.sim import kernel
 
 SHORT = Simulation(duration=20.0)
-SEEDS = experiments.spawn_seeds(0, 4)
+SEEDS = spawn_seeds(0, 4)
 
 
 def _specs(
@@ -34,8 +34,8 @@ def _specs(
     seeds: tuple[int, ...] = SEEDS,
     methods: tuple[str, ...] = (),
     eval_draws: int = 3,
-) -> list[experiments.RunSpec]:
-    specs, _ = experiments.build_specs(
+) -> list[RunSpec]:
+    specs, _ = sweeps.build_specs(
         config=config,
         template=Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
         plant=Plant(),
@@ -87,8 +87,8 @@ CASES = {
 def test_batch_rows_equal_the_process_rows(case: str) -> None:
     """Every column but wall_seconds, bit for bit, for learner and control on both inits."""
     specs = _specs(CASES[case])
-    serial = experiments.sort_rows(experiments.execute(specs))
-    batch = experiments.sort_rows(execute_batch(specs))
+    serial = runs_csv.sort_rows(pool.execute(specs))
+    batch = runs_csv.sort_rows(execute_batch(specs))
     assert len(batch) == len(specs) == 16
     for a, b in zip(serial, batch, strict=True):
         assert _no_wall(b) == _no_wall(a), (a["arm"], a["init"], a["seed"])
@@ -115,7 +115,7 @@ def test_rows_come_as_runs_finish_and_share_the_wall_time() -> None:
 def test_the_batch_sweep_resumes_a_cut_sweep_of_either_engine(tmp_path: Path) -> None:
     specs = _specs(default_config("chapter", max_trials=6), seeds=SEEDS[:3], eval_draws=2)
     settings = {"test": "resume"}
-    full = experiments.sweep(specs, settings, out=tmp_path / "p", max_trials=6)
+    full = sweeps.run_sweep(specs, settings, out=tmp_path / "p", max_trials=6)
     for engine in ("batch", "processes"):
         out = tmp_path / engine
         out.mkdir()
@@ -125,48 +125,55 @@ def test_the_batch_sweep_resumes_a_cut_sweep_of_either_engine(tmp_path: Path) ->
         lines = runs.read_text().splitlines(keepends=True)
         # the header, 5 rows and a line a SIGKILL cut short
         runs.write_text("".join(lines[:6]) + lines[6][: len(lines[6]) // 2])
-        again = experiments.sweep(specs, settings, out=out, max_trials=6, engine="batch")
+        again = sweeps.run_sweep(specs, settings, out=out, max_trials=6, engine="batch")
         assert (again.skipped, again.ran) == (5, len(specs) - 5)
         assert _no_wall(again.summary) == _no_wall(full.summary)
-        assert len(experiments.read_runs(runs)[0]) == len(specs)
-        nothing = experiments.sweep(specs, settings, out=out, max_trials=6, engine="batch")
+        assert len(runs_csv.read_runs(runs)[0]) == len(specs)
+        nothing = sweeps.run_sweep(specs, settings, out=out, max_trials=6, engine="batch")
         assert nothing.ran == 0
 
 
-def test_what_the_batch_engine_does_not_run_is_refused() -> None:
-    chapter = default_config("chapter", max_trials=3)
-    assert unsupported(_specs(chapter)) is None
-    why = unsupported(_specs(chapter, methods=("lqr", "cmaes")))
-    assert why is not None and "cmaes, lqr" in why and "--engine processes" in why
-    shaped = default_config("pgpe", max_trials=3)  # its preset: the shaped reward
-    assert "shaped" in (unsupported(_specs(shaped)) or "")
-    jitter = default_config("pgpe", max_trials=3, reward="sparse", plant_jitter=0.1)
-    assert "plant_jitter" in (unsupported(_specs(jitter)) or "")
-    for limit, flag_name in (("track", "--track"), ("max_force", "--max-force")):
-        limited = replace(chapter, **{limit: 2.0})
-        assert flag_name in (unsupported(_specs(limited)) or "")
-    for flag in ("robust", "symmetric"):
-        flagged = replace(chapter, **{flag: True})
-        assert f"--{flag}" in (unsupported(_specs(flagged)) or "")
-    with pytest.raises(ParameterError, match="baselines hand"):
-        experiments.sweep(
-            _specs(chapter, methods=("hand",)), {}, out=None, max_trials=3, engine="batch"
-        )
+#: What the batch engine once refused: each now runs through the same run_steps, the
+#: trials that need more than a kernel summary inside their run.
+EVERY_KIND = {
+    "baselines": (default_config("chapter", max_trials=3), ("lqr", "hand", "random", "cmaes")),
+    "shaped": (default_config("pgpe", max_trials=3), ()),
+    "jitter": (default_config("pgpe", max_trials=3, reward="sparse", plant_jitter=0.1), ()),
+    "track": (default_config("chapter", max_trials=3, track=2.0, max_force=20.0), ()),
+    "robust": (default_config("pgpe", max_trials=3, robust=True), ()),
+    "symmetric": (default_config("pgpe", max_trials=3, symmetric=True), ()),
+    "ac": (default_config("ac", max_trials=2), ()),
+}
+
+
+@pytest.mark.parametrize("kind", list(EVERY_KIND))
+def test_every_arm_runs_in_lockstep_with_the_process_rows(kind: str) -> None:
+    config, methods = EVERY_KIND[kind]
+    specs = _specs(config, seeds=SEEDS[:1], methods=methods, eval_draws=2)
+    serial = runs_csv.sort_rows(pool.execute(specs))
+    batch = runs_csv.sort_rows(execute_batch(specs))
+    assert len(batch) == len(specs)
+    assert _no_wall(batch) == _no_wall(serial)
     with pytest.raises(ParameterError, match="engine must be"):
-        experiments.sweep(_specs(chapter), {}, out=None, max_trials=3, engine="threads")  # type: ignore[arg-type]
-    assert set(BATCH_LEARNERS) == {"chapter", "rpe", "pgpe"}
+        sweeps.run_sweep(specs, {}, out=None, max_trials=3, engine="threads")  # type: ignore[arg-type]
 
 
-def test_a_rule_the_batch_engine_does_not_know_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
-    from striatal.learners import loop
-    from striatal.learners.chapter import ChapterRule
+def test_trials_of_different_runs_share_kernel_calls(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The point of the engine: the runs' trials go to the batch kernel together."""
+    sizes: list[int] = []
+    real = kernel.run_trials_batch
 
-    class Other(ChapterRule):
-        name = "other"
+    def counting(*args: Any) -> None:
+        sizes.append(args[0].shape[0])
+        real(*args)
 
-    monkeypatch.setitem(loop.RULES, "other", Other())
-    why = unsupported(_specs(LearnerConfig(learner="other", max_trials=3)))
-    assert why is not None and "'other'" in why and "chapter, rpe, pgpe" in why
+    monkeypatch.setattr(kernel, "run_trials_batch", counting)
+    specs = _specs(default_config("chapter", max_trials=4), eval_draws=3)
+    rows = list(execute_batch(specs))
+    trials = sum(r["simulations"] + r["eval_simulations"] for r in rows)
+    assert sum(sizes) == trials  # every trial of the sweep went through the batch kernel
+    assert max(sizes) >= len(specs)  # trial k of every run in one call
+    assert len(sizes) < trials / 4
 
 
 def test_cli_engines_give_the_same_runs_csv(
@@ -181,7 +188,7 @@ def test_cli_engines_give_the_same_runs_csv(
     batch = json.loads(capsys.readouterr().out)
     assert _no_wall(batch) == _no_wall(processes)
     rows = {
-        name: experiments.sort_rows(experiments.read_runs(tmp_path / name / "runs.csv")[0])
+        name: runs_csv.sort_rows(runs_csv.read_runs(tmp_path / name / "runs.csv")[0])
         for name in ("p", "b")
     }
     assert len(rows["b"]) == 24
@@ -191,9 +198,8 @@ def test_cli_engines_give_the_same_runs_csv(
 @pytest.mark.parametrize(
     ("extra", "needle"),
     [
-        (["--baselines", "lqr"], "baselines lqr"),
         (["--workers", "2"], "--workers"),
-        (["--learner", "pgpe"], "shaped"),
+        (["--backend", "ray", "--address", "127.0.0.1:1"], "--backend ray"),
     ],
 )
 def test_cli_refusals_are_one_line_and_exit_2(
@@ -207,13 +213,13 @@ def test_cli_refusals_are_one_line_and_exit_2(
 
 
 def test_the_simd_kernel_drifts_from_round_off_but_keeps_what_is_exact() -> None:
-    """trial_kernel "lockstep" (``--engine simd``): every trial, evaluation included, on the
-    SIMD kernel, whose trials equal the scalar kernel's within round-off; learning amplifies
-    the difference over trials (here W of one run ends far away), which is why a folder
-    never mixes the two kinds and "batch" keeps the exact kernel."""
+    """trial_kernel "lockstep" (``--engine simd``): the trials on the SIMD kernel, whose
+    trials equal the scalar kernel's within round-off; learning amplifies the difference
+    over trials (here W of one run ends far away), which is why a folder never mixes the
+    two kinds and "batch" keeps the exact kernel."""
     specs = _specs(default_config("chapter", max_trials=8), seeds=SEEDS[:2], eval_draws=2)
-    exact = experiments.sort_rows(execute_batch(specs))
-    fast = experiments.sort_rows(execute_batch(specs, trial_kernel="lockstep"))
+    exact = runs_csv.sort_rows(execute_batch(specs))
+    fast = runs_csv.sort_rows(execute_batch(specs, trial_kernel="lockstep"))
     assert [(r["arm"], r["init"], r["seed"]) for r in fast] == [
         (r["arm"], r["init"], r["seed"]) for r in exact
     ]
@@ -230,31 +236,6 @@ def test_the_simd_kernel_drifts_from_round_off_but_keeps_what_is_exact() -> None
         assert b["eval_simulations"] == a["eval_simulations"]
     with pytest.raises(ParameterError, match="trial_kernel"):
         list(execute_batch(specs, trial_kernel="simd"))
-
-
-def test_the_w0_evaluation_a_learner_shares_with_its_control_is_run_once(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """Learner and control of a seed start from the same W(0) and draw the same evaluation
-    noise: the batch engines run that evaluation once, and both rows still count it."""
-    draws: list[int] = []
-    real = kernel.run_trials_batch
-
-    def counting(*args: Any) -> None:
-        noise, learning = args[5], args[6]
-        if learning.gamma == 0.0 and noise.shape[1] > 0:  # an evaluation's noise draws
-            draws.append(noise.shape[0])
-        real(*args)
-
-    specs = _specs(default_config("chapter", max_trials=2), seeds=SEEDS[:1], eval_draws=4)
-    serial = experiments.sort_rows(experiments.execute(specs))
-    monkeypatch.setattr(kernel, "run_trials_batch", counting)
-    batch = experiments.sort_rows(execute_batch(specs))
-    assert _no_wall(batch) == _no_wall(serial)
-    # 2 inits x (learner, control); the first of each pair evaluates W(0) and its final
-    # gains (2 mean trials, 2 x 4 draws), the second only its final gains (1 + 4)
-    assert sorted(draws) == [4, 4, 8, 8]
-    assert all(r["eval_simulations"] == 1 + 2 * (4 + 1) for r in batch)
 
 
 def test_cli_simd_engine_gives_the_same_statistics_not_the_same_rows(
@@ -287,7 +268,7 @@ def test_cli_simd_engine_gives_the_same_statistics_not_the_same_rows(
     assert main(["sweep", "--from-summary", str(tmp_path / "s"), "--print-config"]) == 0
     assert 'engine = "simd"' in capsys.readouterr().out
     # the Python API records it too
-    specs, _ = experiments.build_specs(
+    specs, _ = sweeps.build_specs(
         config=default_config("chapter", max_trials=1),
         template=Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
         plant=Plant(),
@@ -296,5 +277,5 @@ def test_cli_simd_engine_gives_the_same_statistics_not_the_same_rows(
         inits=("chapter",),
         eval_draws=0,
     )
-    experiments.sweep(specs, {"x": 1}, out=tmp_path / "api", max_trials=1, engine="simd")
+    sweeps.run_sweep(specs, {"x": 1}, out=tmp_path / "api", max_trials=1, engine="simd")
     assert "trial_kernel" in json.loads((tmp_path / "api" / "sweep.json").read_text())

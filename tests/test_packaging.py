@@ -3,17 +3,30 @@
 from __future__ import annotations
 
 import email.parser
+import os
 import re
 import shutil
 import subprocess
 import sys
+import tomllib
 import zipfile
 from pathlib import Path
 
 import pytest
 from packaging.requirements import Requirement
 
+from striatal.errors import StriatalError
+
 ROOT = Path(__file__).resolve().parents[1]
+#: extras that `all` leaves out: the tools of development and of benchmarking (gymnax
+#: holds gymnasium below 1.4)
+NOT_IN_ALL = {"dev", "bench", "all"}
+
+
+def _project() -> dict[str, object]:
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    assert isinstance(project, dict)
+    return project
 
 
 @pytest.fixture(scope="module")
@@ -62,8 +75,11 @@ def test_core_metadata(metadata: email.message.Message) -> None:
     assert metadata["Author"] or metadata["Author-email"]
     classifiers = metadata.get_all("Classifier") or []
     assert "Programming Language :: Python :: 3.11" in classifiers
+    assert "Typing :: Typed" in classifiers
+    assert "Operating System :: POSIX" in classifiers
+    assert "Operating System :: OS Independent" not in classifiers
     extras = set(metadata.get_all("Provides-Extra") or [])
-    assert {"dev", "rl", "cluster", "render"} <= extras
+    assert {"dev", "rl", "cluster", "render", "neural", "model", "all"} <= extras
     requires = metadata.get_all("Requires-Dist") or []
     gym = [Requirement(r) for r in requires if r.startswith("gymnasium")]
     # 1.0 lacks gymnasium.vector.AutoresetMode, which striatal.envs imports
@@ -85,3 +101,108 @@ def test_citation_cites_chapter_and_software() -> None:
     assert "Chapter 7" in text
     assert (ROOT / "LICENSE").read_text().startswith("MIT License")
     assert "## [Unreleased]" in (ROOT / "CHANGELOG.md").read_text()
+
+
+def test_all_extra_is_the_union_of_the_user_facing_extras() -> None:
+    extras = _project()["optional-dependencies"]
+    assert isinstance(extras, dict)
+    user_facing = set(extras) - NOT_IN_ALL
+    assert {"rl", "render", "cluster", "neural", "model"} <= user_facing
+    union = {str(Requirement(r)) for name in user_facing for r in extras[name]}
+    everything = [str(Requirement(r)) for r in extras["all"]]
+    assert len(everything) == len(set(everything)), "a requirement twice in [all]"
+    lacks, more = sorted(union - set(everything)), sorted(set(everything) - union)
+    assert not lacks and not more, f"[all] lacks {lacks}, has {more} of no other extra"
+
+
+def test_classifiers_state_what_is_tested() -> None:
+    """Python 3.11 (what the tests and the floor test run), POSIX, typed."""
+    project = _project()
+    classifiers = project["classifiers"]
+    assert isinstance(classifiers, list)
+    versions = {
+        c.rsplit(" :: ", 1)[1]
+        for c in classifiers
+        if re.fullmatch(r"Programming Language :: Python :: 3\.\d+", c)
+    }
+    assert versions == {"3.11"}, versions
+    assert project["requires-python"] == ">=3.11"
+    assert (ROOT / "src" / "striatal" / "py.typed").is_file()
+    assert "Typing :: Typed" in classifiers
+    assert "Operating System :: POSIX" in classifiers
+    assert not [c for c in classifiers if "OS Independent" in c or "Windows" in c]
+
+
+def _citation_urls(text: str) -> dict[str, str]:
+    """``repository-code`` and ``url`` of a CITATION.cff's top level, when it has them."""
+    found = {}
+    for line in text.splitlines():
+        m = re.match(r"(repository-code|url):\s*[\"']?([^\"'\s]+)", line)
+        if m:
+            found[m.group(1)] = m.group(2)
+    return found
+
+
+def test_project_urls_come_from_the_citation() -> None:
+    """No invented address: the project's URLs are CITATION.cff's repository, or none."""
+    urls = _project().get("urls", {})
+    assert isinstance(urls, dict)
+    cited = _citation_urls((ROOT / "CITATION.cff").read_text(encoding="utf-8"))
+    repository = cited.get("repository-code")
+    if repository is None:
+        assert urls == {}, f"project URLs {urls} but CITATION.cff names no repository-code"
+        return
+    assert set(urls) >= {"Homepage", "Documentation", "Source", "Changelog"}, urls
+    assert urls["Source"] == repository
+    for name, url in urls.items():
+        assert re.match(r"https://", url), (name, url)
+        assert url.startswith((repository, cited.get("url", repository))), (name, url)
+
+
+def test_citation_url_reader() -> None:
+    text = "title: x\nrepository-code: 'https://host/o/r'\nurl: https://o.host/r\n  url: nested\n"
+    assert _citation_urls(text) == {
+        "repository-code": "https://host/o/r",
+        "url": "https://o.host/r",
+    }
+    assert _citation_urls("title: x\n") == {}
+
+
+def test_import_works_without_fcntl(tmp_path: Path) -> None:
+    """Only a folder lock needs POSIX: without fcntl, import and files still work."""
+    code = (
+        "import sys; sys.modules['fcntl'] = None\n"
+        "import striatal.io.rundir as rd\n"
+        "from striatal.errors import StriatalError\n"
+        "assert rd.fcntl is None\n"
+        "folder = rd.RunDir(sys.argv[1])\n"
+        "try:\n"
+        "    with folder.lock():\n"
+        "        raise SystemExit('the lock was taken')\n"
+        "except StriatalError as exc:\n"
+        "    print(exc)\n"
+    )
+    out = tmp_path / "run"
+    proc = subprocess.run(
+        [sys.executable, "-c", code, str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "PYTHONPATH": str(ROOT / "src")},
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "POSIX" in proc.stdout and str(out) in proc.stdout
+    assert not out.exists(), "nothing is written when the lock cannot be taken"
+
+
+def test_lock_still_locks_with_fcntl(tmp_path: Path) -> None:
+    from striatal.io.rundir import RunDir
+
+    folder = RunDir(tmp_path / "run")
+    second = RunDir(tmp_path / "run")
+    with (
+        folder.lock(),
+        pytest.raises(StriatalError, match="in use by another striatal process"),
+        second.lock(),
+    ):
+        pass

@@ -41,7 +41,7 @@ import pytest
 
 from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError, StriatalError
-from striatal.experiments.runner import WATCHDOG_SECONDS
+from striatal.experiments.pool import WATCHDOG_SECONDS
 from striatal.io.files import read_json
 from striatal.learners import LearnerConfig, initial_state, learning_step
 from striatal.learners.chapter import gain_update
@@ -57,6 +57,8 @@ WRITE_ENV = "STRIATAL_WRITE_RELIABILITY"
 # "rpe" learner (a tracked reward baseline in its checkpoint) succeeds after 890.
 TRAIN_LONG = ("--seed", "4", "--max-trials", "1500", "--checkpoint-every", "25", "--no-progress")
 TRAIN_RPE = ("--learner", "rpe", "--seed", "5", *TRAIN_LONG[2:])
+# long enough that no fast machine finishes it before the last SIGINT of int-start lands
+TRAIN_ENDLESS = ("--seed", "4", "--max-trials", "1000000", "--no-progress")
 KILL_AFTER = 200
 # A sweep of 16 runs (8 seeds, learner and control arm), ~3 s of runs, interrupted after
 # SWEEP_KILL_AFTER rows of runs.csv; rerunning the same command resumes it.
@@ -767,7 +769,7 @@ def interrupt_at_start(delays: tuple[float, ...]) -> Callable[[Path], tuple[bool
         for delay in delays:
             start = _interpreter_start()
             proc = subprocess.Popen(
-                [sys.executable, "-m", "striatal", "train", *TRAIN_LONG],
+                [sys.executable, "-m", "striatal", "train", *TRAIN_ENDLESS],
                 stdout=subprocess.DEVNULL,
                 stderr=subprocess.PIPE,
                 text=True,
@@ -1198,7 +1200,7 @@ def watchdog_without_pdeathsig(tmp: Path) -> tuple[bool, str]:
     This process forks a parent, which forks the worker (it runs the pool's
     initializer) and then exits at once with no clean-up, as a SIGKILL leaves it.
     """
-    import striatal.experiments.runner as experiments
+    from striatal.experiments import pool
 
     read_end, write_end = os.pipe()
     parent = os.fork()
@@ -1207,8 +1209,8 @@ def watchdog_without_pdeathsig(tmp: Path) -> tuple[bool, str]:
             worker = os.fork()
             if worker == 0:
                 try:
-                    experiments._die_with_parent = lambda: False  # the fallback alone
-                    experiments._worker_init(os.getppid())
+                    pool._die_with_parent = lambda: False  # the fallback alone
+                    pool._worker_init(os.getppid())
                     time.sleep(60)
                 finally:
                     os._exit(0)
@@ -1631,7 +1633,7 @@ INTERRUPTIONS: tuple[Scenario, ...] = (
       "`striatal train --seed 3 --max-trials 200` in two processes, and with `--seed 6`",
       "same seed, same files; another seed, another run", same_seed_same_run),
     S("int-start", "interruption",
-      f"`striatal train {' '.join(TRAIN_LONG)}`, SIGINT (Ctrl-C) 0, 0.1, 0.3, 0.6, 1 and 1.5 s "
+      f"`striatal train {' '.join(TRAIN_ENDLESS)}`, SIGINT (Ctrl-C) 0, 0.1, 0.3, 0.6, 1 and 1.5 s "
       "after striatal's code starts (while the libraries load; the interpreter's own start, "
       "timed as `python -c 'import striatal.cli'`, excluded)", "exit 130, no traceback",
       interrupt_at_start((0.0, 0.1, 0.3, 0.6, 1.0, 1.5))),

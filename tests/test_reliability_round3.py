@@ -239,14 +239,14 @@ ROUND3: tuple[Scenario, ...] = (
       library_error(lambda _: train(action_every=10**20, max_trials=1), ParameterError)),
     S("seeds-billion", "bad input", "`striatal sweep --seeds 1000000000` (memory grew while the "
       "seed sequences were spawned)", "exit 2, one line naming --seeds, at once",
-      usage_error(("sweep", "--seeds", "1000000000", "--out", "OUT"), says="argument --seeds")),
+      usage_error(("sweep", "--seeds", "1000000000", "--out", "OUT"), says="--seeds must be")),
     S("seeds-overflow", "bad input", "`striatal ablation --seeds 10**30` (was an OverflowError)",
       "exit 2, one line naming --seeds",
       usage_error(("ablation", "--seeds", str(10**30), "--out", "OUT"), says="argument --seeds")),
     S("workers-many", "bad input", "`striatal sweep --seeds 2 --workers 1000` (forked 1000 "
       "workers for 4 runs)", "exit 2, one line naming --workers",
       usage_error(("sweep", "--seeds", "2", "--workers", "1000", "--out", "OUT"),
-                  says="argument --workers")),
+                  says="--workers must be")),
     S("learner-dict-curves", "bad file", "`striatal curves R/history.csv --out c.png`, R's "
       "result.json with `settings.learner = {\"a\": 1}` (was TypeError: unhashable dict)",
       "exit 2, one line naming the learner",

@@ -9,6 +9,8 @@ Ctrl-C, before NumPy and Numba load (docs/reliability.md). The Python API:
 
 - :func:`train`: a whole learning run, as ``striatal train`` runs it (same defaults);
 - :func:`simulate`: one run of a controller, as ``striatal simulate`` (same defaults);
+- :func:`sweep`: many learning runs over seeds, with the learner's control and baselines,
+  as ``striatal sweep`` runs them (same defaults, same rows and summary);
 - :func:`check_robust`: the robustness set of ``striatal simulate --robust`` (9 runs,
   the motor force held: :class:`Hardware`);
 - :mod:`striatal.learners`: the learning rules, their presets and the trial loop;
@@ -32,6 +34,7 @@ if TYPE_CHECKING:
     from typing import Any
 
     from striatal import learners
+    from striatal.experiments.sweeps import SweepResult, sweep
     from striatal.experiments.training import Run, simulate, train
     from striatal.io import rundir
     from striatal.io.rundir import read_history, read_result
@@ -77,6 +80,8 @@ _FROM = {
     "Run": "striatal.experiments.training",
     "simulate": "striatal.experiments.training",
     "train": "striatal.experiments.training",
+    "sweep": "striatal.experiments.sweeps",
+    "SweepResult": "striatal.experiments.sweeps",
 }
 
 
@@ -159,6 +164,7 @@ __all__ = [
     "Run",
     "Simulation",
     "SuccessTest",
+    "SweepResult",
     "Trajectory",
     "TrialOutcome",
     "__version__",
@@ -171,5 +177,6 @@ __all__ = [
     "run_trial",
     "rundir",
     "simulate",
+    "sweep",
     "train",
 ]

@@ -155,6 +155,15 @@ class Plant:
         """E_d = m g l, the pendulum energy at rest upright (eq 16) [J]."""
         return self.pole_mass * self.gravity * self.length
 
+    def to_dict(self) -> dict[str, float]:
+        """The four parameters by name, as settings and summaries record a plant."""
+        return {
+            "cart_mass": self.cart_mass,
+            "pole_mass": self.pole_mass,
+            "length": self.length,
+            "gravity": self.gravity,
+        }
+
     def as_array(self) -> np.ndarray:
         """``[M, m, l, g]`` as float64, the layout the kernel takes."""
         return np.array([self.cart_mass, self.pole_mass, self.length, self.gravity], dtype=float)

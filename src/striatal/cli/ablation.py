@@ -1,7 +1,7 @@
 """``striatal ablation``: the learner variants side by side from random initial gains.
 
 A thin layer over the sweep: each variant is an arm of one
-:func:`striatal.experiments.runner.sweep` (resume, progress bar, the Ray backend, the
+:func:`striatal.experiments.sweeps.run_sweep` (resume, progress bar, the Ray backend, the
 output folder's lock); the table and ablation.json are written from its rows.
 """
 
@@ -14,10 +14,9 @@ import sys
 from typing import Any
 
 from striatal.cli import config, options
-from striatal.cli.guards import bounded_int
 from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
-from striatal.experiments import runner as experiments
+from striatal.experiments import pool, sweeps
 from striatal.experiments.ablation import VARIANT_NAMES, build, markdown_table, table_rows, variant
 from striatal.io.files import atomic_write_text, check_out_dir, dumps_json, write_json
 from striatal.io.rundir import RunDir
@@ -35,12 +34,7 @@ DESCRIPTION = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--seeds",
-        type=bounded_int(1, config.MAX_SEEDS),
-        default=config.SEEDS,
-        help=f"number of seeds N (at most {config.MAX_SEEDS:,})",
-    )
+    parser.add_argument("--seeds", type=int, default=sweeps.SEEDS, help="number of seeds N")
     parser.add_argument(
         "--first-seed", type=int, default=0, help="seeds S..S+N-1 (a fresh set: S = 100)"
     )
@@ -65,7 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="noisy trials of each pass-probability estimate (W(0) and final gains), "
         "counted apart as eval_simulations; 0: none",
     )
-    options.add_worker_arguments(parser, connect_timeout=experiments.CONNECT_TIMEOUT)
+    options.add_worker_arguments(parser, connect_timeout=pool.CONNECT_TIMEOUT)
     parser.add_argument(
         "--out",
         type=options.out_path,
@@ -115,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     talk = not (args.no_progress or args.json)
     # the lock covers ablation.json and ablation.md too, written after the sweep
     with RunDir(args.out).lock() if args.out is not None else contextlib.nullcontext():
-        result = experiments.sweep(
+        result = sweeps.run_sweep(
             specs,
             settings,
             out=args.out,

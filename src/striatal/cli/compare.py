@@ -156,9 +156,9 @@ def run(args: argparse.Namespace) -> int:
     arms = label_arms(summaries, [str(p) for p in args.summaries])
     arms.sort(key=lambda a: (a["init"], a["arm"]))
     pairs = label_pairs(summaries)
-    from striatal.experiments import runner as experiments
+    from striatal.experiments import report
 
-    table = experiments.markdown_table({"arms": arms, "learner_vs_control": pairs})
+    table = report.markdown_table({"arms": arms, "learner_vs_control": pairs})
     record = {
         "arms": arms,
         "learner_vs_control": pairs,

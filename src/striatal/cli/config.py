@@ -24,17 +24,10 @@ from typing import Any
 from striatal.cli import lists
 from striatal.errors import DataFileError, ParameterError
 
-#: ``--seeds`` and ``--workers`` of every command that has them (sweep, ablation): 100
-#: seeds, the number every documented result uses (a success rate's 95 % interval is
-#: then about +-10 points), and one worker process, which a shared machine can spare
-#: (the workers change the wall time, never the results).
-SEEDS = 100
+#: ``--workers`` of every command that has it (sweep, ablation): one worker process,
+#: which a shared machine can spare (the workers change the wall time, never the
+#: results). Their ``--seeds``: :data:`striatal.experiments.sweeps.SEEDS`.
 WORKERS = 1
-#: The most ``--seeds`` takes: 10,000 seeds per arm and init (the largest documented
-#: sweep has 500); more would hold that many seed sequences before the first run.
-MAX_SEEDS = 10_000
-#: The most ``--workers`` takes: each is a process with its own compiled kernel.
-MAX_WORKERS = 256
 #: The options of this module: never in a file, never recorded.
 CONFIG_DESTS = ("config", "from_summary", "print_config")
 #: Options that say where and how a run goes, not what it computes: not recorded in

@@ -165,12 +165,7 @@ def run(args: argparse.Namespace) -> int:
     summary = result.summary()
     summary["settings"] = {
         "controller": controller.to_dict(),
-        "plant": {
-            "cart_mass": plant.cart_mass,
-            "pole_mass": plant.pole_mass,
-            "length": plant.length,
-            "gravity": plant.gravity,
-        },
+        "plant": plant.to_dict(),
         "theta0": sim.theta0,
         "x0": sim.x0,
         "duration": sim.duration,

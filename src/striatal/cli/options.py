@@ -8,7 +8,6 @@ from pathlib import Path
 from typing import Any
 
 from striatal.cli import config
-from striatal.cli.guards import bounded_int
 from striatal.cli.helpformat import default_note
 from striatal.errors import ParameterError
 from striatal.params import (
@@ -267,12 +266,7 @@ def add_worker_arguments(
         default=connect_timeout,
         help="give up on a Ray address that accepts no connection after this many seconds",
     )
-    group.add_argument(
-        "--workers",
-        type=bounded_int(1, config.MAX_WORKERS),
-        default=config.WORKERS,
-        help=f"local worker processes (at most {config.MAX_WORKERS})",
-    )
+    group.add_argument("--workers", type=int, default=config.WORKERS, help="local worker processes")
 
 
 def check_worker_arguments(args: argparse.Namespace) -> None:

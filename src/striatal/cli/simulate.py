@@ -62,12 +62,7 @@ def settings_of(
 ) -> dict[str, object]:
     return {
         "controller": traj.controller.to_dict(),
-        "plant": {
-            "cart_mass": traj.plant.cart_mass,
-            "pole_mass": traj.plant.pole_mass,
-            "length": traj.plant.length,
-            "gravity": traj.plant.gravity,
-        },
+        "plant": traj.plant.to_dict(),
         "theta0": traj.sim.theta0,
         "x0": traj.sim.x0,
         "duration": traj.sim.duration,

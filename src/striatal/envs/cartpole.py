@@ -43,24 +43,31 @@ RENDER_HEIGHT = 400
 
 
 def observation_space(task: SwingUpTask) -> spaces.Box:
-    """Unbounded float64 Box, except sin and cos theta in [-1, 1] for ``"trig"``."""
-    high = np.full(task.obs_size, np.inf)
+    """Unbounded Box of ``task.dtype``, except sin and cos theta in [-1, 1] for ``"trig"``.
+
+    x stays unbounded with a track too: the step that leaves the rails returns an
+    |x| beyond ``task.track``.
+    """
+    high = np.full(task.obs_size, np.inf, dtype=task.dtype)
     if task.observation == "trig":
         high[2:4] = 1.0
-    return spaces.Box(-high, high, dtype=np.float64)
+    return spaces.Box(-high, high, dtype=high.dtype)
 
 
 def action_space(task: SwingUpTask) -> spaces.Box:
-    """Box(1): u in [-u_max, u_max], in m/s^2 (eq 13), float64; or [-1, 1] float32 if normalised."""
-    if task.normalised_action:
-        return spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float32)
-    return spaces.Box(-task.u_max, task.u_max, shape=(1,), dtype=np.float64)
+    """Box(1) of ``task.dtype``: u in [-u_max, u_max], in m/s^2 (eq 13); [-1, 1] if normalised."""
+    # Bounds built in the space's dtype: a u_max that float32 cannot hold is rounded
+    # here, while the env clips to the float64 u_max itself.
+    high = np.full(1, 1.0 if task.normalised_action else task.u_max, dtype=task.dtype)
+    return spaces.Box(-high, high, dtype=high.dtype)
 
 
 def clip_action(action: Any, u_max: float, n: int, normalised: bool = False) -> np.ndarray:
-    """(n,) float64 u [m/s^2] from an action batch of n scalars, clipped to +-u_max.
+    """(n,) float64 u, in m/s^2, from an action batch of n real scalars, clipped to +-u_max.
 
-    A normalised action a is clipped to [-1, 1] and scaled to u = a * u_max.
+    Any real dtype is accepted (a float32 action of the action space, a float64 one of
+    a controller) and used as float64. A normalised action a is clipped to [-1, 1]
+    and scaled to u = a * u_max.
     """
     a = np.asarray(action, dtype=float)
     if a.size != n:
@@ -156,17 +163,20 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
     """Swing-up and balance of the point-mass cart-pole (section 2), Gymnasium API.
 
     Action: Box(1) commanded cart acceleration u [m/s^2], clipped to
-    [-u_max, u_max] (default 50); with ``normalised_action=True`` a float32 in
-    [-1, 1], u = a * u_max. Observation: [x, x_dot, sin theta, cos theta,
-    theta_dot] (``observation="trig"``, default) or the raw kernel state
-    [x, x_dot, theta, theta_dot] (``"raw"``, theta unwrapped). Rewards: see
-    :class:`~striatal.envs.task.SwingUpTask`. ``terminated``: the eq-24 check
-    failed at t = 30 s, or the state blew up (non-finite or beyond 1e8);
-    ``truncated``: the time limit ``duration`` (default 60 s) was reached.
+    [-u_max, u_max] (default 50); with ``normalised_action=True`` in [-1, 1],
+    u = a * u_max. Observation: [x, x_dot, sin theta, cos theta, theta_dot]
+    (``observation="trig"``, default) or the raw kernel state [x, x_dot, theta,
+    theta_dot] (``"raw"``, theta unwrapped). Both spaces and the observations are
+    float32 (``dtype="float64"`` for the kernel's own precision); the physics is
+    float64, and actions of any real dtype are accepted. Rewards: see
+    :class:`~striatal.envs.task.SwingUpTask`. ``terminated``: the cart left the
+    track (|x| > ``track``, when a track is set), the eq-24 check failed at
+    t = 30 s, or the state blew up (non-finite or beyond 1e8); ``truncated``: the
+    time limit ``duration`` (default 60 s) was reached.
 
     Keyword arguments are the fields of :class:`~striatal.envs.task.SwingUpTask`
     (plant, dt, duration, u_max, observation, reward, protocol, initial_state,
-    perturbation, normalised_action).
+    perturbation, normalised_action, track, dtype).
     ``reset(options={"initial_state": [...], "perturbation": p})`` overrides the
     start for one episode (other keys raise ParameterError). ``info`` holds
     ``state`` (raw, after the step), ``t`` [s], ``u`` (the clipped action applied,
@@ -222,7 +232,7 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._steps * self.task.dt
 
     def _obs(self) -> np.ndarray:
-        return observe(self._state[None, :], self.task.observation)[0]
+        return observe(self._state[None, :], self.task.observation, self.task.dtype)[0]
 
     def _info(self, fault: bool = False) -> dict[str, Any]:
         return {"state": self.state, "t": self.t, "u": self._u, "fault": fault}

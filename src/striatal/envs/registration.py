@@ -7,18 +7,28 @@ loaded by :mod:`striatal.envs.cartpole` itself).
 
 from __future__ import annotations
 
-__all__ = ["DENSE_ENV_ID", "ENV_ID", "REGISTERED", "register_envs"]
+__all__ = ["DENSE_ENV_ID", "DM_CONTROL_TRACK", "ENV_ID", "REGISTERED", "register_envs"]
 
 ENV_ID = "striatal/CartPoleSwingUp-v0"
 
-#: The variant most RL code wants: dense reward, 10-s episodes (1000 steps, as
-#: dm_control's cartpole swingup), actions normalised to float32 [-1, 1].
+#: The variant most RL code wants: dense reward, 10-s episodes (1000 steps), actions
+#: normalised to [-1, 1] and rails of +-1.8 m, as dm_control's cartpole swingup
+#: (leaving them terminates the episode).
 DENSE_ENV_ID = "striatal/CartPoleSwingUpDense-v0"
+
+#: Half-length of the rails of dm_control's cartpole [m]: its slider joint is limited
+#: to [-1.8, 1.8] (``dm_control/suite/cartpole.xml``). The dense id's default track.
+DM_CONTROL_TRACK = 1.8
 
 #: Keyword arguments each registered id passes to the env.
 REGISTERED: dict[str, dict[str, object]] = {
     ENV_ID: {},
-    DENSE_ENV_ID: {"reward": "dense", "duration": 10.0, "normalised_action": True},
+    DENSE_ENV_ID: {
+        "reward": "dense",
+        "duration": 10.0,
+        "normalised_action": True,
+        "track": DM_CONTROL_TRACK,
+    },
 }
 
 

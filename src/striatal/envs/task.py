@@ -20,6 +20,7 @@ from striatal.params import (
     CHAPTER_THETA0,
     MAX_STEPS,
     Plant,
+    as_float,
     check_dt,
     require_finite,
     require_finite_positive,
@@ -33,10 +34,13 @@ __all__ = [
     "RESET_OPTIONS",
     "ObservationKind",
     "RewardKind",
+    "SpaceDtype",
     "SwingUpTask",
+    "check_dtype",
     "check_perturbation",
     "check_reset_options",
     "check_state",
+    "check_track",
     "dense_reward",
     "observe",
     "outcome",
@@ -46,6 +50,7 @@ __all__ = [
 
 ObservationKind = Literal["trig", "raw"]
 RewardKind = Literal["chapter", "dense"]
+SpaceDtype = Literal["float32", "float64"]
 
 #: Default clip on the commanded cart acceleration u [m/s^2]. The chapter's final
 #: controller peaks at |u| = 13.4 m/s^2 (``striatal simulate --chapter-final``), so
@@ -80,9 +85,18 @@ class SwingUpTask:
     perturbation : half-width of a uniform random offset added to each start state
         component at reset, drawn from the env's ``np_random`` (0: none; below 1e8,
         the kernel's blow-up bound).
-    normalised_action : if True the action is a float32 in [-1, 1], scaled to
-        u = a * u_max inside the env (what most RL libraries expect); if False
-        (default) the action is u itself, float64 [m/s^2], bit-exact with the kernel.
+    normalised_action : if True the action is in [-1, 1], scaled to u = a * u_max
+        inside the env (what most RL libraries expect); if False (default) the action
+        is u itself [m/s^2].
+    track : half-length of the rails [m]; |x| beyond it after a step ends the episode
+        (``terminated``, as in Gymnasium's CartPole; the chapter reward's failure
+        reward -5, the dense reward of that state). None (default) or ``inf``: an
+        endless track, the chapter's idealisation.
+    dtype : ``"float32"`` (default, what RL libraries expect) or ``"float64"``: the
+        dtype of the observation and action spaces and of the observations. The
+        physics is float64 in both; actions of any real dtype are accepted and used
+        as float64, so ``"float64"`` observations make the env bit-exact with the
+        kernel under a policy that reads them.
     """
 
     plant: Plant = field(default_factory=Plant)
@@ -95,6 +109,8 @@ class SwingUpTask:
     initial_state: tuple[float, float, float, float] = (0.0, 0.0, CHAPTER_THETA0, 0.0)
     perturbation: float = 0.0
     normalised_action: bool = False
+    track: float | None = None
+    dtype: SpaceDtype = "float32"
 
     def __post_init__(self) -> None:
         if not isinstance(self.plant, Plant):
@@ -115,6 +131,13 @@ class SwingUpTask:
                 f"normalised_action must be True or False, got {self.normalised_action!r}"
             )
         object.__setattr__(self, "normalised_action", bool(self.normalised_action))
+        object.__setattr__(self, "track", check_track(self.track))
+        object.__setattr__(self, "dtype", check_dtype(self.dtype))
+        if not self.normalised_action and self.u_max > float(np.finfo(self.dtype).max):
+            raise ParameterError(
+                f"u_max = {self.u_max:g} does not fit the {self.dtype} action space; "
+                "use dtype='float64' or normalised_action=True"
+            )
         steps = self.duration / self.dt
         if not 1 <= round(steps) <= MAX_STEPS:
             raise ParameterError(
@@ -170,6 +193,40 @@ def check_perturbation(value: float) -> float:
     if not 0.0 <= p < kernel.BLOW_UP:
         raise ParameterError(f"perturbation must be >= 0 and < {kernel.BLOW_UP:g}, got {p!r}")
     return p
+
+
+def check_track(value: object) -> float | None:
+    """A track half-length: a finite number > 0 [m], or None for an endless track.
+
+    ``inf`` is read as None. Anything else (0, a negative number, NaN, a bool, text)
+    raises ParameterError.
+    """
+    if value is None:
+        return None
+    if isinstance(value, bool | np.bool_):
+        raise ParameterError(f"track must be a number > 0 [m] or None, got {value!r}")
+    t = as_float("track", value)
+    if t == math.inf:
+        return None
+    if not math.isfinite(t) or t <= 0.0:
+        raise ParameterError(
+            f"track must be a finite number > 0 [m] (half-length of the rails), "
+            f"or None / inf for an endless track; got {value!r}"
+        )
+    return t
+
+
+def check_dtype(value: object) -> SpaceDtype:
+    """``"float32"`` or ``"float64"`` from a name or NumPy type, or ParameterError."""
+    try:
+        name = np.dtype(value).name if value is not None else None  # type: ignore[call-overload]
+    except TypeError:
+        name = None
+    if name == "float32":
+        return "float32"
+    if name == "float64":
+        return "float64"
+    raise ParameterError(f"dtype must be 'float32' or 'float64', got {value!r}")
 
 
 def check_reset_options(
@@ -237,12 +294,19 @@ def wrap(theta: np.ndarray) -> np.ndarray:
     return result
 
 
-def observe(states: np.ndarray, kind: ObservationKind) -> np.ndarray:
-    """(B, 5) trig or (B, 4) raw observations of kernel states (B, 4)."""
+def observe(states: np.ndarray, kind: ObservationKind, dtype: SpaceDtype = "float64") -> np.ndarray:
+    """(B, 5) trig or (B, 4) raw observations of kernel states (B, 4), as ``dtype``.
+
+    Computed in float64 and then rounded once to ``dtype``.
+    """
     if kind == "raw":
-        return states.copy()
-    th = states[:, 2]
-    return np.stack([states[:, 0], states[:, 1], np.sin(th), np.cos(th), states[:, 3]], axis=1)
+        obs = states.copy()
+    else:
+        th = states[:, 2]
+        obs = np.stack([states[:, 0], states[:, 1], np.sin(th), np.cos(th), states[:, 3]], axis=1)
+    # Only a blown-up state (beyond 1e8, already a fault) overflows float32, to inf.
+    with np.errstate(over="ignore"):
+        return obs.astype(dtype, copy=False)
 
 
 def _gaussian_tolerance(d: np.ndarray, margin: float, value_at_margin: float = 0.1) -> np.ndarray:
@@ -280,22 +344,24 @@ def outcome(
     The trial rules are the kernel's own compiled :func:`striatal.sim.kernel.judge`
     (eqs 24-25, docs/paper-notes.md section 5), the function
     :func:`striatal.sim.kernel.run_trial` applies after every step: a non-finite or
-    blown-up state ends the episode (termination, failure reward); at the check step
+    blown-up state ends the episode (termination, failure reward); so does |x| beyond
+    ``task.track`` (the cart left the rails; the kernel's STATUS_TRACK); at the check step
     (t = 30 s) the eq-24 test |x| > check_x or |theta| > check_theta terminates with
     the failure reward; at the last step the time limit truncates and the chapter
     reward is eq 25's success or failure. The dense reward replaces the chapter's
-    (0 on a fault); the t = 30 s check terminates in both modes.
+    (0 on a fault; the state's dense reward on leaving the track); the t = 30 s check
+    and the track terminate in both modes.
     """
     states = np.ascontiguousarray(states, dtype=float)
     B = states.shape[0]
     status = np.empty(B, dtype=np.int64)
     chapter_reward = np.empty(B)
-    protocol = protocol_args(task.protocol, task.dt, task.n_steps)
+    protocol = protocol_args(task.protocol, task.dt, task.n_steps, task.track)
     kernel.judge_batch(
         states, np.ascontiguousarray(steps, dtype=np.int64), protocol, status, chapter_reward
     )
     fault = status == kernel.STATUS_FAULT
-    terminated = fault | (status == kernel.STATUS_EARLY)
+    terminated = fault | (status == kernel.STATUS_EARLY) | (status == kernel.STATUS_TRACK)
     truncated = (status == kernel.STATUS_SUCCESS) | (status == kernel.STATUS_FAILURE)
     if task.reward == "chapter":
         reward = chapter_reward

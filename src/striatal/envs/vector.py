@@ -162,7 +162,7 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         }
         for b, state in starts.items():
             self._commit_row(b, state)
-        return observe(self._states, self.task.observation), self._infos()
+        return observe(self._states, self.task.observation, self.task.dtype), self._infos()
 
     def step(
         self, actions: np.ndarray
@@ -186,7 +186,7 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         terminated[was_done] = False
         truncated[was_done] = False
         self._autoreset = terminated | truncated
-        obs = observe(self._states, self.task.observation)
+        obs = observe(self._states, self.task.observation, self.task.dtype)
         return obs, reward, terminated, truncated, self._infos()
 
     def render(self) -> tuple[np.ndarray, ...] | None:

@@ -5,7 +5,7 @@ drawn exactly as ``striatal train --init random --seed S`` draws them, with the
 policy noise seeded by S, so any row of the table can be rerun on its own with
 ``striatal train --init random --seed S --learner ... --success-on mean``.
 Success is the chapter's success test on the mean policy. The variants are arms of
-one sweep (:func:`striatal.experiments.runner.sweep`: resume, progress, the Ray backend,
+one sweep (:func:`striatal.experiments.sweeps.run_sweep`: resume, progress, the Ray backend,
 the output folder's lock), with seeds S..S+N-1 and init "random". "trials" counts
 the learner's 60-s trials; "simulations" every simulated trial, the mean-policy
 checks of ``--success-on mean`` included (pgpe judges the candidate its trial ran,
@@ -23,7 +23,8 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.experiments import runner as experiments
+from striatal.experiments import runner, sweeps
+from striatal.experiments.spec import RunSpec
 from striatal.learners import LearnerConfig, control_config, default_config
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
@@ -75,8 +76,8 @@ class Variant:
             return "baseline"
         return "control" if self.control else "learner"
 
-    def arm(self, max_trials: int) -> experiments.Arm:
-        return experiments.Arm(self.name, self.method, self.config(max_trials), self.role)
+    def arm(self, max_trials: int) -> sweeps.Arm:
+        return sweeps.Arm(self.name, self.method, self.config(max_trials), self.role)
 
     @property
     def options(self) -> str:
@@ -180,12 +181,12 @@ def _control(v: Variant) -> dict[str, Any]:
 
 def build(
     variants: Sequence[Variant], seeds: Sequence[int], max_trials: int, eval_draws: int = 0
-) -> tuple[list[experiments.RunSpec], dict[str, Any]]:
+) -> tuple[list[RunSpec], dict[str, Any]]:
     """(specs, settings) of the ablation sweep: every variant an arm, init "random"."""
     if not variants:
         raise ParameterError("no variant to run: name at least one")
     arms = [v.arm(max_trials) for v in variants]
-    specs, arm_settings = experiments.specs_of(
+    specs, arm_settings = sweeps.specs_of(
         arms,
         template=Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
         plant=Plant(),
@@ -204,7 +205,7 @@ def build(
         "eval_draws": eval_draws,
         "arms": arm_settings,
         "variants": {v.name: {"options": v.options, "what": v.what} for v in variants},
-        "budget": experiments.NOTE_BUDGET,
+        "budget": runner.NOTE_BUDGET,
     }
     return specs, settings
 
@@ -240,7 +241,7 @@ def summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
 
 
 def table_rows(
-    variants: Sequence[Variant], result: experiments.SweepResult
+    variants: Sequence[Variant], result: sweeps.SweepResult
 ) -> tuple[list[tuple[Variant, dict[str, Any]]], dict[str, Any]]:
     """(table rows, ablation.json) of a finished ablation sweep, in the variants' order.
 

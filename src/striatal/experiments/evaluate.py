@@ -29,15 +29,19 @@ from striatal.params import (
     Simulation,
     check_seed,
 )
-from striatal.sim.rollout import Protocol, SensorNoise, run_trial
+from striatal.sim.batch import Steps, TrialRequest, drive
+from striatal.sim.rollout import Protocol, SensorNoise
 
 __all__ = [
     "MAX_DRAWS",
     "PassProbability",
     "check_draws",
     "pass_probability",
+    "pass_probability_steps",
 ]
 
+#: Noisy trials requested at once (their noise is drawn when a driver runs them).
+DRAWS_AT_ONCE = 256
 #: Most noise draws one estimate may take: at ~2 ms a 60-s trial, about half an hour.
 MAX_DRAWS = 1_000_000
 
@@ -120,15 +124,49 @@ def pass_probability(
     robustness set see :func:`striatal.sim.robust.check_robust`. ``on_draw(k)`` is called
     after the k-th noisy trial (a progress bar); it does not touch the draws.
     """
+    return drive(
+        pass_probability_steps(
+            plant,
+            controller,
+            sim,
+            protocol,
+            draws,
+            seed,
+            action_every=action_every,
+            model=model,
+            sensor=sensor,
+            hardware=hardware,
+            on_draw=on_draw,
+        )
+    )
+
+
+def pass_probability_steps(
+    plant: Plant,
+    controller: Controller,
+    sim: Simulation,
+    protocol: Protocol,
+    draws: int,
+    seed: int,
+    *,
+    action_every: int = 1,
+    model: Plant | None = None,
+    sensor: SensorNoise | None = None,
+    hardware: Hardware = CHAPTER_HARDWARE,
+    on_draw: Callable[[int], None] | None = None,
+    chunk: int = DRAWS_AT_ONCE,
+) -> Steps[PassProbability]:
+    """:func:`pass_probability` as :data:`striatal.sim.batch.Steps`: the mean-policy
+    trial, then the noisy trials ``chunk`` at a time (the same draws, in the same order)."""
     n = check_draws(draws)
     sensor = sensor or SensorNoise()
     rng = np.random.default_rng(check_seed(seed))
 
-    def trial(mean_policy: bool) -> tuple[bool, float, float]:
-        o = run_trial(
-            plant,
-            controller,
-            sim,
+    def trial(mean_policy: bool) -> TrialRequest:
+        return TrialRequest(
+            plant=plant,
+            controller=controller,
+            sim=sim,
             protocol=protocol,
             trace=np.zeros(N_GAINS),
             gamma=0.0,
@@ -140,18 +178,20 @@ def pass_probability(
             mean_policy=mean_policy,
             hardware=hardware,
         )
-        return o.success, o.reward, o.ended_at
 
-    mean_ok, _, mean_seconds = trial(mean_policy=True)
+    (mean,) = yield [trial(mean_policy=True)]
     passes = positive = 0
-    seconds = mean_seconds
-    for k in range(n):
-        ok, reward, ended = trial(mean_policy=False)
-        passes += ok
-        positive += reward > 0
-        seconds += ended
-        if on_draw is not None:
-            on_draw(k + 1)
+    seconds = mean.ended_at
+    done = 0
+    while done < n:
+        outcomes = yield [trial(mean_policy=False) for _ in range(min(chunk, n - done))]
+        for o in outcomes:
+            passes += o.success
+            positive += o.reward > 0
+            seconds += o.ended_at
+            done += 1
+            if on_draw is not None:
+                on_draw(done)
     low, high = wilson_interval(passes, n).bounds or (0.0, 1.0)  # n >= 1: never None
     return PassProbability(
         gains=controller.gains,
@@ -162,7 +202,7 @@ def pass_probability(
         rate=passes / n,
         rate_ci=(low, high),
         reward_positive=positive,
-        mean_policy_pass=mean_ok,
+        mean_policy_pass=mean.success,
         simulations=n + 1,
         simulated_seconds=seconds,
     )

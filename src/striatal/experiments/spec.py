@@ -1,7 +1,7 @@
 """One run of a sweep: its spec (arm, start, seed, settings), its seed and its W(0).
 
 A sweep is a list of :class:`RunSpec` (frozen, picklable), one per (arm, init, seed).
-Both engines read them: the process engine (:mod:`striatal.experiments.runner`) and
+Both engines read them: the process engine (:mod:`striatal.experiments.pool`) and
 the lockstep engine (:mod:`striatal.experiments.lockstep_sweep`).
 """
 

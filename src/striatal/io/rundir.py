@@ -22,7 +22,6 @@ in use.
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import hashlib
 import json
 import math
@@ -32,7 +31,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from striatal.errors import DataFileError, ParameterError
+from striatal.errors import DataFileError, ParameterError, StriatalError
 from striatal.io.files import (
     atomic_write_text,
     csv_text,
@@ -53,6 +52,11 @@ from striatal.learners import (
 from striatal.learners.state import history_columns
 from striatal.params import Controller, Plant, Simulation, check_seed
 from striatal.sim.rollout import Protocol
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: everything but RunDir.lock still works
+    fcntl = None  # type: ignore[assignment]
 
 __all__ = [
     "CHECKPOINT",
@@ -199,8 +203,14 @@ class RunDir:
         """Hold an exclusive lock on the folder (``fcntl.flock``) or raise DataFileError.
 
         The lock is on the folder itself (no lock file is left behind) and goes away
-        with the process, even after SIGKILL.
+        with the process, even after SIGKILL. Needs a POSIX system (``fcntl``); elsewhere
+        it raises StriatalError before touching the folder.
         """
+        if fcntl is None:
+            raise StriatalError(
+                f"cannot lock output folder {self.path}: folder locks need a POSIX system "
+                "(Linux, macOS); this Python has no fcntl module"
+            )
         try:
             self.path.mkdir(parents=True, exist_ok=True)
             fd = os.open(self.path, os.O_RDONLY)

@@ -44,8 +44,9 @@ from striatal.learners.rpe import RPE
 from striatal.learners.rule import Rule, Update
 from striatal.learners.state import LearnerState, TrainResult, TrialRecord
 from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Plant, Simulation
+from striatal.sim.batch import Steps, TrialRequest, drive
 from striatal.sim.robust import nominal_is_the_case, stop_check
-from striatal.sim.rollout import Protocol, TrialOutcome, recorded_trial, run_trial
+from striatal.sim.rollout import Protocol, recorded_trial
 
 __all__ = [
     "RULES",
@@ -53,7 +54,9 @@ __all__ = [
     "control_config",
     "default_config",
     "learn",
+    "learn_steps",
     "learning_step",
+    "learning_steps",
     "register",
     "rule_of",
 ]
@@ -129,7 +132,7 @@ def _finite(update: Update, state: LearnerState) -> Update:
     return Update(W=W, theta_c=theta_c, memory=memory)
 
 
-def _mean_policy_outcome(
+def _mean_policy_trial(
     plant: Plant,
     controller: Controller,
     sim: Simulation,
@@ -138,9 +141,9 @@ def _mean_policy_outcome(
     action_every: int,
     model: Plant | None,
     hardware: Hardware = CHAPTER_HARDWARE,
-) -> TrialOutcome:
+) -> TrialRequest:
     """The noise-free trial of the success test (``mean_policy_success`` with its outcome)."""
-    return run_trial(
+    return TrialRequest(
         plant=plant,
         controller=controller,
         sim=sim,
@@ -166,7 +169,23 @@ def learning_step(
     """One trial with (W, theta_c) of ``state``, the success test, then the rule's update.
 
     Pure: the same state gives the same result. ``template`` carries the readings
-    (balance sign, switch, inhibition); its gains are replaced by the state's.
+    (balance sign, switch, inhibition); its gains are replaced by the state's. Its
+    trials run on the scalar kernel (:func:`learning_steps` for other drivers).
+    """
+    return drive(learning_steps(state, plant, template, sim, protocol, config))
+
+
+def learning_steps(
+    state: LearnerState,
+    plant: Plant,
+    template: Controller,
+    sim: Simulation,
+    protocol: Protocol,
+    config: LearnerConfig,
+) -> Steps[tuple[LearnerState, TrialRecord]]:
+    """:func:`learning_step` as :data:`striatal.sim.batch.Steps`: the learning trial and the
+    success test's noise-free trials are yielded as requests; the trials that need more
+    than the summary (a recorded trial, a rule's own trial, the robustness set) run here.
     """
     rule = rule_of(config)
     rng = np.random.default_rng()
@@ -197,7 +216,7 @@ def learning_step(
         outcome, data = recorded_trial(**kwargs)  # type: ignore[arg-type]
         reward = shaped_reward(data, outcome, true_plant, sim, protocol)
     else:
-        outcome = run_trial(**kwargs)  # type: ignore[arg-type]
+        (outcome,) = yield [TrialRequest(**kwargs)]  # type: ignore[arg-type]
         reward = outcome.reward
     simulations, seconds = 1, outcome.ended_at
     if rule.judges_candidate:
@@ -229,9 +248,18 @@ def learning_step(
         for true_plant_i, model_i in checks:
             if not success:
                 break
-            check = _mean_policy_outcome(
-                true_plant_i, controller, sim, protocol, W, config.action_every, model_i, hardware
-            )
+            (check,) = yield [
+                _mean_policy_trial(
+                    true_plant_i,
+                    controller,
+                    sim,
+                    protocol,
+                    W,
+                    config.action_every,
+                    model_i,
+                    hardware,
+                )
+            ]
             simulations += 1
             seconds += check.ended_at
             success = check.success
@@ -298,15 +326,20 @@ def learn(
     protocol = protocol or Protocol()
     if state is None:
         state = initial_state(template.gains, template.theta_c, seed)
+    last = [state]
+
+    def recorded(new: LearnerState, record: TrialRecord) -> None:
+        last[0] = new
+        if on_trial is not None:
+            on_trial(new, record)
+
     t0 = time.perf_counter()
     interrupted = False
     try:
-        while not state.success and state.trials_done < config.max_trials:
-            state, record = learning_step(state, plant, template, sim, protocol, config)
-            if on_trial is not None:
-                on_trial(state, record)
+        drive(learn_steps(plant, template, config, state, sim, protocol, on_trial=recorded))
     except KeyboardInterrupt:
         interrupted = True
+    state = last[0]
     return TrainResult(
         success=state.success,
         trials=state.trials_done,
@@ -319,3 +352,22 @@ def learn(
         interrupted=interrupted,
         settings={"learner": config.learner, "seed": seed, "config": config.to_dict()},
     )
+
+
+def learn_steps(
+    plant: Plant,
+    template: Controller,
+    config: LearnerConfig,
+    state: LearnerState,
+    sim: Simulation,
+    protocol: Protocol,
+    *,
+    on_trial: Callable[[LearnerState, TrialRecord], None] | None = None,
+) -> Steps[LearnerState]:
+    """:func:`learn`'s trials from ``state`` as :data:`striatal.sim.batch.Steps`: the
+    learning steps until success or ``config.max_trials``; returns the last state."""
+    while not state.success and state.trials_done < config.max_trials:
+        state, record = yield from learning_steps(state, plant, template, sim, protocol, config)
+        if on_trial is not None:
+            on_trial(state, record)
+    return state

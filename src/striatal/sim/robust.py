@@ -140,12 +140,7 @@ class RobustReport:
             "dt": self.dt,
             "hardware": self.hardware.to_dict(),
             "controller": self.controller.to_dict(),
-            "nominal_plant": {
-                "cart_mass": self.plant.cart_mass,
-                "pole_mass": self.plant.pole_mass,
-                "length": self.plant.length,
-                "gravity": self.plant.gravity,
-            },
+            "nominal_plant": self.plant.to_dict(),
             "policy": "mean (no exploration noise)",
             "success_test": "|theta|<0.05, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.005 at T_f",
             "cases": [c.to_dict() for c in self.cases],

@@ -34,6 +34,7 @@ __all__ = [
     "TrialOutcome",
     "batch_args",
     "control_args",
+    "noise_arrays",
     "plant_args",
     "protocol_args",
     "recorded_trial",
@@ -190,13 +191,15 @@ class Trajectory:
         return [float(t) for t in self.t[idx]]
 
 
-def _noise_arrays(
+def noise_arrays(
     sim: Simulation,
     action_every: int,
     rng: np.random.Generator | None,
     sensor: SensorNoise,
     mean_policy: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
+    """(action normals, sensor normals) of one trial, drawn from ``rng`` in that order:
+    one normal per action step unless the mean policy runs, (n_steps, 2) with sensor noise."""
     n_draws = -(-sim.n_steps // action_every)
     draws_actions = rng is not None and not mean_policy
     noise = rng.standard_normal(n_draws) if draws_actions and rng is not None else np.empty(0)
@@ -406,7 +409,7 @@ def simulate(
     controller believes in (default: the true ``plant``); ``hardware``: the motor's hold
     and limit and the track (default: the chapter's idealisation).
     """
-    noise, sensor_noise = _noise_arrays(sim, action_every, rng, sensor)
+    noise, sensor_noise = noise_arrays(sim, action_every, rng, sensor)
     args = trial_args(
         plant,
         controller,
@@ -532,7 +535,7 @@ def _trial(
     record: bool,
     hardware: Hardware = CHAPTER_HARDWARE,
 ) -> tuple[TrialOutcome, np.ndarray]:
-    noise, sensor_noise = _noise_arrays(sim, action_every, rng, sensor, mean_policy)
+    noise, sensor_noise = noise_arrays(sim, action_every, rng, sensor, mean_policy)
     args = trial_args(
         plant,
         controller,

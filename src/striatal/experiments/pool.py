@@ -1,0 +1,262 @@
+"""Where the runs of a sweep execute: a local process pool or a Ray cluster.
+
+:func:`execute` yields one row per spec (:func:`striatal.experiments.runner.run_one`),
+in completion order. Local workers die with the sweep that started them (Linux's
+PR_SET_PDEATHSIG, and a watchdog thread where that is missing); the Ray backend waits
+for its address to accept connections first (:func:`wait_for_address`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import os
+import signal
+import socket
+import sys
+import threading
+import time
+from collections.abc import Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from typing import Any, Literal
+
+from striatal.errors import ParameterError
+from striatal.experiments.runner import run_one
+from striatal.experiments.spec import RunSpec
+from striatal.learners.config import require_count
+
+Backend = Literal["local", "ray"]
+
+
+#: Seconds to wait for a Ray cluster's address to accept a connection.
+CONNECT_TIMEOUT = 30.0
+
+
+def _ray_worker(spec: RunSpec) -> dict[str, Any]:
+    return run_one(spec)
+
+
+#: How often a local worker checks that the sweep that started it is still there [s].
+WATCHDOG_SECONDS = 0.5
+
+
+#: prctl(2) option: the signal the kernel sends this process when its parent dies (Linux).
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> bool:
+    """Ask Linux to SIGKILL this process when its parent dies; False where unavailable."""
+    if not sys.platform.startswith("linux"):
+        return False
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        return int(libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _watch_parent(parent: int, ppid: int) -> None:
+    while True:
+        if os.getppid() != ppid or not _alive(parent):
+            os._exit(1)  # the sweep is gone (even SIGKILLed): stop its run at once
+        time.sleep(WATCHDOG_SECONDS)
+
+
+def _worker_init(parent: int) -> None:
+    """Initializer of every local worker: it ends when the sweep ``parent`` (its pid) dies.
+
+    On Linux the kernel kills it as soon as its parent process dies (prctl
+    PR_SET_PDEATHSIG); everywhere a daemon thread also ends it within about
+    WATCHDOG_SECONDS once its parent changes (it was re-parented) or the sweep's
+    pid is gone, so a SIGKILLed sweep leaves no worker behind.
+    Under the fork and spawn start methods the parent is the sweep; under
+    forkserver it is the server, which exits with the sweep.
+    """
+    _die_with_parent()
+    ppid = os.getppid()
+    if not _alive(parent):
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent, ppid), daemon=True).start()
+
+
+#: The most local worker processes a sweep starts (each holds a Numba runtime, ~100 MB).
+MAX_WORKERS = 256
+
+
+def check_workers(workers: object) -> None:
+    """ParameterError unless ``workers`` is a whole number in [1, :data:`MAX_WORKERS`]."""
+    require_count("--workers", workers)
+    if workers > MAX_WORKERS:  # type: ignore[operator]
+        raise ParameterError(f"--workers must be <= {MAX_WORKERS}, got {workers}")
+
+
+def execute(
+    specs: Sequence[RunSpec],
+    *,
+    backend: Backend = "local",
+    workers: int = 1,
+    address: str | None = None,
+    connect_timeout: float = CONNECT_TIMEOUT,
+) -> Iterator[dict[str, Any]]:
+    """Rows of ``specs`` in completion order.
+
+    local: in this process (workers 1) or a ProcessPoolExecutor of ``workers``
+    processes, never more than there are specs (module-level worker, safe under spawn
+    and forkserver; each worker exits when its parent dies). ray: tasks on the existing
+    Ray cluster at ``address`` (extra [cluster]), given up after ``connect_timeout``
+    seconds if the address does not accept a connection.
+    """
+    check_workers(workers)
+    if backend == "ray":
+        yield from _execute_ray(specs, address, connect_timeout)
+        return
+    if backend != "local":
+        raise ParameterError(f"backend must be 'local' or 'ray', got {backend!r}")
+    if workers == 1 or len(specs) <= 1:
+        for spec in specs:
+            yield run_one(spec)
+        return
+    pool = ProcessPoolExecutor(
+        max_workers=min(workers, len(specs)), initializer=_worker_init, initargs=(os.getpid(),)
+    )
+    try:
+        pending = {pool.submit(run_one, s) for s in specs}
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in done:
+                yield fut.result()
+    except BaseException:
+        _stop_pool(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """End ``pool`` now: queued runs cancelled, running ones (never recorded) killed.
+
+    A plain ``shutdown`` waits for the running runs, and a second Ctrl-C inside it
+    leaves workers waiting for work that never comes, which the interpreter then
+    joins at exit for ever. SIGINT is blocked meanwhile (a pending one is raised
+    afterwards).
+    """
+    main = threading.current_thread() is threading.main_thread()
+    if main:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        workers = list((getattr(pool, "_processes", None) or {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for worker in workers:
+            with contextlib.suppress(OSError, ValueError):
+                worker.kill()
+        for worker in workers:
+            with contextlib.suppress(OSError, ValueError, AssertionError):
+                worker.join(timeout=5)
+    finally:
+        if main:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def wait_for_address(address: str, timeout: float) -> None:
+    """Return once HOST:PORT accepts a TCP connection; ParameterError after ``timeout`` s.
+
+    Addresses that are not HOST:PORT (``auto``, ``ray://...``) are left to Ray.
+    """
+    if not math.isfinite(timeout) or timeout <= 0:
+        raise ParameterError(f"--connect-timeout must be > 0 seconds, got {timeout}")
+    host, sep, port_text = address.rpartition(":")
+    if not sep or not host or "/" in address or not port_text.isdigit():
+        return
+    deadline = time.monotonic() + timeout
+    while True:
+        left = deadline - time.monotonic()
+        try:
+            with socket.create_connection((host, int(port_text)), timeout=max(min(left, 5.0), 0.1)):
+                return
+        except OSError as exc:
+            if time.monotonic() + 0.5 >= deadline:
+                raise ParameterError(
+                    f"no Ray cluster answers at {address} within {timeout:g} s "
+                    f"({exc.strerror or exc})"
+                ) from None
+            time.sleep(0.5)
+
+
+#: Run in a child process: connect to the Ray cluster at argv[1], then disconnect.
+_RAY_PROBE = (
+    "import logging, sys, ray; "
+    "ray.init(address=sys.argv[1], logging_level=logging.ERROR, log_to_driver=False); "
+    "ray.shutdown()"
+)
+
+
+def _probe_ray(address: str, timeout: float, shown: float) -> None:
+    """Connect to Ray at ``address`` in a child process killed after ``timeout`` s.
+
+    Ray has no connect timeout of its own: on a port that accepts connections but is
+    no Ray head it retries for minutes, logging each attempt to stderr from C++, and
+    the SIGTERM handler it installs cannot run while its client waits. A child can be
+    killed and its stderr kept; it dies with this process (PR_SET_PDEATHSIG on
+    Linux), so SIGTERM, which keeps its default action here, ends both at once.
+    ParameterError (one line) when it fails or times out.
+    """
+    import subprocess
+
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", _RAY_PROBE, address],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            preexec_fn=_die_with_parent,
+            check=False,
+        )
+    except subprocess.TimeoutExpired:
+        raise ParameterError(
+            f"the Ray cluster at {address} did not answer within {shown:g} s "
+            "(is it a Ray head's GCS port?); see --connect-timeout"
+        ) from None
+    if done.returncode != 0:
+        lines = [ln.strip() for ln in done.stderr.splitlines() if ln.strip()]
+        reason = lines[-1] if lines else f"exit {done.returncode}"
+        raise ParameterError(f"cannot connect to the Ray cluster at {address}: {reason}")
+
+
+def _execute_ray(
+    specs: Sequence[RunSpec], address: str | None, connect_timeout: float
+) -> Iterator[dict[str, Any]]:
+    if not address:
+        raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
+    try:
+        import ray
+    except ImportError:
+        raise ParameterError(
+            "--backend ray needs the [cluster] extra: pip install 'striatal[cluster]'"
+        ) from None
+    # the whole connection, the TCP check and Ray's handshake, within connect_timeout
+    started = time.monotonic()
+    wait_for_address(address, connect_timeout)
+    left = connect_timeout - (time.monotonic() - started)
+    _probe_ray(address, max(left, 1.0), connect_timeout)
+    ray.init(address=address, logging_level=logging.ERROR, log_to_driver=False)
+    try:
+        remote = ray.remote(num_cpus=1)(_ray_worker)
+        pending = [remote.remote(s) for s in specs]
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1)
+            for ref in done:
+                yield ray.get(ref)
+    finally:
+        ray.shutdown()

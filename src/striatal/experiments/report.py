@@ -1,0 +1,220 @@
+"""summary.json and its markdown table: the statistics of a sweep's rows, per arm.
+
+Each (arm, init) gets its success rate with a Wilson interval and, over its solved
+seeds, medians and IQMs of the cost with seeded bootstrap intervals
+(:mod:`striatal.experiments.stats`); each learner arm is tested against its control
+(Fisher's exact test, McNemar's on the shared seeds). The summary is computed from the
+rows sorted by (arm, init, seed), so it does not depend on completion order; its
+bootstrap intervals are seeded by the arm and init.
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+
+from striatal.errors import ParameterError
+from striatal.experiments import stats
+from striatal.experiments.runner import NOTE_BUDGET, control_note
+from striatal.experiments.runs_csv import sort_rows
+
+
+def _quantile(values: Sequence[float], q: float) -> float:
+    return float(np.quantile(np.asarray(values, dtype=float), q)) if values else math.nan
+
+
+def _finite_mean(values: Iterable[float]) -> float:
+    x = [float(v) for v in values if math.isfinite(float(v))]
+    return float(np.mean(x)) if x else math.nan
+
+
+def bootstrap_rng(arm: str, init: str) -> np.random.Generator:
+    """The generator of an arm's bootstrap intervals: seeded by its name and init only."""
+    return np.random.default_rng(zlib.crc32(f"{arm}|{init}".encode()))
+
+
+def arm_statistics(
+    rows: Sequence[dict[str, Any]], max_trials: int, rng: np.random.Generator | None = None
+) -> dict[str, Any]:
+    """The statistics of one arm's rows (one per seed).
+
+    From :func:`striatal.experiments.stats.arm_summary`: ``success_rate`` with its Wilson interval
+    ``success_rate_ci``, and over the solved seeds the median and IQM of
+    ``simulations``, ``simulated_seconds`` and ``trials`` with seeded bootstrap
+    intervals (``simulations_median_ci``, ``simulations_iqm_ci``, ...). Besides:
+    quartiles of trials to success, ``trials_median_all`` (unsolved runs counted as
+    ``max_trials``, a lower bound), the share whose final gains pass a noise-free
+    re-simulation, budget and evaluation totals, and the mean pass probabilities of
+    W(0) and of the final gains (over runs that estimated them).
+    """
+    n = len(rows)
+    solved = [float(r["trials"]) for r in rows if r["success"]]
+    every = [float(r["trials"]) if r["success"] else float(max_trials) for r in rows]
+    wall = [float(r["wall_seconds"]) for r in rows]
+    out = stats.arm_summary(rows, rng=rng if rng is not None else np.random.default_rng(0))
+    out.update(
+        {
+            "unsolved_share": (n - len(solved)) / n if n else math.nan,
+            "trials_q1": _quantile(solved, 0.25),
+            "trials_q3": _quantile(solved, 0.75),
+            "trials_median_all": _quantile(every, 0.5),
+            "mean_policy_success_rate": (
+                sum(bool(r["mean_policy_success"]) for r in rows) / n if n else math.nan
+            ),
+            "robust_rate": _finite_mean(r.get("robust", math.nan) for r in rows),
+            "simulations_total": int(sum(int(r["simulations"]) for r in rows)),
+            "simulated_seconds_total": float(sum(float(r["simulated_seconds"]) for r in rows)),
+            "trials_total": int(sum(int(r["trials"]) for r in rows)),
+            "eval_simulations_total": int(sum(int(r["eval_simulations"]) for r in rows)),
+            "pass_rate_W0_mean": _finite_mean(r["pass_rate_W0"] for r in rows),
+            "pass_rate_mean": _finite_mean(r["pass_rate"] for r in rows),
+            "wall_seconds_total": float(sum(wall)),
+            "wall_seconds_median": _quantile(wall, 0.5),
+        }
+    )
+    if out["trials_median"] is None:
+        out["trials_median"] = math.nan
+    return out
+
+
+def summarise(
+    rows: Sequence[dict[str, Any]], max_trials: int, settings: dict[str, Any]
+) -> dict[str, Any]:
+    """summary.json: statistics per (arm, init) in sorted order, each learner arm against
+    its control (Fisher's exact test, and McNemar's on the shared seeds), settings.
+
+    Rows must have distinct (arm, init, seed): a duplicate would count one run twice
+    (ParameterError).
+    """
+    ordered = sort_rows(rows)
+    keys = [(r["arm"], r["init"], int(r["seed"])) for r in ordered]
+    if len(set(keys)) != len(keys):
+        dup = next(k for i, k in enumerate(keys) if k in keys[:i])
+        raise ParameterError(f"run {dup} appears twice: a run is counted once")
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in ordered:
+        groups.setdefault((r["arm"], r["init"]), []).append(r)
+    arms = [
+        {
+            "arm": arm,
+            "init": init,
+            "role": g[0]["role"],
+            "method": g[0]["method"],
+            "learner": g[0]["learner"],
+            **arm_statistics(g, max_trials, bootstrap_rng(arm, init)),
+        }
+        for (arm, init), g in groups.items()
+    ]
+    side_by_side = []
+    for a in arms:
+        if a["role"] != "learner":
+            continue
+        ctrl = next(
+            (
+                c
+                for c in arms
+                if c["role"] == "control"
+                and c["init"] == a["init"]
+                and c["learner"] == a["learner"]
+            ),
+            None,
+        )
+        if ctrl is None:
+            continue
+        solved = {
+            name: {int(r["seed"]): bool(r["success"]) for r in groups[(name, a["init"])]}
+            for name in (a["arm"], ctrl["arm"])
+        }
+        side_by_side.append(
+            {
+                "init": a["init"],
+                "arm": a["arm"],
+                "control": ctrl["arm"],
+                "learner": a["learner"],
+                "success_rate": a["success_rate"],
+                "success_rate_ci": a["success_rate_ci"],
+                "control_success_rate": ctrl["success_rate"],
+                "control_success_rate_ci": ctrl["success_rate_ci"],
+                "simulations_median": a["simulations_median"],
+                "control_simulations_median": ctrl["simulations_median"],
+                "trials_median": a["trials_median"],
+                "control_trials_median": ctrl["trials_median"],
+                **stats.compare_arms(solved[a["arm"]], solved[ctrl["arm"]]),
+            }
+        )
+    learners = sorted({a["learner"] for a in arms} - {"-"})
+    return {
+        "arms": arms,
+        "learner_vs_control": side_by_side,
+        "notes": [*(control_note(x) for x in learners), NOTE_BUDGET],
+        "settings": settings,
+    }
+
+
+def _num(v: Any, fmt: str = "g") -> str:
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+        return "-"
+    return format(v, fmt)
+
+
+def _ci(v: Any, fmt: str = "g") -> str:
+    if not isinstance(v, list | tuple) or len(v) != 2:
+        return ""
+    return f" [{_num(v[0], fmt)}, {_num(v[1], fmt)}]"
+
+
+def _robust_cell(arm: dict[str, Any]) -> str:
+    """ ", robust R" (re-checked share of robust final gains) in a robust sweep."""
+    rate = arm.get("robust_rate")
+    return (
+        f", robust {_num(rate, '.0%')}" if isinstance(rate, float) and math.isfinite(rate) else ""
+    )
+
+
+def markdown_table(summary: dict[str, Any]) -> str:
+    """The comparison table of a summary, one line per (arm, init), then each learner
+    against its control. Intervals are 95 %: Wilson for rates, bootstrap for the median
+    and IQM of simulations to success (over solved runs)."""
+    lines = [
+        "| arm | init | runs | success [95% CI] | simulations to success: median [95% CI] | "
+        "IQM [95% CI] | trials: median [q1, q3] | mean policy passes | "
+        "pass rate W(0) -> final | simulations (all runs) | wall s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for a in summary["arms"]:
+        lines.append(
+            f"| {a['arm']} | {a['init']} | {a['runs']} | "
+            f"{_num(a['success_rate'], '.0%')}{_ci(a.get('success_rate_ci'), '.0%')} | "
+            f"{_num(a.get('simulations_median'))}{_ci(a.get('simulations_median_ci'))} | "
+            f"{_num(a.get('simulations_iqm'), '.4g')}{_ci(a.get('simulations_iqm_ci'), '.4g')} | "
+            f"{_num(a['trials_median'])} "
+            f"[{_num(a.get('trials_q1'))}, {_num(a.get('trials_q3'))}] | "
+            f"{_num(a.get('mean_policy_success_rate'), '.0%')}{_robust_cell(a)} | "
+            f"{_num(a.get('pass_rate_W0_mean'), '.2f')} -> "
+            f"{_num(a.get('pass_rate_mean'), '.2f')} | "
+            f"{_num(a.get('simulations_total'))} | {_num(a.get('wall_seconds_total'), '.1f')} |"
+        )
+    pairs = summary.get("learner_vs_control") or []
+    if pairs:
+        lines += [
+            "",
+            "| learner arm | control | init | success | control success | "
+            "Fisher p | McNemar p (only learner / only control) |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for c in pairs:
+            mc = c.get("mcnemar") or {}
+            lines.append(
+                f"| {c['arm']} | {c['control']} | {c['init']} | "
+                f"{_num(c['success_rate'], '.0%')}{_ci(c.get('success_rate_ci'), '.0%')} | "
+                f"{_num(c['control_success_rate'], '.0%')}"
+                f"{_ci(c.get('control_success_rate_ci'), '.0%')} | "
+                f"{_num(c['fisher']['p_value'], '.3g')} | "
+                f"{_num(mc.get('p_value'), '.3g')} ({mc.get('only_a', '-')} / "
+                f"{mc.get('only_b', '-')}) |"
+            )
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,126 @@
+"""runs.csv: one row per finished run, appended as runs finish, read back on resume.
+
+A last line that a kill cut short is dropped on reading; a row whose (arm, init, seed)
+an earlier row already has is dropped too, so no run is counted twice.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from striatal.errors import DataFileError
+from striatal.io.files import csv_text, read_text
+from striatal.params import N_GAINS
+
+RUN_COLUMNS: tuple[str, ...] = (
+    "arm",
+    "role",
+    "method",
+    "learner",
+    "init",
+    "seed",
+    "alpha",
+    "gamma",
+    "success",
+    "trials",
+    *(f"W{i}" for i in range(1, N_GAINS + 1)),
+    "theta_c",
+    *(f"W0_{i}" for i in range(1, N_GAINS + 1)),
+    "theta_c0",
+    "mean_policy_success",
+    "robust",
+    "simulations",
+    "simulated_seconds",
+    "eval_simulations",
+    "pass_rate_W0",
+    "pass_rate",
+    "wall_seconds",
+)
+
+
+_INT_COLUMNS = ("seed", "trials", "simulations", "eval_simulations")
+
+
+_BOOL_COLUMNS = ("success", "mean_policy_success")
+
+
+_STR_COLUMNS = ("arm", "role", "method", "learner", "init")
+
+
+def row_text(row: dict[str, Any]) -> str:
+    """One CSV line (no header) of ``row`` in RUN_COLUMNS order."""
+    cells = [int(row[c]) if c in _BOOL_COLUMNS else row[c] for c in RUN_COLUMNS]
+    return csv_text(RUN_COLUMNS, [cells]).split("\n", 1)[1]
+
+
+def _parse_row(cells: list[str]) -> dict[str, Any]:
+    if len(cells) != len(RUN_COLUMNS):
+        raise ValueError(f"{len(cells)} cells, expected {len(RUN_COLUMNS)}")
+    row: dict[str, Any] = {}
+    for name, cell in zip(RUN_COLUMNS, cells, strict=True):
+        if name in _STR_COLUMNS:
+            if not cell:
+                raise ValueError(f"empty {name}")
+            row[name] = cell
+        elif name in _INT_COLUMNS:
+            row[name] = int(cell)
+        elif name in _BOOL_COLUMNS:
+            if cell not in ("0", "1"):
+                raise ValueError(f"{name} must be 0 or 1, got {cell!r}")
+            row[name] = cell == "1"
+        else:
+            row[name] = float(cell) if cell else math.nan
+    return row
+
+
+def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
+    """(rows, clean text) of runs.csv; a last line that does not parse is dropped.
+
+    A last line without its newline or that does not parse is what a kill during
+    a write leaves; any other bad line raises DataFileError. A row whose (arm, init,
+    seed) an earlier row already has is dropped (the first is kept), so no run is
+    counted twice.
+    """
+    if not path.exists():
+        return [], csv_text(RUN_COLUMNS, [])
+    lines = read_text(path, what="runs file").splitlines(keepends=True)
+    header = ",".join(RUN_COLUMNS)
+    if not lines or not lines[0].endswith("\n"):
+        return [], csv_text(RUN_COLUMNS, [])
+    if lines[0].strip() != header:
+        if lines[0].startswith("arm,"):
+            raise DataFileError(
+                f"runs file {path} has the columns of another striatal version (an older "
+                "one, before simulations or the robust column were recorded); use another --out"
+            )
+        raise DataFileError(f"runs file {path} does not have the header of a striatal sweep")
+    rows: list[dict[str, Any]] = []
+    kept = [lines[0]]
+    seen: set[tuple[str, str, int]] = set()
+    for i, line in enumerate(lines[1:], start=2):
+        last = i == len(lines)
+        try:
+            if not line.endswith("\n"):
+                raise ValueError("line cut short")
+            cells = next(csv.reader(io.StringIO(line)))
+            row = _parse_row(cells)
+        except (ValueError, StopIteration, csv.Error) as exc:
+            if last:
+                break
+            raise DataFileError(f"runs file {path} line {i} is malformed: {exc}") from None
+        key = (row["arm"], row["init"], row["seed"])
+        if key in seen:
+            continue
+        seen.add(key)
+        rows.append(row)
+        kept.append(line)
+    return rows, "".join(kept)
+
+
+def sort_rows(rows: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
+    return sorted(rows, key=lambda r: (r["arm"], r["init"], int(r["seed"])))

@@ -1,0 +1,486 @@
+"""A sweep: arms x inits x seeds, run on an engine, resumable, summarised.
+
+:func:`sweep` is the Python API of ``striatal sweep`` (the same defaults and the same
+rows and summary for the same arguments); :func:`plan` turns its arguments into run
+specs and the settings recorded in sweep.json; :func:`run_sweep` runs specs.
+
+Resume: rows are appended and flushed to runs.csv as runs finish; a rerun with the
+same output folder reads the rows back (dropping a last line a kill cut short) and
+runs only the missing (arm, init, seed). The output folder is locked
+(:meth:`striatal.io.rundir.RunDir.lock`) while a sweep runs in it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Literal, TextIO
+
+from striatal.errors import ParameterError
+from striatal.experiments import baselines as baseline_methods
+from striatal.experiments.pool import CONNECT_TIMEOUT, Backend, check_workers, execute
+from striatal.experiments.report import summarise
+from striatal.experiments.runner import (
+    CONTROL_ARM,
+    EVAL_DRAWS,
+    NOTE_BUDGET,
+    NOTE_ROBUST,
+    NOTE_SIMD,
+    ROLES,
+    control_note,
+)
+from striatal.experiments.runs_csv import read_runs, row_text, sort_rows
+from striatal.experiments.spec import Init, RunSpec, initial_gains, spawn_seeds
+from striatal.io.files import atomic_write_text, check_out_dir
+from striatal.io.rundir import RunDir
+from striatal.learners import LearnerConfig, default_config, rule_of
+from striatal.learners.config import require_count
+from striatal.params import (
+    CHAPTER_INITIAL_THETA_C,
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+    check_seed,
+)
+from striatal.sim.rollout import Protocol
+
+Engine = Literal["processes", "batch", "simd"]
+
+
+#: How a sweep runs its specs: one learning loop per run, or the runs of an arm in lockstep
+#: on the exact batch kernel ("batch") or on the SIMD lockstep kernel ("simd").
+ENGINES: tuple[str, ...] = ("processes", "batch", "simd")
+
+
+def arm_label(alpha: float, gamma: float, grid: bool) -> str:
+    return f"learner a={alpha:g} g={gamma:g}" if grid else "learner"
+
+
+def build_specs(
+    *,
+    config: LearnerConfig,
+    template: Controller,
+    plant: Plant,
+    sim: Simulation,
+    seeds: Sequence[int],
+    inits: Sequence[Init],
+    alphas: Sequence[float] = (),
+    gammas: Sequence[float] = (),
+    control: bool = True,
+    methods: Sequence[str] = (),
+    eval_draws: int = 0,
+) -> tuple[list[RunSpec], dict[str, dict[str, Any]]]:
+    """(specs, config of each arm): the grid of alpha x gamma (default: config's own),
+    the learner's declared no-learning control arm, and the baselines, each for every
+    init and seed."""
+    alphas = tuple(alphas) or (config.alpha,)
+    gammas = tuple(gammas) or (config.gamma,)
+    grid = len(alphas) * len(gammas) > 1
+    arms: list[Arm] = [
+        Arm(arm_label(a, g, grid), "learn", replace(config, alpha=a, gamma=g))
+        for a in alphas
+        for g in gammas
+    ]
+    if control:
+        arms.append(Arm(CONTROL_ARM, "learn", rule_of(config).control_config(config), "control"))
+    for m in methods:
+        if m not in baseline_methods.BASELINES:
+            raise ParameterError(
+                f"unknown baseline {m!r}; choose from {', '.join(baseline_methods.BASELINES)}"
+            )
+        arms.append(Arm(m, m, config, "baseline"))
+    return specs_of(
+        arms,
+        template=template,
+        plant=plant,
+        sim=sim,
+        seeds=seeds,
+        inits=inits,
+        eval_draws=eval_draws,
+    )
+
+
+@dataclass(frozen=True)
+class Arm:
+    """One arm of a sweep: a name, a method ("learn" or a baseline), its config, its role."""
+
+    name: str
+    method: str
+    config: LearnerConfig
+    role: str = "learner"
+
+    def settings(self) -> dict[str, Any]:
+        return {"method": self.method, "role": self.role, "config": self.config.to_dict()}
+
+
+def specs_of(
+    arms: Sequence[Arm],
+    *,
+    template: Controller,
+    plant: Plant,
+    sim: Simulation,
+    seeds: Sequence[int],
+    inits: Sequence[Init],
+    eval_draws: int = 0,
+) -> tuple[list[RunSpec], dict[str, dict[str, Any]]]:
+    """(specs, settings of each arm): every arm for every init and seed."""
+    names = [a.name for a in arms]
+    if len(set(names)) != len(names):
+        raise ParameterError("two arms of the sweep have the same name; check the grid")
+    if not arms:
+        raise ParameterError("the sweep has no arm to run")
+    for a in arms:
+        if a.role not in ROLES:
+            raise ParameterError(f"arm role must be one of {', '.join(ROLES)}, got {a.role!r}")
+    if eval_draws < 0:
+        raise ParameterError(f"--eval-draws must be >= 0, got {eval_draws}")
+    for init in inits:
+        initial_gains(init, 0)
+    specs = [
+        RunSpec(
+            a.name, a.method, init, int(seed), a.config, template, plant, sim, a.role, eval_draws
+        )
+        for a in arms
+        for init in inits
+        for seed in seeds
+    ]
+    return specs, {a.name: a.settings() for a in arms}
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    rows: list[dict[str, Any]]
+    ran: int
+    skipped: int
+    summary: dict[str, Any]
+
+
+def run_sweep(
+    specs: Sequence[RunSpec],
+    settings: dict[str, Any],
+    *,
+    out: Path | None,
+    max_trials: int,
+    backend: Backend = "local",
+    workers: int = 1,
+    address: str | None = None,
+    connect_timeout: float = CONNECT_TIMEOUT,
+    progress: bool = False,
+    engine: Engine = "processes",
+    locked: bool = False,
+) -> SweepResult:
+    """Run the specs not already in ``out``/runs.csv, appending each row as it finishes,
+    then write ``out``/summary.json (atomically) from all rows.
+
+    ``engine`` "processes": :func:`execute` (one learning loop per run, on ``backend``);
+    "batch": :func:`striatal.experiments.lockstep_sweep.execute_batch` (every run in this
+    process, side by side, their trials batched; the same rows but wall_seconds); "simd":
+    the same on the SIMD kernel (:func:`striatal.sim.kernel.run_trials_lockstep`), rows
+    equal only within round-off (docs/performance.md), so ``settings`` gets
+    ``trial_kernel`` (:data:`NOTE_SIMD`) and a folder is never resumed across the two kinds.
+
+    ``settings`` is stored in ``out``/sweep.json; a rerun in the same folder must use
+    the same settings (ParameterError otherwise), ``settings["options"]`` aside: the
+    options as they were given, recorded for ``--print-config --from-summary``.
+    ``out`` is locked for the whole sweep: a second sweep on it gets DataFileError.
+    ``locked``: the caller already holds ``RunDir(out).lock()`` (to write more files
+    under the same lock).
+    """
+    if engine not in ENGINES:
+        raise ParameterError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+    if engine != "processes" and (backend != "local" or workers != 1):
+        raise ParameterError(
+            f"--engine {engine} runs in this process on Numba's threads "
+            "(NUMBA_NUM_THREADS); --workers and --backend ray are for --engine processes"
+        )
+    if not (isinstance(connect_timeout, int | float) and 0 < connect_timeout < math.inf):
+        raise ParameterError(
+            f"--connect-timeout must be a finite number of seconds > 0, got {connect_timeout!r}"
+        )
+    if backend == "ray" and not address:
+        raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
+    check_workers(workers)
+    if engine != "processes":
+        from striatal.experiments.lockstep_sweep import check_specs
+
+        check_specs(specs)
+    if engine == "simd":
+        # its rows are not the exact kernel's: recorded, so a folder never mixes the two
+        settings = {**settings, "trial_kernel": NOTE_SIMD}
+    # a folder not yet locked is locked for the whole sweep
+    guard = contextlib.nullcontext() if out is None or locked else RunDir(out).lock()
+    with guard:
+        return _run_sweep(
+            specs,
+            settings,
+            out,
+            max_trials,
+            backend,
+            workers,
+            address,
+            connect_timeout,
+            progress,
+            engine,
+        )
+
+
+def _run_sweep(
+    specs: Sequence[RunSpec],
+    settings: dict[str, Any],
+    out: Path | None,
+    max_trials: int,
+    backend: Backend,
+    workers: int,
+    address: str | None,
+    connect_timeout: float,
+    progress: bool,
+    engine: Engine = "processes",
+) -> SweepResult:
+    from tqdm import tqdm
+
+    from striatal.io.files import read_json, write_json
+
+    rows: list[dict[str, Any]] = []
+    stream: TextIO | None = None
+    wanted = {s.key for s in specs}
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        spath = out / "sweep.json"
+        if spath.exists():
+            old = read_json(spath, what="sweep settings")
+            # settings.options records how the sweep was asked for (an option left to its
+            # default or given at that value), the rest what it computes: only that counts
+            new = json_roundtrip(settings)
+            new.pop("options", None)
+            if isinstance(old, dict):
+                old.pop("options", None)
+            if old != new:
+                raise ParameterError(
+                    f"{out} holds a sweep with other settings; use another --out "
+                    "or the same options to resume it"
+                )
+        else:
+            write_json(spath, settings)
+        rpath = out / "runs.csv"
+        old_rows, clean = read_runs(rpath)
+        rows = [r for r in old_rows if (r["arm"], r["init"], r["seed"]) in wanted]
+        atomic_write_text(rpath, clean)
+        stream = rpath.open("a", encoding="utf-8", newline="")
+    done = {(r["arm"], r["init"], r["seed"]) for r in rows}
+    todo = [s for s in specs if s.key not in done]
+    bar = tqdm(total=len(specs), initial=len(specs) - len(todo), unit="run", disable=not progress)
+    try:
+        if engine != "processes":
+            from striatal.experiments.lockstep_sweep import execute_batch
+
+            rows_in = execute_batch(todo, trial_kernel="lockstep" if engine == "simd" else "exact")
+        else:
+            rows_in = execute(
+                todo,
+                backend=backend,
+                workers=workers,
+                address=address,
+                connect_timeout=connect_timeout,
+            )
+        for row in rows_in:
+            rows.append(row)
+            if stream is not None:
+                stream.write(row_text(row))
+                stream.flush()
+            bar.update(1)
+    finally:
+        bar.close()
+        if stream is not None:
+            stream.close()
+    summary = summarise(rows, max_trials, settings)
+    if out is not None:
+        write_json(out / "summary.json", summary)
+    return SweepResult(
+        rows=sort_rows(rows), ran=len(todo), skipped=len(specs) - len(todo), summary=summary
+    )
+
+
+def json_roundtrip(obj: Any) -> Any:
+    """``obj`` as it reads back from JSON (tuples become lists, non-finite floats None)."""
+    import json
+
+    from striatal.io.files import dumps_json
+
+    return json.loads(dumps_json(obj))
+
+
+#: Seeds per arm and init of a sweep: the number every documented result uses (a
+#: success rate's 95 % interval is then about +-10 points).
+SEEDS = 100
+#: The most seeds a sweep takes (its run specs are built before any run starts).
+MAX_SEEDS = 100_000
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What a sweep runs (``specs``) and records (``settings``, stored in sweep.json)."""
+
+    specs: list[RunSpec]
+    settings: dict[str, Any]
+    max_trials: int
+
+
+def plan(
+    learner: str | None = None,
+    *,
+    seeds: int = SEEDS,
+    seed: int = 0,
+    init: str | Sequence[str] = "chapter",
+    theta_c0: float = CHAPTER_INITIAL_THETA_C,
+    alpha_grid: Sequence[float] = (),
+    gamma_grid: Sequence[float] = (),
+    control: bool = True,
+    eval_draws: int = EVAL_DRAWS,
+    baselines: Sequence[str] = (),
+    plant: Plant | None = None,
+    sim: Simulation | None = None,
+    balance_sign: str | None = None,
+    switch: str | None = None,
+    inhibition: float | None = None,
+    **options: Any,
+) -> Plan:
+    """The run specs and settings of a sweep (arguments as :func:`sweep`), validated."""
+    require_count("seeds", seeds)
+    if seeds > MAX_SEEDS:
+        raise ParameterError(f"--seeds must be <= {MAX_SEEDS}, got {seeds}")
+    root = check_seed(seed)
+    require_count("eval_draws", eval_draws, 0)
+    inits = (init,) if isinstance(init, str) else tuple(init) if isinstance(init, Sequence) else ()
+    if not inits or not all(isinstance(i, str) for i in inits):
+        raise ParameterError(f"init must be 'chapter', 'random' or a list of them, got {init!r}")
+    inits = tuple(dict.fromkeys(inits))
+    config = default_config(learner or "chapter", **options)
+    plant = Plant() if plant is None else plant
+    sim = Simulation() if sim is None else sim
+    if not isinstance(plant, Plant) or not isinstance(sim, Simulation):
+        raise ParameterError("plant must be a striatal.Plant and sim a striatal.Simulation")
+    readings: dict[str, Any] = {
+        "balance_sign": balance_sign,
+        "switch": switch,
+        "inhibition": inhibition,
+    }
+    template = Controller(
+        gains=CHAPTER_INITIAL_W,
+        theta_c=theta_c0,
+        **{k: v for k, v in readings.items() if v is not None},
+    )
+    run_seeds = spawn_seeds(root, seeds)
+    specs, arm_settings = build_specs(
+        config=config,
+        template=template,
+        plant=plant,
+        sim=sim,
+        seeds=run_seeds,
+        inits=inits,  # type: ignore[arg-type]
+        alphas=tuple(alpha_grid),
+        gammas=tuple(gamma_grid),
+        control=control,
+        methods=list(baselines),
+        eval_draws=eval_draws,
+    )
+    settings: dict[str, Any] = {
+        "command": "striatal sweep",
+        "root_seed": root,
+        "seeds": seeds,
+        "run_seeds": list(run_seeds),
+        "seed_rule": "SeedSequence(root_seed).spawn(seeds)[i].generate_state(1)[0]",
+        "inits": list(inits),
+        "theta_c0": template.theta_c,
+        "max_trials": config.max_trials,
+        "success_on": config.success_on,
+        "arms": arm_settings,
+        "control": control,
+        "control_reading": control_note(config.learner),
+        "budget": NOTE_BUDGET,
+        "eval_draws": eval_draws,
+        "controller": {
+            "balance_sign": template.balance_sign,
+            "switch": template.switch,
+            "inhibition": template.inhibition,
+        },
+        "plant": plant.to_dict(),
+        "trial": {"dt": sim.dt, "duration": sim.duration, "theta0": sim.theta0, "x0": sim.x0},
+        "protocol": json_roundtrip(Protocol().__dict__),
+        "baselines": {
+            "lqr": baseline_methods.lqr_fit(plant).to_dict(),
+            "random_box": [
+                baseline_methods.RANDOM_BOX[0].tolist(),
+                baseline_methods.RANDOM_BOX[1].tolist(),
+            ],
+            "cmaes": "IPOP-CMA-ES: sigma0 1 from (W(0), theta_c(0)), cma's default "
+            "population (9), restarted with twice the population when cma stops, "
+            "minimising minus the shaped reward",
+        },
+        "reproduce": "striatal train --seed S --init INIT with the same learner options "
+        "(control arm: the options of settings.arms.control.config)",
+    }
+    if config.robust:
+        # only when set, so the settings of sweeps without it stay as they were
+        settings["robust"] = NOTE_ROBUST
+    tuning_root = rule_of(config).tuning_root_of(config)
+    if tuning_root is not None:
+        settings["tuning_root"] = tuning_root
+    return Plan(specs, settings, config.max_trials)
+
+
+def in_sample_note(settings: dict[str, Any]) -> str | None:
+    """The warning for a sweep run on the root its preset was tuned on, else None."""
+    root = settings.get("tuning_root")
+    if root is None or root != settings["root_seed"]:
+        return None
+    return (
+        f"note: the preset was tuned on root seed {root}: these are its tuning seeds, "
+        "not a held-out evaluation (use another --seed)"
+    )
+
+
+def sweep(
+    learner: str | None = None,
+    *,
+    out: str | Path | None = None,
+    engine: Engine = "processes",
+    workers: int = 1,
+    backend: Backend = "local",
+    address: str | None = None,
+    connect_timeout: float = CONNECT_TIMEOUT,
+    progress: bool = False,
+    **arguments: Any,
+) -> SweepResult:
+    """Many learning runs over seeds, as ``striatal sweep`` runs them (same defaults).
+
+    ``learner``: a key of :data:`striatal.learners.RULES` (default "chapter"). The sweep's
+    own arguments (``seeds`` 100, root ``seed`` 0, ``init`` "chapter" or "random" or
+    both, ``theta_c0``, ``alpha_grid``, ``gamma_grid``, ``control`` True, ``eval_draws``
+    200, ``baselines`` from :data:`striatal.experiments.baseline_methods.BASELINES`, ``plant``,
+    ``sim``, the controller readings) and any :class:`striatal.learners.LearnerConfig`
+    field (``max_trials``, ``success_on``...) are those of :func:`plan`. Every arm runs
+    on the same seeds: the learner, its no-learning control and the baselines. With
+    ``out``, runs.csv, sweep.json and summary.json are written there and a rerun resumes
+    (:func:`run_sweep`). Returns the rows sorted by (arm, init, seed) and the summary.
+
+    >>> result = sweep(seeds=4, init="random", learner="pgpe", max_trials=50)  # doctest: +SKIP
+    >>> result.summary["arms"]  # doctest: +SKIP
+    """
+    folder = None if out is None else check_out_dir(out)
+    the_plan = plan(learner, **arguments)
+    return run_sweep(
+        the_plan.specs,
+        the_plan.settings,
+        out=folder,
+        max_trials=the_plan.max_trials,
+        backend=backend,
+        workers=workers,
+        address=address,
+        connect_timeout=connect_timeout,
+        progress=progress,
+        engine=engine,
+    )

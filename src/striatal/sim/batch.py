@@ -1,0 +1,244 @@
+"""Trials as requests: code that needs trials yields them, a driver runs them.
+
+A learning step, a pass-probability estimate or a whole sweep run is written once, as
+a generator that yields lists of :class:`TrialRequest` and receives their
+:class:`~striatal.sim.rollout.TrialOutcome` in the same order (:data:`Steps`). Two
+drivers run such a generator:
+
+- :func:`drive`: one generator, each request a call of
+  :func:`striatal.sim.rollout.run_trial` (what ``striatal train`` and the process
+  engine of ``striatal sweep`` do);
+- :class:`Lockstep`: many generators side by side; the requests they have pending are
+  grouped by what a kernel call shares (plant, readings, protocol, action rate, trace
+  decay, motor) and each group is one call of the batch kernel
+  (:func:`striatal.sim.kernel.run_trials_batch`, or the SIMD
+  :func:`striatal.sim.kernel.run_trials_lockstep`).
+
+Each request draws its noise from its own generator exactly as ``run_trial`` draws it,
+in the order the requests were yielded, and ``run_trials_batch`` equals the scalar
+kernel bit for bit, so both drivers give the same outcomes (the SIMD kernel: within
+round-off). The rules, the loop and the evaluation therefore exist once, whichever
+driver runs them.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Generator, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal, TypeVar
+
+import numba
+import numpy as np
+
+from striatal.errors import ParameterError
+from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
+from striatal.sim import kernel
+from striatal.sim.rollout import (
+    Protocol,
+    SensorNoise,
+    TrialOutcome,
+    batch_args,
+    noise_arrays,
+    run_trial,
+)
+
+__all__ = ["TRIAL_KERNELS", "Lockstep", "Steps", "TrialRequest", "drive", "run_requests"]
+
+T = TypeVar("T")
+#: A computation that needs trials: it yields requests, is sent their outcomes, returns T.
+Steps = Generator[list["TrialRequest"], list[TrialOutcome], T]
+#: The kernels :class:`Lockstep` can batch on: the exact one, or the SIMD one.
+TRIAL_KERNELS: tuple[str, ...] = ("exact", "lockstep")
+#: Trials a kernel thread takes at a time (numba.set_parallel_chunksize): dynamic chunks,
+#: so a thread the OS takes away, or that gets the long trials, does not hold up the rest.
+CHUNK = 2
+
+
+@dataclass(frozen=True, eq=False)
+class TrialRequest:
+    """One trial of the protocol: the arguments of :func:`striatal.sim.rollout.run_trial`.
+
+    ``trace`` (6,) is updated in place when the trial runs, as ``run_trial`` does.
+    """
+
+    plant: Plant
+    controller: Controller
+    sim: Simulation
+    protocol: Protocol
+    trace: np.ndarray
+    gamma: float
+    rng: np.random.Generator | None
+    gains: np.ndarray | None = None
+    action_every: int = 1
+    chapter_eligibility: bool = False
+    model: Plant | None = None
+    sensor: SensorNoise = field(default_factory=SensorNoise)
+    mean_policy: bool = False
+    hardware: Hardware = CHAPTER_HARDWARE
+
+    def run(self) -> TrialOutcome:
+        """The trial on the scalar kernel."""
+        return run_trial(
+            self.plant,
+            self.controller,
+            self.sim,
+            protocol=self.protocol,
+            trace=self.trace,
+            gamma=self.gamma,
+            rng=self.rng,
+            gains=self.gains,
+            action_every=self.action_every,
+            chapter_eligibility=self.chapter_eligibility,
+            model=self.model,
+            sensor=self.sensor,
+            mean_policy=self.mean_policy,
+            hardware=self.hardware,
+        )
+
+    @property
+    def draws_actions(self) -> bool:
+        return self.rng is not None and not self.mean_policy
+
+    def batch_key(self) -> tuple[Any, ...] | None:
+        """What a batched kernel call shares with this trial; None if it runs alone
+        (sensor noise: the batch kernel has none)."""
+        if self.sensor.active:
+            return None
+        c = self.controller
+        return (
+            self.plant,
+            (c.balance_sign, c.switch, c.inhibition),
+            self.sim,
+            self.protocol,
+            self.action_every,
+            self.chapter_eligibility,
+            self.gamma,
+            self.model,
+            self.hardware,
+            self.draws_actions,
+        )
+
+
+def drive(steps: Steps[T]) -> T:
+    """Run ``steps`` to its end, each request on the scalar kernel; its return value."""
+    try:
+        requests = next(steps)
+        while True:
+            requests = steps.send([r.run() for r in requests])
+    except StopIteration as stop:
+        return stop.value  # type: ignore[no-any-return]
+
+
+def run_requests(
+    requests: Sequence[TrialRequest], trial_kernel: Literal["exact", "lockstep"] = "exact"
+) -> list[TrialOutcome]:
+    """The outcomes of ``requests``, in their order, from as few batched kernel calls as
+    their :meth:`TrialRequest.batch_key` allow.
+
+    The action noise of each request is drawn from its generator in the order of
+    ``requests`` (what :func:`drive` would draw); traces are updated in place. "lockstep"
+    runs a group on the SIMD kernel unless its motor or track needs the exact one.
+    """
+    if trial_kernel not in TRIAL_KERNELS:
+        raise ParameterError(
+            f"trial_kernel must be one of {', '.join(TRIAL_KERNELS)}, got {trial_kernel!r}"
+        )
+    outcomes: list[TrialOutcome | None] = [None] * len(requests)
+    groups: dict[tuple[Any, ...], list[int]] = {}
+    noise: list[np.ndarray] = []
+    for i, r in enumerate(requests):
+        # in request order, each draws from its generator what run_trial would draw
+        key = r.batch_key()
+        if key is None:
+            outcomes[i] = r.run()
+            noise.append(np.empty(0))
+            continue
+        noise.append(noise_arrays(r.sim, r.action_every, r.rng, r.sensor, r.mean_policy)[0])
+        groups.setdefault(key, []).append(i)
+    for members in groups.values():
+        first = requests[members[0]]
+        gains = np.array(
+            [
+                requests[i].controller.gains if requests[i].gains is None else requests[i].gains
+                for i in members
+            ],
+            dtype=float,
+        )
+        theta_c = np.array([requests[i].controller.theta_c for i in members], dtype=float)
+        traces = np.array([requests[i].trace for i in members], dtype=float)
+        args = batch_args(
+            first.plant,
+            first.controller,
+            first.sim,
+            protocol=first.protocol,
+            gains=gains,
+            theta_c=theta_c,
+            noise=np.array([noise[i] for i in members]) if first.draws_actions else None,
+            model=first.model,
+            action_every=first.action_every,
+            chapter_eligibility=first.chapter_eligibility,
+            gamma=first.gamma,
+            traces=traces,
+            hardware=first.hardware,
+        )
+        simd = trial_kernel == "lockstep" and first.hardware == CHAPTER_HARDWARE
+        old = numba.set_parallel_chunksize(CHUNK)
+        try:
+            (kernel.run_trials_lockstep if simd else kernel.run_trials_batch)(*args)
+        finally:
+            numba.set_parallel_chunksize(old)
+        out = args[-1]
+        for j, i in enumerate(members):
+            requests[i].trace[:] = traces[j]
+            outcomes[i] = TrialOutcome.from_row(out[j], first.sim)
+    return outcomes  # type: ignore[return-value]
+
+
+class Lockstep:
+    """Many :data:`Steps` advanced together: each round, the requests of every unfinished
+    one run in batched kernel calls (:func:`run_requests`).
+
+    :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value.
+    ``seconds[i]``: the wall time spent on generator i, its own Python plus an even
+    share of each kernel call it was in.
+    """
+
+    def __init__(
+        self, steps: Sequence[Steps[T]], trial_kernel: Literal["exact", "lockstep"] = "exact"
+    ) -> None:
+        self.steps = list(steps)
+        self.trial_kernel = trial_kernel
+        self.seconds = np.zeros(len(self.steps))
+
+    def _advance(self, i: int, outcomes: list[TrialOutcome] | None) -> list[TrialRequest]:
+        t0 = time.perf_counter()
+        try:
+            step = self.steps[i]
+            return next(step) if outcomes is None else step.send(outcomes)
+        finally:
+            self.seconds[i] += time.perf_counter() - t0
+
+    def run(self) -> Generator[tuple[int, Any], None, None]:
+        pending: dict[int, list[TrialRequest]] = {}
+        for i in range(len(self.steps)):
+            try:
+                pending[i] = self._advance(i, None)
+            except StopIteration as stop:
+                yield i, stop.value
+        while pending:
+            order = list(pending)
+            flat = [r for i in order for r in pending[i]]
+            t0 = time.perf_counter()
+            outcomes = run_requests(flat, self.trial_kernel)
+            share = (time.perf_counter() - t0) / max(len(flat), 1)
+            at = 0
+            for i in order:
+                n = len(pending[i])
+                self.seconds[i] += share * n
+                mine, at = outcomes[at : at + n], at + n
+                try:
+                    pending[i] = self._advance(i, mine)
+                except StopIteration as stop:
+                    del pending[i]
+                    yield i, stop.value

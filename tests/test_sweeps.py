@@ -1,0 +1,89 @@
+"""striatal.sweep, the Python API of ``striatal sweep``: the same runs for the same options."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import striatal
+from striatal.cli import main
+from striatal.errors import ParameterError
+from striatal.experiments import sweeps
+
+
+def _without_wall(rows: list[dict]) -> list[dict]:
+    return [{k: v for k, v in r.items() if k != "wall_seconds"} for r in rows]
+
+
+def test_the_api_runs_what_the_command_runs(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    api = striatal.sweep(seeds=4, init="random", learner="pgpe", success_on="mean", max_trials=50)
+    argv = ["sweep", "--seeds", "4", "--init", "random", "--learner", "pgpe"]
+    argv += ["--success-on", "mean", "--max-trials", "50", "--no-progress"]
+    assert main([*argv, "--out", str(tmp_path / "cli")]) == 0
+    capsys.readouterr()
+    cli = json.loads((tmp_path / "cli" / "summary.json").read_text())
+
+    def arms(summary: dict) -> list[tuple]:
+        return [(a["arm"], a["init"], a["successes"], a["simulations_total"]) for a in summary]
+
+    assert arms(api.summary["arms"]) == arms(cli["arms"])
+    assert {a["arm"] for a in cli["arms"]} == {"learner", "control"}
+    from striatal.experiments.runs_csv import read_runs
+
+    rows, _ = read_runs(tmp_path / "cli" / "runs.csv")
+    assert _without_wall(api.rows) == _without_wall(sweeps.sort_rows(rows))
+    # the settings agree too (the command adds the options it was given)
+    settings = dict(cli["settings"])
+    settings.pop("options")
+    assert sweeps.json_roundtrip(api.summary["settings"]) == settings
+
+
+def test_a_folder_the_api_wrote_resumes_from_the_command(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    out = tmp_path / "s"
+    first = striatal.sweep(
+        seeds=2, max_trials=3, eval_draws=0, sim=striatal.Simulation(duration=5), out=out
+    )
+    assert first.ran == 4 and first.skipped == 0
+    argv = ["sweep", "--seeds", "2", "--max-trials", "3", "--eval-draws", "0"]
+    assert main([*argv, "--duration", "5", "--no-progress", "--out", str(out)]) == 0
+    assert "ran 0 runs, 4 already in --out" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"seeds": 0}, "seeds must be a whole number >= 1"),
+        ({"seeds": 2.5}, "seeds must be a whole number"),
+        ({"seeds": 10**30}, f"--seeds must be <= {sweeps.MAX_SEEDS}"),
+        ({"seed": -1}, "seed must be a whole number >= 0"),
+        ({"init": 5}, "init must be"),
+        ({"init": "sideways"}, "sideways"),
+        ({"eval_draws": -1}, "eval_draws must be a whole number >= 0"),
+        ({"plant": "heavy"}, "plant must be a striatal.Plant"),
+        ({"baselines": ["nope"]}, "unknown baseline 'nope'"),
+        ({"engine": "batch", "workers": 2}, "--engine batch runs in this process"),
+        ({"connect_timeout": float("inf")}, "finite"),
+        ({"backend": "ray"}, "--backend ray needs --address"),
+        ({"workers": 10**6}, "--workers must be <="),
+        ({"no_such_option": 1}, "no_such_option"),
+    ],
+)
+def test_bad_arguments_are_refused_before_any_run(
+    tmp_path: Path, kwargs: dict, message: str
+) -> None:
+    out = tmp_path / "s"
+    with pytest.raises(ParameterError, match=message.replace("(", r"\(")):
+        striatal.sweep(**{"max_trials": 1, "eval_draws": 0, "out": out, **kwargs})
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_plan_records_the_tuning_root_and_warns_in_sample() -> None:
+    plan = sweeps.plan("pgpe", seeds=1, robust=True)
+    assert plan.settings["tuning_root"] == 0
+    assert "tuned on root seed 0" in (sweeps.in_sample_note(plan.settings) or "")
+    held_out = sweeps.plan("pgpe", seeds=1, seed=1, robust=True)
+    assert sweeps.in_sample_note(held_out.settings) is None
