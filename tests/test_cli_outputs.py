@@ -61,3 +61,21 @@ def test_robustness_out_over_its_input(tmp_path: Path, capsys: pytest.CaptureFix
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "overwrite the input" in err
     assert (run / "result.json").read_bytes() == before
+
+
+def test_a_folder_out_never_replaces_another_kind_of_run(tmp_path: Path) -> None:
+    """simulate into a sweep's folder would replace its summary.json: refused; into a
+    training run's folder (nothing of it replaced), or again into its own, allowed."""
+    sweep, run = tmp_path / "W", tmp_path / "R"
+    for name in ("sweep.json", "runs.csv", "summary.json"):
+        (sweep / name).parent.mkdir(exist_ok=True)
+        (sweep / name).write_text("{}")
+    for name in ("checkpoint.json", "result.json", "history.csv", "summary.json"):
+        (run / name).parent.mkdir(exist_ok=True)
+        (run / name).write_text("{}")
+    simulate = ("trajectory.csv", "summary.json")
+    with pytest.raises(ParameterError, match="holds a sweep: its summary.json"):
+        check_out(argparse.Namespace(out=sweep), simulate)
+    check_out(argparse.Namespace(out=run), simulate)
+    check_out(argparse.Namespace(out=sweep), ("sweep.json", "runs.csv", "summary.json"))
+    check_out(argparse.Namespace(out=run), ("checkpoint.json", "result.json", "history.csv"))

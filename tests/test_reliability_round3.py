@@ -151,6 +151,10 @@ ROUND3: tuple[Scenario, ...] = (
       "exit 2, one line; the sweep untouched",
       usage_error(("compare", "OUT", "--out", "OUT/summary.json"), prepare=_swept,
                   says="would replace the summary.json of a run or sweep")),
+    S("out-folder-over-sweep", "bad file", "`striatal simulate --duration 5 --out W`, W a sweep "
+      "folder (simulate writes a summary.json too)", "exit 2, one line; the sweep untouched",
+      usage_error(("simulate", "--duration", "5", "--out", "OUT"), prepare=_swept,
+                  says="holds a sweep: its summary.json would be replaced")),
     S("config-fifo", "bad file", "`striatal sweep --config FIFO` (no writer: a read would wait "
       "for ever)", "exit 2, one line, no hang",
       usage_error(("sweep", "--config", "OUT/exp.toml", "--out", "OUT/w"), process=True,

@@ -27,6 +27,17 @@ RUN_FOLDER_FILES = (
 )
 
 
+#: The kinds of run folder: the files that mark one, and the files it owns.
+RUN_KINDS = (
+    ("a sweep", ("sweep.json", "runs.csv"), ("sweep.json", "runs.csv", "summary.json")),
+    (
+        "a training run",
+        ("checkpoint.json", "result.json"),
+        ("checkpoint.json", "result.json", "history.csv"),
+    ),
+)
+
+
 def input_paths(args: argparse.Namespace) -> Iterator[Path]:
     """Every path among the options of ``args`` but ``--out`` (one, or a list of them)."""
     for dest, value in vars(args).items():
@@ -66,3 +77,20 @@ def check_out(args: argparse.Namespace, folder_files: Sequence[str] | None) -> N
         raise ParameterError(
             f"--out {out} would replace the {out.name} of a run or sweep: write elsewhere"
         )
+    if folder_files is not None:
+        _check_foreign_run(out, folder_files)
+
+
+def _check_foreign_run(out: Path, folder_files: Sequence[str]) -> None:
+    """ParameterError if folder ``out`` holds a run of another kind whose file it would
+    replace (``simulate --out`` a sweep's folder: the sweep's summary.json)."""
+    for kind, markers, owned in RUN_KINDS:
+        if set(markers) <= set(folder_files):
+            continue  # the command writes such runs itself (a rerun, a resume)
+        if not any((out / m).exists() for m in markers):
+            continue
+        for name in folder_files:
+            if name in owned and (out / name).exists():
+                raise ParameterError(
+                    f"--out {out} holds {kind}: its {name} would be replaced; write elsewhere"
+                )
