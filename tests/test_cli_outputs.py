@@ -74,7 +74,7 @@ def test_a_folder_out_never_replaces_another_kind_of_run(tmp_path: Path) -> None
         (run / name).parent.mkdir(exist_ok=True)
         (run / name).write_text("{}")
     simulate = ("trajectory.csv", "summary.json")
-    with pytest.raises(ParameterError, match="holds a sweep: its summary.json"):
+    with pytest.raises(ParameterError, match=r"holds a sweep: its summary\.json"):
         check_out(argparse.Namespace(out=sweep), simulate)
     check_out(argparse.Namespace(out=run), simulate)
     check_out(argparse.Namespace(out=sweep), ("sweep.json", "runs.csv", "summary.json"))
