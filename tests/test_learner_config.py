@@ -97,7 +97,7 @@ def test_bounds_are_enforced_at_their_edges(f: Any) -> None:
     for good in inside:
         edge_open = low_open if good == low else high_open
         if not edge_open:
-            LearnerConfig(**{f.name: good})
+            LearnerConfig(**{f.name: int(good) if field_kind(f)[0] is int else good})
 
 
 def test_true_false_fields_refuse_other_values() -> None:

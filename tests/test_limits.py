@@ -183,3 +183,51 @@ def test_import_striatal_is_light_and_still_registers_the_env() -> None:
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert r.stdout.split() == ["[]", "True", "1.0", "striatal.sim.kernel"]
+
+
+def test_every_int_option_is_bounded(capsys: pytest.CaptureFixture[str]) -> None:
+    """``type=int`` of every parser is cli.guards.whole_number: at most 2**31 - 1."""
+    from striatal.cli import build_parser
+    from striatal.cli.guards import MAX_WHOLE
+
+    parser = build_parser(only="robustness")
+    ok = parser.parse_args(["robustness", "r.json", "--seed", str(MAX_WHOLE)])
+    assert ok.seed == MAX_WHOLE
+    for bad, says in ((str(MAX_WHOLE + 1), "at most 2,147,483,647"), ("1.5", "invalid int")):
+        with pytest.raises(SystemExit) as exc:
+            parser.parse_args(["robustness", "r.json", "--seed", bad])
+        assert exc.value.code == 2
+        assert says in capsys.readouterr().err
+
+
+def test_a_full_disk_names_history_csv(tmp_path: Path) -> None:
+    """ENOSPC while history.csv is appended to (buffered writes) names the file."""
+    import errno
+    from types import SimpleNamespace
+
+    from striatal.io.rundir import RunDir
+
+    def no_space(*_: object) -> None:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    full_disk = SimpleNamespace(write=no_space, flush=no_space, close=no_space)
+    record = SimpleNamespace(columns=("trial", "reward"), row=lambda: (1, 10.0))
+    rundir = RunDir(tmp_path / "run")
+    rundir.start_history(["trial", "reward"])
+    rundir.close_history()
+    says = r"cannot write .*history\.csv: No space left on device"
+    rundir._history = full_disk
+    with pytest.raises(DataFileError, match=says):
+        rundir.append(record)  # type: ignore[arg-type]
+    with pytest.raises(DataFileError, match=says):
+        rundir.close_history()
+    assert rundir._history is None
+
+
+def test_a_byte_order_mark_is_not_part_of_the_text(tmp_path: Path) -> None:
+    from striatal.io.files import read_csv, read_json
+
+    (tmp_path / "a.json").write_bytes(b'\xef\xbb\xbf{"a": 1}')
+    (tmp_path / "a.csv").write_bytes(b"\xef\xbb\xbftrial,reward\n1,10\n")
+    assert read_json(tmp_path / "a.json") == {"a": 1}
+    assert read_csv(tmp_path / "a.csv") == [{"trial": "1", "reward": "10"}]

@@ -23,7 +23,7 @@ from types import ModuleType
 from typing import Any, NamedTuple, NoReturn
 
 from striatal import interrupts
-from striatal.cli import config, jit
+from striatal.cli import config, guards, jit, outputs
 from striatal.cli.helpformat import DefaultsHelpFormatter
 from striatal.errors import StriatalError
 from striatal.io.files import check_no_dangling_link
@@ -45,7 +45,8 @@ class OneLineParser(argparse.ArgumentParser):
 
     Every command's parser is one of these, so a negative value reads as a value
     everywhere: argparse's own test knows only ``-1`` and ``-1.5`` and takes
-    ``-2e-1``, ``-inf`` or ``-1,2`` for an unknown option. Their help is formatted by
+    ``-2e-1``, ``-inf`` or ``-1,2`` for an unknown option; ``type=int`` is read by
+    :func:`~striatal.cli.guards.whole_number` (at most 2**31 - 1). Their help is formatted by
     :class:`~striatal.cli.helpformat.DefaultsHelpFormatter` (each default stated once).
     """
 
@@ -53,6 +54,8 @@ class OneLineParser(argparse.ArgumentParser):
         kwargs.setdefault("formatter_class", DefaultsHelpFormatter)
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = NEGATIVE_VALUE
+        # ``type=int`` of every option is bounded (cli.guards.MAX_WHOLE)
+        self.register("type", int, guards.whole_number)
 
     def error(self, message: str) -> NoReturn:
         sys.stderr.write(f"{self.prog}: error: {message}\n")
@@ -168,6 +171,21 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def options_given(command: str, words: Sequence[str]) -> frozenset[str]:
+    """The dests of the options of ``command`` that ``words`` (the whole command line) give.
+
+    An option given at its default value counts as given: it is found by parsing
+    ``words`` again with every default of the command left out, not by comparing values.
+    """
+    parser = build_parser(only=command)
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    own = sub.choices[command]
+    dests = {a.dest for a in own._actions if a.option_strings}
+    for action in own._actions:
+        action.default = argparse.SUPPRESS
+    return frozenset(vars(parser.parse_args(list(words)))) & dests
+
+
 def tolerate_any_encoding() -> None:
     """Make stdout and stderr print what they cannot encode as an escape, not raise.
 
@@ -222,6 +240,7 @@ def _main(argv: Sequence[str] | None) -> int:
         words = sys.argv[1:] if argv is None else argv
         parser = build_parser(only=command_of(words) or "")
         args = parser.parse_args(argv)
+        args._given = options_given(args.command, words)
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
     except Exception:
@@ -230,10 +249,13 @@ def _main(argv: Sequence[str] | None) -> int:
         raise
     try:
         if config.wants_file(args):
+            given = args._given
             args = config.apply(parser, args, sys.argv[1:] if argv is None else argv)
+            args._given = given
             if args.print_config:
                 sys.stdout.write(config.toml_text(args.command, args))
                 return 0
+        outputs.check_out(args, getattr(command_module(args.command), "OUT_FILES", None))
         out = getattr(args, "out", None)
         if isinstance(out, str | os.PathLike) and str(out):
             # every --out (a folder or a file): a link to nothing above it can never be

@@ -21,6 +21,9 @@ from striatal.experiments.ablation import VARIANT_NAMES, build, markdown_table, 
 from striatal.io.files import atomic_write_text, check_out_dir, dumps_json, write_json
 from striatal.io.rundir import RunDir
 
+#: The files that ``--out DIR`` gets (its sweep's, then its own).
+OUT_FILES = ("sweep.json", "runs.csv", "summary.json", "ablation.json", "ablation.md")
+
 DESCRIPTION = (
     "Run each named learner variant from W(0) uniform in [-1, 1]^6 (as train --init random) "
     "for seeds S..S+N-1 and tabulate success (mean policy, Wilson 95 % interval), trials "

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import tomllib
 from collections.abc import Mapping, Sequence
 from pathlib import Path, PurePath
@@ -105,15 +106,21 @@ def recorded_options(args: argparse.Namespace) -> dict[str, Any]:
     return {k: v for k, v in values.items() if v is not None}
 
 
+#: Largest experiment file read [bytes]: 1 MiB (one holds a few dozen options).
+MAX_CONFIG_BYTES = 2**20
+
+
 def read_toml(path: Path) -> dict[str, Any]:
+    """The options of an experiment file, read through :func:`striatal.io.files.read_text`:
+    a FIFO, a device or a file over :data:`MAX_CONFIG_BYTES` is refused before reading."""
+    from striatal.io.files import read_text
+
+    if not os.path.lexists(path):
+        raise DataFileError(f"--config {path}: no such file")
+    text = read_text(path, what="--config", max_bytes=MAX_CONFIG_BYTES)
     try:
-        with path.open("rb") as f:
-            return tomllib.load(f)
-    except FileNotFoundError:
-        raise DataFileError(f"--config {path}: no such file") from None
-    except IsADirectoryError:
-        raise DataFileError(f"--config {path} is a folder, not a TOML file") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
         raise DataFileError(f"--config {path} is not TOML: {exc}") from None
 
 

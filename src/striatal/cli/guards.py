@@ -3,6 +3,8 @@
 ``type=bounded_int(1, 4096)`` or ``type=bounded_float(0, 600)`` in ``add_argument``:
 a value out of range, not finite, or not a number is one line on stderr and exit 2
 from the parser, so no command can build an array of that size or overflow on it.
+Every parser of the command line reads ``type=int`` as :func:`whole_number`, so no
+whole-number option exceeds :data:`MAX_WHOLE` (what a compiled int32 holds).
 """
 
 from __future__ import annotations
@@ -10,6 +12,25 @@ from __future__ import annotations
 import argparse
 import math
 from collections.abc import Callable
+
+#: The largest whole number any option takes: 2**31 - 1, an int32 (the kernel's counts).
+MAX_WHOLE = 2**31 - 1
+
+
+def whole_number(text: str) -> int:
+    """``int(text)`` within [-MAX_WHOLE, MAX_WHOLE]: the ``type=int`` of every option.
+
+    Text that is no whole number raises ValueError, which argparse reports as
+    "invalid int value"; a larger one is refused by name, before any work.
+    """
+    value = int(text)
+    if not -MAX_WHOLE <= value <= MAX_WHOLE:
+        shown = text if len(text) <= 24 else f"{text[:20]}... ({len(text.strip())} digits)"
+        raise argparse.ArgumentTypeError(f"must be at most {MAX_WHOLE:,} in size, got {shown}")
+    return value
+
+
+whole_number.__name__ = "int"
 
 
 def bounded_int(low: int, high: int) -> Callable[[str], int]:

@@ -16,6 +16,16 @@ if TYPE_CHECKING:
     from striatal.neural.network import NetworkConfig
     from striatal.params import Controller, Plant
 
+#: The files that ``--out DIR`` gets (of a run, or of --learn).
+OUT_FILES = (
+    "trajectory.csv",
+    "rates.csv",
+    "summary.json",
+    "activity.png",
+    "learn_history.csv",
+    "learn_summary.json",
+)
+
 DESCRIPTION = (
     "Section 4's neural reading built as a spiking network of LIF neurons (nengo): cortex "
     "encodes the sensed state and E~ (eqs 15-16); a balancing channel decodes mu_1 (eq 22) "

@@ -275,5 +275,7 @@ def check_worker_arguments(args: argparse.Namespace) -> None:
         raise ParameterError(f"--workers must be >= 1, got {args.workers}")
     if args.backend == "ray" and not args.address:
         raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
-    if not args.connect_timeout > 0:
-        raise ParameterError(f"--connect-timeout must be > 0 seconds, got {args.connect_timeout}")
+    if not (math.isfinite(args.connect_timeout) and args.connect_timeout > 0):
+        raise ParameterError(
+            f"--connect-timeout must be a finite number of seconds > 0, got {args.connect_timeout}"
+        )

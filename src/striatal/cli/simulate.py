@@ -15,6 +15,9 @@ if TYPE_CHECKING:
     from striatal.sim.robust import RobustReport
     from striatal.sim.rollout import Trajectory
 
+#: The files that ``--out DIR`` gets.
+OUT_FILES = ("trajectory.csv", "summary.json")
+
 DESCRIPTION = (
     "Simulate the point-mass cart-pole (eqs 7-14) under the energy swing-up (eq 23) and the "
     "balancing law (eq 22), hard- or soft-switched at theta_c, with the mean policy (no "

@@ -11,6 +11,9 @@ from striatal.experiments import baselines, pool, report, runner, sweeps
 from striatal.io.files import check_out_dir, dumps_json
 from striatal.params import CHAPTER_INITIAL_THETA_C, Simulation
 
+#: The files that ``--out DIR`` gets.
+OUT_FILES = ("sweep.json", "runs.csv", "summary.json")
+
 DESCRIPTION = (
     "Run the learner for N seeds spawned from --seed (SeedSequence), for each --init and "
     "each alpha x gamma of the grid, plus the learner's declared no-learning control arm "

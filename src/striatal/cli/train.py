@@ -7,6 +7,7 @@ import signal
 import sys
 import threading
 from collections import deque
+from dataclasses import replace
 from pathlib import Path
 from types import FrameType
 from typing import Any
@@ -18,9 +19,12 @@ from striatal.cli import EXIT_INTERRUPTED, learner_options, options
 from striatal.errors import ParameterError
 from striatal.experiments.training import DEFAULT_CHECKPOINT_EVERY, train
 from striatal.io.files import check_out_dir, dumps_json
-from striatal.io.rundir import RunDir
+from striatal.io.rundir import RUN_FILES, RunDir, setup_of
 from striatal.learners import LearnerState, TrialRecord, default_config
-from striatal.params import CHAPTER_INITIAL_THETA_C, Plant, Simulation
+from striatal.params import CHAPTER_INITIAL_THETA_C, Simulation
+
+#: The files that ``--out DIR`` gets.
+OUT_FILES = RUN_FILES
 
 DESCRIPTION = """\
 Learn the six gains and theta_c with the chapter's REINFORCE rule (eqs 1-5, 21-25): 60-s
@@ -116,11 +120,9 @@ _START = ("learner", "init", "init_gains", "theta_c0", "seed")
 
 
 def _explicit(args: argparse.Namespace) -> set[str]:
-    """The options given on the command line (those that differ from their defaults)."""
-    parser = argparse.ArgumentParser()
-    add_arguments(parser)
-    defaults = vars(parser.parse_args([]))
-    return {k for k, v in vars(args).items() if k in defaults and v != defaults[k]}
+    """The options given on the command line, also those given at their default value
+    (:func:`striatal.cli.options_given`, which ``main`` stores as ``args._given``)."""
+    return set(args._given)
 
 
 def _train_arguments(args: argparse.Namespace) -> dict[str, Any]:
@@ -137,14 +139,17 @@ def _train_arguments(args: argparse.Namespace) -> dict[str, Any]:
     kwargs: dict[str, Any] = {k: getattr(args, k) for k in (*_START, *_READINGS) if k in given}
     kwargs.update(learner_options.learner_changes(args))
     if given & {*_PLANT, *_TRIAL}:
-        # compare only the fields given: the rest are taken from the checkpoint
-        _, settings, _, _ = RunDir(args.out).read_checkpoint()
+        # compare only the fields given: the rest are taken from the checkpoint, read (and
+        # checked, so a malformed plant is one line) as train reads it
+        rundir = RunDir(args.out)
+        _, settings, _, _ = rundir.read_checkpoint()
+        setup = setup_of(settings, f"checkpoint {rundir.checkpoint_path}")
         if given & set(_PLANT):
-            plant = dict(settings["plant"], **{k: getattr(args, k) for k in _PLANT if k in given})
-            kwargs["plant"] = Plant(**plant)
+            changes = {k: getattr(args, k) for k in _PLANT if k in given}
+            kwargs["plant"] = replace(setup.plant, **changes)
         if given & set(_TRIAL):
-            trial = dict(settings["trial"], **{k: getattr(args, k) for k in _TRIAL if k in given})
-            kwargs["sim"] = Simulation(**trial)
+            changes = {k: getattr(args, k) for k in _TRIAL if k in given}
+            kwargs["sim"] = replace(setup.sim, **changes)
     return kwargs
 
 

@@ -8,9 +8,11 @@ the same W(0), the same files with ``out=``.
 
 from __future__ import annotations
 
+import numbers
+import os
 import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -38,19 +40,21 @@ from striatal.learners import (
     learn,
     random_initial_gains,
 )
+from striatal.learners.config import MAX_COUNT
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
     CHAPTER_INITIAL_THETA_C,
     CHAPTER_INITIAL_W,
     Controller,
+    Hardware,
     Plant,
     Simulation,
     check_gains,
     check_seed,
 )
 from striatal.sim.robust import check_robust
-from striatal.sim.rollout import Trajectory
+from striatal.sim.rollout import Protocol, SensorNoise, Trajectory
 from striatal.sim.rollout import simulate as _simulate
 
 __all__ = [
@@ -128,6 +132,39 @@ class Run:
         return payload
 
 
+def _require(name: str, value: object, kind: type | tuple[type, ...], what: str) -> None:
+    """ParameterError naming argument ``name`` unless ``value`` is None or a ``kind``."""
+    if value is not None and not isinstance(value, kind):
+        raise ParameterError(f"{name} must be {what}, got {value!r}")
+
+
+def _require_number(name: str, value: object) -> None:
+    """ParameterError unless ``value`` is None or a real number (text and bool are not)."""
+    if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
+        raise ParameterError(f"{name} must be a number, got {value!r}")
+
+
+def _check_train_arguments(args: dict[str, Any]) -> None:
+    """The types of :func:`train`'s arguments (their values are checked where they are used)."""
+    for name in ("learner", "init", "balance_sign", "switch"):
+        _require(name, args[name], str, "a name")
+    for name in ("theta_c0", "inhibition"):
+        _require_number(name, args[name])
+    gains = args["init_gains"]
+    if isinstance(gains, str | bytes) or (gains is not None and not isinstance(gains, Iterable)):
+        raise ParameterError(f"init_gains must be six numbers W1..W6, got {gains!r}")
+    _require("plant", args["plant"], Plant, "a striatal.Plant")
+    _require("sim", args["sim"], Simulation, "a striatal.Simulation")
+    _require("out", args["out"], (str, os.PathLike), "a folder (str or Path)")
+    if isinstance(args["out"], str) and not args["out"].strip():
+        raise ParameterError("out must name a folder, got an empty string")
+    if not isinstance(args["resume"], bool):
+        raise ParameterError(f"resume must be True or False, got {args['resume']!r}")
+    for name in ("on_trial", "should_stop"):
+        if args[name] is not None and not callable(args[name]):
+            raise ParameterError(f"{name} must be a function, got {args[name]!r}")
+
+
 def floor_w1(gains: Sequence[float]) -> tuple[float, ...]:
     """The six gains with W1 floored at W1_FLOOR = 0.001, the guard of sqrt(W1 g) (eq 22).
 
@@ -169,8 +206,8 @@ def _fresh_setup(
     config = default_config(learner, **options)
     W0 = initial_gains(init, seed, init_gains)
     template = Controller(gains=W0, theta_c=theta_c0, **controller)
-    plant = plant or Plant()
-    sim = sim or Simulation()
+    plant = Plant() if plant is None else plant
+    sim = Simulation() if sim is None else sim
     settings = run_settings(
         config,
         template,
@@ -226,6 +263,13 @@ def _resume_changes(
         elif name == "init_gains":
             if have[name] is None or floor_w1(value) != have[name]:
                 differ.append(f"{_flag(name)}")
+        elif name in ("plant", "sim") and isinstance(value, Plant | Simulation):
+            # name the fields (the options of striatal train), not the whole record
+            differ += [
+                f"{_flag(f.name)} (the run has {getattr(have[name], f.name)!r})"
+                for f in fields(value)
+                if getattr(value, f.name) != getattr(have[name], f.name)
+            ]
         elif value != have[name]:
             differ.append(f"{_flag(name)} (the run has {have[name]!r})")
     if differ:
@@ -283,6 +327,23 @@ def train(
     asked after it (True: stop there, the result is ``interrupted``). Ctrl-C
     stops likewise.
     """
+    _check_train_arguments(
+        {
+            "learner": learner,
+            "init": init,
+            "init_gains": init_gains,
+            "theta_c0": theta_c0,
+            "plant": plant,
+            "sim": sim,
+            "balance_sign": balance_sign,
+            "switch": switch,
+            "inhibition": inhibition,
+            "out": out,
+            "resume": resume,
+            "on_trial": on_trial,
+            "should_stop": should_stop,
+        }
+    )
     if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, int):
         raise ParameterError(f"checkpoint_every must be a whole number, got {checkpoint_every!r}")
     if checkpoint_every < 1:
@@ -464,9 +525,32 @@ def simulate(
     :func:`striatal.sim.rollout.simulate` (protocol, rng, model, sensor, action_every,
     hardware: the motor's hold and limit and the track, docs/paper-notes.md section 10).
     """
+    _require("plant", plant, Plant, "a striatal.Plant")
+    _require("controller", controller, Controller, "a striatal.Controller")
+    _require("sim", sim, Simulation, "a striatal.Simulation")
+    for name, (kind, what) in _SIMULATE_KWARGS.items():
+        _require(name, kwargs.get(name), kind, what)
+    if "action_every" in kwargs:
+        every = kwargs["action_every"]
+        if isinstance(every, bool) or not isinstance(every, numbers.Integral):
+            raise ParameterError(f"action_every must be a whole number >= 1, got {every!r}")
+        if not 1 <= int(every) <= MAX_COUNT:
+            raise ParameterError(f"action_every must be in [1, {MAX_COUNT:,}], got {every!r}")
     return _simulate(
-        plant or Plant(),
-        controller or Controller(gains=CHAPTER_FINAL_W, theta_c=CHAPTER_FINAL_THETA_C),
-        sim or Simulation(),
+        Plant() if plant is None else plant,
+        Controller(gains=CHAPTER_FINAL_W, theta_c=CHAPTER_FINAL_THETA_C)
+        if controller is None
+        else controller,
+        Simulation() if sim is None else sim,
         **kwargs,
     )
+
+
+#: The keyword arguments of :func:`simulate` checked by type (None: their default).
+_SIMULATE_KWARGS: dict[str, tuple[type, str]] = {
+    "protocol": (Protocol, "a striatal.Protocol"),
+    "rng": (np.random.Generator, "a numpy.random.Generator"),
+    "model": (Plant, "a striatal.Plant"),
+    "sensor": (SensorNoise, "a striatal.sim.rollout.SensorNoise"),
+    "hardware": (Hardware, "a striatal.Hardware"),
+}

@@ -126,11 +126,15 @@ def atomic_write_stream(path: str | os.PathLike[str], write: Callable[[TextIO], 
     except OSError as exc:
         raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
     try:
-        os.fchmod(fd, 0o666 & ~_umask())
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            write(fh)
-            fh.flush()
-            os.fsync(fh.fileno())
+        try:
+            os.fchmod(fd, 0o666 & ~_umask())
+            with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+                write(fh)
+                fh.flush()
+                os.fsync(fh.fileno())
+        except OSError as exc:
+            # a full disk (ENOSPC) or a quota: the error names no file, so name the target
+            raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
         replace_into(tmp, target)
     except BaseException:
         if os.path.exists(tmp):
@@ -177,42 +181,45 @@ def _finite_float(token: str) -> float:
 MAX_INPUT_BYTES = 256 * 2**20
 
 
-def read_text(path: str | os.PathLike[str], *, what: str = "file") -> str:
-    """The UTF-8 text of a regular file of at most :data:`MAX_INPUT_BYTES`.
+def read_text(
+    path: str | os.PathLike[str], *, what: str = "file", max_bytes: int = MAX_INPUT_BYTES
+) -> str:
+    """The UTF-8 text of a regular file of at most ``max_bytes`` (:data:`MAX_INPUT_BYTES`).
 
-    Every JSON and CSV input goes through here. A folder, a device (``/dev/zero``),
-    a FIFO or a socket, or a file that is too big, raises DataFileError before a
-    byte is read: none can hang or exhaust memory.
+    Every JSON, CSV and TOML input goes through here. A folder, a device
+    (``/dev/zero``), a FIFO or a socket, or a file that is too big, raises
+    DataFileError before a byte is read: none can hang or exhaust memory.
     """
     p = Path(path)
     try:
         st = os.stat(p)  # stat, unlike open, does not wait for a FIFO's writer
         if stat.S_ISDIR(st.st_mode):
             raise DataFileError(f"{what} {p} is a folder, not a file")
-        _check_regular(p, st, what)
+        _check_regular(p, st, what, max_bytes)
         # O_NONBLOCK: if a FIFO took the file's place since the stat, open does not wait
         fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK)
         with os.fdopen(fd, "rb") as fh:
-            _check_regular(p, os.fstat(fh.fileno()), what)
-            data = fh.read(MAX_INPUT_BYTES + 1)
-        _check_size(p, len(data), what)
-        return data.decode("utf-8")
+            _check_regular(p, os.fstat(fh.fileno()), what, max_bytes)
+            data = fh.read(max_bytes + 1)
+        _check_size(p, len(data), what, max_bytes)
+        # utf-8-sig: a byte-order mark that an editor put first is not part of the text
+        return data.decode("utf-8-sig")
     except FileNotFoundError:
         raise DataFileError(f"{what} {p} does not exist") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise DataFileError(f"{what} {p} cannot be read: {exc}") from None
 
 
-def _check_regular(p: Path, st: os.stat_result, what: str) -> None:
+def _check_regular(p: Path, st: os.stat_result, what: str, max_bytes: int) -> None:
     if not stat.S_ISREG(st.st_mode):
         raise DataFileError(f"{what} {p} is not a regular file (a device, FIFO or socket?)")
-    _check_size(p, st.st_size, what)
+    _check_size(p, st.st_size, what, max_bytes)
 
 
-def _check_size(p: Path, size: int, what: str) -> None:
-    if size > MAX_INPUT_BYTES:
+def _check_size(p: Path, size: int, what: str, max_bytes: int) -> None:
+    if size > max_bytes:
         raise DataFileError(
-            f"{what} {p} is larger than {MAX_INPUT_BYTES // 2**20} MiB, the most striatal reads"
+            f"{what} {p} is larger than {max_bytes / 2**20:g} MiB, the most striatal reads"
         )
 
 

@@ -152,6 +152,12 @@ def setup_of(settings: Any, where: str) -> Setup:
             f"{where} has settings schema {settings.get('schema')!r}; this striatal reads "
             f"schema {SETTINGS_SCHEMA} (start a fresh run)"
         )
+    for part in ("config", "controller", "plant", "trial", "protocol"):
+        if part in settings and not isinstance(settings[part], dict):
+            raise DataFileError(
+                f"{where} is corrupted: its settings.{part} is not an object, "
+                f"got {settings[part]!r}"
+            )
     try:
         fields = dict(settings["config"])
         if "max_step" in fields and fields["max_step"] is None:
@@ -231,7 +237,8 @@ class RunDir:
     def write_checkpoint(self, run: str, settings: Mapping[str, Any], state: LearnerState) -> None:
         """checkpoint.json for ``state``: flushes history.csv first, so it covers its rows."""
         if self._history is not None:
-            self._history.flush()
+            with self._naming_history():
+                self._history.flush()
         write_json(
             self.checkpoint_path,
             {
@@ -298,20 +305,33 @@ class RunDir:
         self._hash = h
         self._open()
 
+    @contextlib.contextmanager
+    def _naming_history(self) -> Iterator[None]:
+        """An OSError of history.csv (a full disk: ENOSPC names no file) as DataFileError."""
+        try:
+            yield
+        except OSError as exc:
+            raise DataFileError(
+                f"cannot write {self.history_path}: {exc.strerror or exc}"
+            ) from None
+
     def _open(self) -> None:
-        self._history = self.history_path.open("a", encoding="utf-8", newline="")
+        with self._naming_history():
+            self._history = self.history_path.open("a", encoding="utf-8", newline="")
 
     def append(self, record: TrialRecord) -> None:
         """One row of history.csv (buffered; flushed at each checkpoint and at close)."""
         line = history_line(record)
         if self._history is not None:
-            self._history.write(line)
+            with self._naming_history():
+                self._history.write(line)
         self._hash.update(line.encode("utf-8"))
 
     def close_history(self) -> None:
         if self._history is not None:
-            self._history.close()
-            self._history = None
+            history, self._history = self._history, None
+            with self._naming_history():
+                history.close()
 
     def read_history(self) -> History:
         return read_history(self.history_path)
@@ -398,6 +418,13 @@ def read_history(path: str | Path, *, learner: str | None = None) -> History:
     return History(learner=learner, columns=columns, rows=tuple(out), reward_kind=reward_kind)
 
 
+def _learner_name(value: object, where: str) -> str | None:
+    """``value`` if it can name a learner (text, or None: not stated), else DataFileError."""
+    if value is None or isinstance(value, str):
+        return value
+    raise DataFileError(f"{where}: learner must be a name, got {value!r}")
+
+
 def _sibling_settings(history_path: Path) -> dict[str, Any] | None:
     """The settings in the result.json or checkpoint.json beside a history.csv, if readable."""
     for name in (RESULT, CHECKPOINT):
@@ -409,6 +436,7 @@ def _sibling_settings(history_path: Path) -> dict[str, Any] | None:
                 continue
             s = data.get("settings") if isinstance(data, dict) else None
             if isinstance(s, dict):
+                _learner_name(s.get("learner"), f"{f}, beside {history_path}: its settings")
                 return s
     return None
 
@@ -429,12 +457,22 @@ class ResultFile:
     data: dict[str, Any]
 
 
+def _is_number(value: object) -> bool:
+    """Whether ``value`` is a number as JSON holds one (not text, not true/false)."""
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
 def result_of(data: Any, path: str | Path) -> ResultFile:
     """:func:`read_result` of already-parsed JSON ``data`` read from ``path``."""
     p = Path(path)
     where = f"result {p}" if str(path) else "result"
     if not isinstance(data, dict) or "W" not in data or "theta_c" not in data:
         raise DataFileError(f"{where} is not a striatal result.json (no W and theta_c)")
+    W, theta_c = data["W"], data["theta_c"]
+    if not (isinstance(W, list) and len(W) == 6 and all(_is_number(w) for w in W)):
+        raise DataFileError(f"{where}: W must be a list of six numbers, got {W!r}")
+    if not _is_number(theta_c):
+        raise DataFileError(f"{where}: theta_c must be a number, got {theta_c!r}")
     settings = data.get("settings", {})
     if not isinstance(settings, dict):
         raise DataFileError(f"{where}: its settings must be an object, got {settings!r}")
@@ -444,8 +482,8 @@ def result_of(data: Any, path: str | Path) -> ResultFile:
         raise DataFileError(f"{where}: settings.controller and settings.plant must be objects")
     try:
         controller = Controller(
-            gains=tuple(data["W"]),
-            theta_c=data["theta_c"],
+            gains=tuple(W),
+            theta_c=theta_c,
             balance_sign=ctrl.get("balance_sign", "corrected"),
             switch=ctrl.get("switch", "hard"),
             inhibition=ctrl.get("inhibition", 50.0),
@@ -461,7 +499,10 @@ def result_of(data: Any, path: str | Path) -> ResultFile:
         raise DataFileError(f"{where} holds an unusable controller: {exc}") from None
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise DataFileError(f"{where} lacks W, theta_c or settings: {exc!r}") from None
-    learner = data.get("learner", settings.get("learner")) or "chapter"
+    stated = _learner_name(settings.get("learner"), f"{where}: its settings")
+    if "learner" in data:
+        stated = _learner_name(data["learner"], where)
+    learner = stated or "chapter"
     success = data.get("success")
     trials = data.get("trials")
     return ResultFile(

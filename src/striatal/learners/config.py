@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
 import types
 from dataclasses import Field, asdict, dataclass, field, fields
 from typing import Any, Literal, TypeVar, get_args, get_origin, get_type_hints
@@ -17,6 +18,7 @@ from striatal.errors import ParameterError
 from striatal.params import Hardware, as_float, require_finite
 
 __all__ = [
+    "MAX_COUNT",
     "STORED_ALWAYS",
     "W1_FLOOR",
     "Eligibility",
@@ -37,6 +39,9 @@ SuccessOn = Literal["noisy", "mean"]
 ThetaCRule = Literal["swingup", "trial", "clamped", "fixed", "learned"]
 Eligibility = Literal["score", "chapter"]
 RewardKind = Literal["sparse", "shaped"]
+
+#: The largest value of a count field: 2**31 - 1, what the compiled kernel's int32 holds.
+MAX_COUNT = 2**31 - 1
 
 #: Floor that keeps W1 > 0 for sqrt(W1 g) (eq 22): the documented guard.
 W1_FLOOR = 1e-3
@@ -330,6 +335,11 @@ def bounds_of(f: Field[Any]) -> tuple[float, float, bool, bool] | None:
     return float(low), float(high), text[0] == "(", text[-1] == ")"
 
 
+def _is_a(value: object, kind: type) -> bool:
+    """Whether ``value`` is a ``kind`` (numbers.Real, numbers.Integral) and not a bool."""
+    return isinstance(value, kind) and not isinstance(value, bool)
+
+
 def check_field(f: Field[Any], value: Any) -> Any:
     """``value`` if it is allowed for field ``f`` (a limit as float), else ParameterError."""
     kind, choices, optional = field_kind(f)
@@ -344,11 +354,20 @@ def check_field(f: Field[Any], value: Any) -> Any:
         if not isinstance(value, bool):
             raise ParameterError(f"{name} must be true or false, got {value!r}")
     elif kind is int:
-        require_count(name, value, 0 if f.metadata.get("bounds") == ">= 0" else 1)
+        least = 0 if f.metadata.get("bounds") == ">= 0" else 1
+        if not _is_a(value, numbers.Integral):
+            # 5.0 or "5" is not a count: a hand-edited file would otherwise pass it on
+            raise ParameterError(f"{name} must be a whole number >= {least}, got {value!r}")
+        require_count(name, value, least)
+        if value > MAX_COUNT:
+            raise ParameterError(f"{name} must be at most {MAX_COUNT:,}, got {value:,}")
     elif kind is str:
         if not isinstance(value, str):
             raise ParameterError(f"{name} must be a name, got {value!r}")
     elif kind is float:
+        if not _is_a(value, numbers.Real):
+            # "0.9" would reach the compiled kernel as text, true as 1
+            raise ParameterError(f"{name} must be a number, got {value!r}")
         number = (
             require_finite(name, value) if f.metadata.get("finite", True) else as_float(name, value)
         )

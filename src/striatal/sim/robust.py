@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, N_GAINS, Controller, Hardware, Plant, Simulation
 from striatal.sim.rollout import NO_PROTOCOL, run_trial, simulate
 
@@ -195,6 +196,10 @@ def check_robust(
     the chapter's); ``max_force`` [N] and ``track`` [m]: a motor limit and a track
     for every case (default: none). Deterministic: no random draws.
     """
+    if not isinstance(controller, Controller):
+        raise ParameterError(f"controller must be a striatal.Controller, got {controller!r}")
+    if plant is not None and not isinstance(plant, Plant):
+        raise ParameterError(f"plant must be a striatal.Plant, got {plant!r}")
     nominal = plant or Plant()
     hw = robust_hardware(max_force, track)
     results = tuple(

@@ -1,0 +1,322 @@
+"""Reliability, round 3: options given at their default, outputs over inputs, typed files.
+
+Each scenario tries one thing a user can do and records what happened, with the
+machinery of tests/test_reliability.py; this module checks them and the "round3"
+table of docs/reliability.md (regenerate with
+``STRIATAL_WRITE_RELIABILITY=1 pytest tests/test_reliability_round3.py``).
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+from test_reliability import (
+    Scenario,
+    check_doc_section,
+    cli_in_process,
+    library_error,
+    outcome,
+    params_of,
+    usage_error,
+)
+
+from striatal.errors import ParameterError
+from striatal.experiments.training import simulate, train
+from striatal.sim.robust import check_robust
+
+#: A short training run (2 s of trials) whose folder the scenarios below start from.
+SHORT = ("--duration", "5", "--max-trials", "3", "--no-progress")
+
+
+def _trained(*extra: str) -> Callable[[Path], None]:
+    """OUT holds a finished ``striatal train`` run of SHORT with ``extra`` options."""
+
+    def prepare(out: Path) -> None:
+        r = cli_in_process("train", *SHORT, *extra, "--out", str(out))
+        assert r.rc == 0, r.err
+
+    return prepare
+
+
+def _edited(prepare: Callable[[Path], None], name: str, change: Callable[[dict[str, Any]], None]):
+    """``prepare``, then the JSON file OUT/``name`` loaded, changed and saved."""
+
+    def run(out: Path) -> None:
+        prepare(out)
+        path = out / name
+        data = json.loads(path.read_text())
+        change(data)
+        path.write_text(json.dumps(data))
+
+    return run
+
+
+#: A small sweep (2 seeds, 3 trials of 5 s, the learner and its control).
+SWEEP = ("sweep", "--seeds", "2", "--max-trials", "3", "--duration", "5", "--eval-draws", "0",
+         "--no-progress")  # fmt: skip
+
+
+def _swept(out: Path) -> None:
+    r = cli_in_process(*SWEEP, "--out", str(out))
+    assert r.rc == 0, r.err
+
+
+def _config_fifo(out: Path) -> None:
+    out.mkdir(parents=True)
+    os.mkfifo(out / "exp.toml")
+
+
+def _config_huge(out: Path) -> None:
+    """A sparse 300 MB experiment file: refused by its size, never read."""
+    out.mkdir(parents=True)
+    with (out / "exp.toml").open("wb") as fh:
+        fh.truncate(300 * 10**6)
+
+
+def _config_entry(name: str, value: Any) -> Callable[[dict[str, Any]], None]:
+    def change(d: dict[str, Any]) -> None:
+        d["settings"]["config"][name] = value
+
+    return change
+
+
+def _checkpoint_with(name: str, value: Any) -> Callable[[Path], None]:
+    """A checkpointed run in OUT whose settings.config[name] is ``value``."""
+    return _edited(_trained(), "checkpoint.json", _config_entry(name, value))
+
+
+def _settings_entry(name: str, value: Any) -> Callable[[dict[str, Any]], None]:
+    def change(d: dict[str, Any]) -> None:
+        if value is None:
+            del d["settings"][name]
+        else:
+            d["settings"][name] = value
+
+    return change
+
+
+def bom_history(tmp: Path) -> tuple[bool, str]:
+    """history.csv with a UTF-8 byte-order mark first (as some editors save it) reads."""
+    out = tmp / "OUT"
+    _trained()(out)
+    history = out / "history.csv"
+    history.write_bytes(b"\xef\xbb\xbf" + history.read_bytes())
+    r = cli_in_process("curves", str(history), "--out", str(out / "c.png"))
+    line = r.out.strip().replace(str(out), "OUT") or r.err.strip()
+    return r.rc == 0 and (out / "c.png").exists(), f"exit {r.rc}: `{line}`"
+
+
+def full_disk(*argv: str, names: str) -> Callable[[Path], tuple[bool, str]]:
+    """``striatal ARGV`` with every fsync failing as on a full disk (ENOSPC)."""
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        out = tmp / "OUT"
+
+        def no_space(fd: int) -> None:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+        words = [a.replace("OUT", str(out)) for a in argv]
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(os, "fsync", no_space)
+            r = cli_in_process(*words)
+        lines = r.err.strip().splitlines()
+        line = (lines[-1] if lines else "").replace(str(out), "OUT")
+        hidden = [p.name for p in out.rglob(".*.tmp")] if out.exists() else []
+        ok = r.rc == 2 and len(lines) == 1 and names in line and not hidden
+        return ok, f"exit {r.rc}, {len(lines)} line: `{line}`; temporary files left: {len(hidden)}"
+
+    return run
+
+
+S = Scenario
+ROUND3: tuple[Scenario, ...] = (
+    S("resume-at-default", "runs", "`striatal train --seed 4 --duration 5 --max-trials 3 --out "
+      "DIR`, then `--resume --out DIR --seed 0 --duration 60 --max-trials 4` (options given at "
+      "their default value)", "exit 2, one line naming --seed and --duration; files untouched",
+      usage_error(("train", "--resume", "--out", "OUT", "--seed", "0", "--duration", "60",
+                   "--max-trials", "4", "--no-progress"), prepare=_trained("--seed", "4"),
+                  says="--seed (the run has 4), --duration (the run has 5.0)")),
+    S("out-over-input", "bad file", "`striatal robustness R/result.json --repeats 1 --out "
+      "R/result.json`", "exit 2, one line; result.json untouched (it was replaced by the table)",
+      usage_error(("robustness", "OUT/result.json", "--repeats", "1", "--out", "OUT/result.json"),
+                  prepare=_trained(), says="would overwrite the input")),
+    S("out-over-run-file", "bad file", "`striatal compare W --out W/summary.json`, W a sweep "
+      "folder (the same for result.json, checkpoint.json, history.csv, sweep.json, runs.csv)",
+      "exit 2, one line; the sweep untouched",
+      usage_error(("compare", "OUT", "--out", "OUT/summary.json"), prepare=_swept,
+                  says="would replace the summary.json of a run or sweep")),
+    S("out-folder-over-sweep", "bad file", "`striatal simulate --duration 5 --out W`, W a sweep "
+      "folder (simulate writes a summary.json too)", "exit 2, one line; the sweep untouched",
+      usage_error(("simulate", "--duration", "5", "--out", "OUT"), prepare=_swept,
+                  says="holds a sweep: its summary.json would be replaced")),
+    S("config-fifo", "bad file", "`striatal sweep --config FIFO` (no writer: a read would wait "
+      "for ever)", "exit 2, one line, no hang",
+      usage_error(("sweep", "--config", "OUT/exp.toml", "--out", "OUT/w"), process=True,
+                  prepare=_config_fifo, says="not a regular file")),
+    S("config-dev-zero", "bad file", "`striatal ablation --config /dev/zero`",
+      "exit 2, one line, nothing read",
+      usage_error(("ablation", "--config", "/dev/zero", "--out", "OUT"),
+                  says="not a regular file")),
+    S("config-huge", "bad file", "`striatal sweep --config FILE`, FILE 300 MB",
+      "exit 2, one line, nothing read",
+      usage_error(("sweep", "--config", "OUT/exp.toml", "--out", "OUT/w"), prepare=_config_huge,
+                  says="larger than 1 MiB")),
+    S("result-w-text", "bad file", "`striatal simulate --result result.json` whose `\"W\"` is "
+      "`\"123456\"` (was read as the gains 1..6)", "exit 2, one line naming W",
+      usage_error(("simulate", "--result", "OUT/result.json", "--duration", "5"),
+                  prepare=_edited(_trained(), "result.json", lambda d: d.update(W="123456")),
+                  says="W must be a list of six numbers")),
+    S("result-w-text-figure", "bad file", "`striatal figure --result result.json`, W as above",
+      "exit 2, one line naming W",
+      usage_error(("figure", "--result", "OUT/result.json", "--out", "OUT/f.png"),
+                  prepare=_edited(_trained(), "result.json", lambda d: d.update(W="123456")),
+                  says="W must be a list of six numbers")),
+    S("result-theta-c-text", "bad file", "`striatal evaluate --result result.json` whose "
+      "`\"theta_c\"` is `\"0.6\"`", "exit 2, one line naming theta_c",
+      usage_error(("evaluate", "--result", "OUT/result.json"),
+                  prepare=_edited(_trained(), "result.json", lambda d: d.update(theta_c="0.6")),
+                  says="theta_c must be a number")),
+    S("result-w-bool", "bad file", "`striatal interpret result.json` whose `\"W\"` holds "
+      "`true`", "exit 2, one line naming W",
+      usage_error(("interpret", "OUT/result.json"),
+                  prepare=_edited(_trained(), "result.json",
+                                  lambda d: d["W"].__setitem__(0, True)),
+                  says="W must be a list of six numbers")),
+    S("resume-gamma-text", "bad file", "`striatal train --resume`, checkpoint `\"gamma\": "
+      "\"0.9\"` (was an 82-line Numba TypingError)", "exit 2, one line naming gamma",
+      usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
+                  prepare=_checkpoint_with("gamma", "0.9"), says="gamma must be a number")),
+    S("resume-alpha-text", "bad file", "`striatal train --resume`, checkpoint `\"alpha\": "
+      "\"5\"`", "exit 2, one line naming alpha",
+      usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
+                  prepare=_checkpoint_with("alpha", "5"), says="alpha must be a number")),
+    S("resume-max-step-text", "bad file", "`striatal train --resume`, checkpoint "
+      "`\"max_step\": \"1\"`", "exit 2, one line naming max_step",
+      usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
+                  prepare=_checkpoint_with("max_step", "1"), says="max_step must be a number")),
+    S("resume-count-float", "bad file", "`striatal train --resume`, checkpoint "
+      "`\"action_every\": 1.0`", "exit 2, one line naming action_every",
+      usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
+                  prepare=_checkpoint_with("action_every", 1.0), says="action_every must be")),
+    S("resume-rate-bool", "bad file", "`striatal train --resume`, checkpoint "
+      "`\"alpha\": true`", "exit 2, one line naming alpha",
+      usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
+                  prepare=_checkpoint_with("alpha", True), says="alpha must be a number")),
+    S("api-gamma-text", "bad input", "`striatal.train(gamma=\"0.9\")`",
+      "ParameterError naming gamma",
+      library_error(lambda _: train(gamma="0.9", max_trials=1), ParameterError)),
+    S("api-explore-text", "bad input", "`striatal.train(learner=\"pgpe\", explore=\"1\")`",
+      "ParameterError naming explore",
+      library_error(lambda _: train(learner="pgpe", explore="1", max_trials=1), ParameterError)),
+    S("resume-plant-text", "bad file", "`striatal train --resume --length 2`, checkpoint "
+      "`\"plant\": \"x\"`", "exit 2, one line naming the plant",
+      usage_error(("train", "--resume", "--out", "OUT", "--length", "2", "--no-progress"),
+                  prepare=_edited(_trained(), "checkpoint.json", _settings_entry("plant", "x")),
+                  says="settings.plant is not an object")),
+    S("resume-plant-gone", "bad file", "`striatal train --resume --length 2`, checkpoint "
+      "without `\"plant\"`", "exit 2, one line naming the plant",
+      usage_error(("train", "--resume", "--out", "OUT", "--length", "2", "--no-progress"),
+                  prepare=_edited(_trained(), "checkpoint.json", _settings_entry("plant", None)),
+                  says="lack 'plant'")),
+    S("resume-trial-list", "bad file", "`striatal train --resume --duration 5`, checkpoint "
+      "`\"trial\": [1, 2]`", "exit 2, one line naming the trial",
+      usage_error(("train", "--resume", "--out", "OUT", "--duration", "5", "--no-progress"),
+                  prepare=_edited(_trained(), "checkpoint.json", _settings_entry("trial", [1, 2])),
+                  says="settings.trial is not an object")),
+    S("int-huge", "bad input", "`striatal train --max-trials 2 --duration 5 --action-every "
+      "100000000000000000000` (was Numba's \"Int value is too large\")",
+      "exit 2, one line naming --action-every",
+      usage_error(("train", "--max-trials", "2", "--duration", "5", "--action-every",
+                   "100000000000000000000", "--out", "OUT"), says="argument --action-every")),
+    S("int-huge-any", "bad input", "`striatal curves history.csv --window 2147483648` (every "
+      "whole-number option of every command)", "exit 2, one line naming --window",
+      usage_error(("curves", "OUT/history.csv", "--window", "2147483648", "--out", "OUT/c.png"),
+                  prepare=_trained(), says="argument --window")),
+    S("api-int-huge", "bad input", "`striatal.train(action_every=10**20)`",
+      "ParameterError naming action_every",
+      library_error(lambda _: train(action_every=10**20, max_trials=1), ParameterError)),
+    S("seeds-billion", "bad input", "`striatal sweep --seeds 1000000000` (memory grew while the "
+      "seed sequences were spawned)", "exit 2, one line naming --seeds, at once",
+      usage_error(("sweep", "--seeds", "1000000000", "--out", "OUT"), says="--seeds must be")),
+    S("seeds-overflow", "bad input", "`striatal ablation --seeds 10**30` (was an OverflowError)",
+      "exit 2, one line naming --seeds",
+      usage_error(("ablation", "--seeds", str(10**30), "--out", "OUT"), says="argument --seeds")),
+    S("workers-many", "bad input", "`striatal sweep --seeds 2 --workers 1000` (forked 1000 "
+      "workers for 4 runs)", "exit 2, one line naming --workers",
+      usage_error(("sweep", "--seeds", "2", "--workers", "1000", "--out", "OUT"),
+                  says="--workers must be")),
+    S("learner-dict-curves", "bad file", "`striatal curves R/history.csv --out c.png`, R's "
+      "result.json with `settings.learner = {\"a\": 1}` (was TypeError: unhashable dict)",
+      "exit 2, one line naming the learner",
+      usage_error(("curves", "OUT/history.csv", "--out", "OUT/c.png"),
+                  prepare=_edited(_trained(), "result.json",
+                                  _settings_entry("learner", {"a": 1})),
+                  says="learner must be a name")),
+    S("learner-dict-interpret", "bad file", "`striatal interpret R/result.json`, the same",
+      "exit 2, one line naming the learner",
+      usage_error(("interpret", "OUT/result.json"),
+                  prepare=_edited(_trained(), "result.json",
+                                  _settings_entry("learner", {"a": 1})),
+                  says="learner must be a name")),
+    S("api-action-every-0", "bad input", "`striatal.simulate(action_every=0)` (was "
+      "ZeroDivisionError)", "ParameterError naming action_every",
+      library_error(lambda _: simulate(action_every=0), ParameterError)),
+    S("api-simulate-plant", "bad input", "`striatal.simulate(plant=\"x\")`",
+      "ParameterError naming plant", library_error(lambda _: simulate(plant="x"), ParameterError)),
+    S("api-train-plant", "bad input", "`striatal.train(plant=\"heavy\")` (was TypeError from "
+      "asdict)", "ParameterError naming plant",
+      library_error(lambda _: train(plant="heavy", max_trials=1), ParameterError)),
+    S("api-train-sim", "bad input", "`striatal.train(sim={})` (was taken for the default)",
+      "ParameterError naming sim",
+      library_error(lambda _: train(sim={}, max_trials=1), ParameterError)),
+    S("api-train-learner", "bad input", "`striatal.train(learner=5)` (was AttributeError)",
+      "ParameterError naming learner",
+      library_error(lambda _: train(learner=5, max_trials=1), ParameterError)),
+    S("api-train-out", "bad input", "`striatal.train(out=5)` (was TypeError)",
+      "ParameterError naming out",
+      library_error(lambda _: train(out=5, max_trials=1), ParameterError)),
+    S("api-normalise-text", "bad input", "`striatal.train(learner=\"rpe\", normalise=\"false\")`",
+      "ParameterError naming normalise",
+      library_error(lambda _: train(learner="rpe", normalise="false", max_trials=1),
+                    ParameterError)),
+    S("api-max-trials-bool", "bad input", "`striatal.train(max_trials=True)` (was one trial)",
+      "ParameterError naming max_trials",
+      library_error(lambda _: train(max_trials=True), ParameterError)),
+    S("api-check-robust", "bad input", "`striatal.check_robust(\"x\")` (was AttributeError)",
+      "ParameterError naming the controller",
+      library_error(lambda _: check_robust("x"), ParameterError)),
+    S("connect-timeout-inf", "bad input", "`striatal sweep --backend ray --address "
+      "127.0.0.1:1 --connect-timeout inf`", "exit 2, one line saying finite",
+      usage_error(("sweep", "--backend", "ray", "--address", "127.0.0.1:1", "--connect-timeout",
+                   "inf", "--seeds", "1", "--out", "OUT"), says="finite number of seconds")),
+    S("history-bom", "bad file", "`striatal curves history.csv`, the file starting with a UTF-8 "
+      "byte-order mark", "read as without it", bom_history),
+    S("enospc-simulate", "bad file", "`striatal simulate --duration 5 --out DIR` on a full disk "
+      "(every fsync fails with ENOSPC)", "exit 2, one line naming the file",
+      full_disk("simulate", "--duration", "5", "--out", "OUT", names="OUT/trajectory.csv")),
+    S("enospc-train", "bad file", "`striatal train --max-trials 2 --duration 5 --out DIR` on "
+      "the same full disk", "exit 2, one line naming the file",
+      full_disk("train", "--max-trials", "2", "--duration", "5", "--out", "OUT",
+                names="OUT/history.csv")),
+)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def round3_tmp(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("round3")
+
+
+@pytest.mark.parametrize("scenario", params_of(ROUND3))
+def test_round3(scenario: Scenario, round3_tmp: Path) -> None:
+    ok, observed = outcome(scenario, round3_tmp)
+    assert ok, observed
+
+
+def test_doc_matches_round3(round3_tmp: Path) -> None:
+    check_doc_section("round3", ROUND3, round3_tmp, "test_reliability_round3.py")
