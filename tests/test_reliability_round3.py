@@ -320,3 +320,17 @@ def test_round3(scenario: Scenario, round3_tmp: Path) -> None:
 
 def test_doc_matches_round3(round3_tmp: Path) -> None:
     check_doc_section("round3", ROUND3, round3_tmp, "test_reliability_round3.py")
+
+
+@pytest.mark.parametrize("gains", ["123456", ("1", "2", "3", "4", "5", "6"), [True] * 6])
+def test_gains_given_as_text_or_flags_are_refused_everywhere(gains: object) -> None:
+    """check_gains is the one gate: a result, an ablation.json and the API all use it."""
+    from striatal.errors import ParameterError
+    from striatal.experiments.robustness import controller_groups
+    from striatal.params import Controller
+
+    with pytest.raises(ParameterError, match="six numbers"):
+        Controller(gains=gains, theta_c=0.6)  # type: ignore[arg-type]
+    ablation = {"v": {"runs": [{"success": True, "W": gains, "theta_c": 0.6}]}}
+    with pytest.raises(ParameterError, match="six numbers"):
+        controller_groups(ablation)

@@ -96,8 +96,13 @@ def check_gains(gains: object, *, need_positive_w1: bool = True) -> tuple[float,
     W1 enters the balancing law through sqrt(W1 g) (eq 20), so it must be > 0
     unless ``need_positive_w1`` is False.
     """
+    if isinstance(gains, str | bytes):
+        raise ParameterError(f"gains must be six numbers W1..W6, not text {gains!r}")
     try:
-        values = tuple(float(w) for w in np.asarray(gains, dtype=float).ravel())
+        raw = np.asarray(gains)
+        if raw.dtype.kind not in "iuf":  # text, true/false or objects are not gains
+            raise ValueError(f"got {gains!r}")
+        values = tuple(float(w) for w in raw.astype(float).ravel())
     except (TypeError, ValueError, OverflowError) as exc:
         raise ParameterError(f"gains must be six numbers W1..W6: {exc}") from None
     if len(values) != N_GAINS:
