@@ -3,7 +3,8 @@
 :func:`learning_step`: restore the generator, let the rule plan the trial, run
 it (recorded when the reward is the shaped one), score it (eqs 24-25 or the
 shaped reward), apply the success test (on the noisy trial or on a mean-policy
-rerun, eqs 22-23; on the jitter corners too), let the rule update, record the
+rerun, eqs 22-23; on the jitter corners too: the named checks of :func:`success_checks`),
+let the rule update, record the
 history row and build the next state. Every simulated trial is counted in
 ``LearnerState.simulations`` (and its simulated time in ``simulated_seconds``):
 the learning trial and each success check that needs a trial of its own. A rule
@@ -59,6 +60,7 @@ __all__ = [
     "learning_steps",
     "register",
     "rule_of",
+    "success_checks",
 ]
 
 #: The registry: learner name -> rule (docs/architecture.md). The rules below the loop
@@ -130,6 +132,47 @@ def _finite(update: Update, state: LearnerState) -> Update:
         (k, v if all(math.isfinite(x) for x in v) else old.get(k, ())) for k, v in update.memory
     )
     return Update(W=W, theta_c=theta_c, memory=memory)
+
+
+#: The checks of the success test, by name: what each runs. :func:`success_checks` says
+#: which a config applies, in order; the first that fails ends the test (docs/architecture.md).
+CHECKS: dict[str, str] = {
+    "trial": "the trial itself: the noisy trial (success_on noisy), or the noise-free run "
+    "of the candidate a rule that judges_candidate ran (its own plant)",
+    "rerun": "a noise-free run of the judged controller on the nominal plant",
+    "jitter corners": "noise-free runs on the four corners of plant_jitter (pole mass and "
+    "length scaled by 1 +- plant_jitter), the controller believing in the nominal plant",
+    "robustness set": "the robustness set of striatal.sim.robust (9 noise-free cases, the "
+    "motor force held), up to the first that fails; its nominal case is not rerun when a "
+    "check already ran it",
+}
+
+
+def success_checks(config: LearnerConfig) -> tuple[str, ...]:
+    """The names of the checks (:data:`CHECKS`) the success test of ``config`` applies."""
+    rule = rule_of(config)
+    if config.success_on == "noisy":
+        checks: tuple[str, ...] = ("trial",)
+    elif rule.judges_candidate and (config.plant_jitter == 0.0 or config.robust):
+        # its trial is the noise-free run of the judged controller (on a jittered plant
+        # with robust: a first filter, the robustness set decides)
+        checks = ("trial",)
+    else:
+        checks = ("rerun",)
+    if config.success_on == "mean" and config.plant_jitter > 0.0 and not config.robust:
+        checks += ("jitter corners",)
+    if config.robust:
+        checks += ("robustness set",)
+    return checks
+
+
+def nominal_checked(config: LearnerConfig) -> bool:
+    """Whether a check before the robustness set ran the judged controller noise-free on
+    the nominal plant (then the set need not rerun its nominal case)."""
+    checks = success_checks(config)
+    return "rerun" in checks or (
+        config.success_on == "mean" and checks[0] == "trial" and config.plant_jitter == 0.0
+    )
 
 
 def _mean_policy_trial(
@@ -226,29 +269,41 @@ def learning_steps(
     else:
         W = np.array(state.W, dtype=float)
         controller = replace(template, theta_c=state.theta_c)
-    nominal_run = False  # whether the success test ran the mean policy on the nominal plant
-    if config.success_on == "noisy":
-        success = outcome.success
-    else:
-        checks: list[tuple[Plant, Plant | None]] = []
-        if rule.judges_candidate and plan.rng is None and plan.plant is None:
-            # the trial itself was the noise-free run of the judged controller
+    if rule.judges_candidate and plan.rng is not None:
+        raise ParameterError(
+            f"learner {rule.name!r} judges its candidate, so its trials must be noise-free "
+            "(TrialPlan.rng None)"
+        )
+    success = True
+    for check in success_checks(config):
+        if not success:
+            break
+        if check == "trial":
             success = outcome.success
-            nominal_run = True
-        elif config.robust and rule.judges_candidate and plan.rng is None:
-            # robust: the noise-free trial on a jittered plant is the first filter; the
-            # robustness set (nominal case included) decides
-            success = outcome.success
-        else:
-            nominal_run = True
-            checks.append((plant, None))
-            success = True
-        if config.plant_jitter > 0.0 and not config.robust:
-            checks.extend((corner, plant) for corner in jitter_corners(plant, config.plant_jitter))
-        for true_plant_i, model_i in checks:
+            continue
+        if check == "robustness set":
+            nominal = nominal_checked(config) and nominal_is_the_case(sim, config.action_every)
+            verdict = stop_check(
+                controller,
+                plant,
+                sim.dt,
+                gains=W,
+                nominal_passed=nominal,
+                hardware=hardware,
+            )
+            simulations += verdict.simulations
+            seconds += verdict.simulated_seconds
+            success = verdict.robust
+            continue
+        runs = (
+            [(plant, None)]
+            if check == "rerun"
+            else [(corner, plant) for corner in jitter_corners(plant, config.plant_jitter)]
+        )
+        for true_plant_i, model_i in runs:
             if not success:
                 break
-            (check,) = yield [
+            (rerun,) = yield [
                 _mean_policy_trial(
                     true_plant_i,
                     controller,
@@ -261,20 +316,8 @@ def learning_steps(
                 )
             ]
             simulations += 1
-            seconds += check.ended_at
-            success = check.success
-    if config.robust and success:
-        verdict = stop_check(
-            controller,
-            plant,
-            sim.dt,
-            gains=W,
-            nominal_passed=nominal_run and nominal_is_the_case(sim, config.action_every),
-            hardware=hardware,
-        )
-        simulations += verdict.simulations
-        seconds += verdict.simulated_seconds
-        success = verdict.robust
+            seconds += rerun.ended_at
+            success = rerun.success
     update = _finite(rule.update(state, config, Trial(plan, outcome, reward, success)), state)
     record = TrialRecord(
         trial=state.trials_done + 1,

@@ -1,0 +1,105 @@
+"""The loop's success test as named checks (learners.loop.success_checks, CHECKS)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from striatal.learners import default_config, initial_state, learning_step
+from striatal.learners.loop import CHECKS, nominal_checked, success_checks
+from striatal.params import (
+    CHAPTER_FINAL_THETA_C,
+    CHAPTER_FINAL_W,
+    CHAPTER_INITIAL_THETA_C,
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+)
+from striatal.sim import batch
+from striatal.sim.rollout import Protocol
+
+SHORT = Simulation(duration=10.0)
+DOC = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"
+#: The table's rows: learner and the options (as LearnerConfig changes).
+ROWS: dict[str, tuple[str, dict[str, Any]]] = {
+    "chapter (preset: success_on noisy)": ("chapter", {}),
+    "chapter `--success-on mean`": ("chapter", {"success_on": "mean"}),
+    "chapter `--robust`": ("chapter", {"robust": True}),
+    "chapter `--success-on mean --robust`": ("chapter", {"success_on": "mean", "robust": True}),
+    "rpe `--success-on mean`": ("rpe", {"success_on": "mean"}),
+    "pgpe (preset: success_on mean)": ("pgpe", {}),
+    "pgpe `--plant-jitter 0.2`": ("pgpe", {"plant_jitter": 0.2}),
+    "pgpe `--robust` (jitter 0.2)": ("pgpe", {"robust": True}),
+    "forward (preset)": ("forward", {}),
+    "ac (preset)": ("ac", {}),
+}
+
+
+def test_the_documented_table_is_what_the_loop_applies() -> None:
+    text = DOC.read_text(encoding="utf-8")
+    table = text.split("<!-- success-checks:begin -->")[1].split("<!-- success-checks:end -->")[0]
+    found = {}
+    for line in table.strip().splitlines()[2:]:
+        learner, options, checks = (c.strip() for c in line.strip("|").split("|"))
+        found[f"{learner} {options}"] = tuple(c.strip() for c in checks.split(","))
+    assert set(found) == set(ROWS)
+    for key, (learner, changes) in ROWS.items():
+        assert found[key] == success_checks(default_config(learner, **changes)), key
+    assert all(c in CHECKS for checks in found.values() for c in checks)
+
+
+def test_the_nominal_case_of_the_set_is_skipped_only_after_a_nominal_check() -> None:
+    assert nominal_checked(default_config("chapter", success_on="mean", robust=True))
+    assert not nominal_checked(default_config("chapter", robust=True))  # a noisy trial
+    assert nominal_checked(default_config("pgpe"))  # its noise-free nominal candidate
+    assert not nominal_checked(default_config("pgpe", robust=True))  # on a jittered plant
+
+
+class Count:
+    """Counts the trials the loop asks for (every check that simulates is one)."""
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
+        self.n = 0
+        real = batch.run_trial
+
+        def counted(*args: Any, **kwargs: Any) -> Any:
+            self.n += 1
+            return real(*args, **kwargs)
+
+        monkeypatch.setattr(batch, "run_trial", counted)
+
+
+@pytest.mark.parametrize(
+    ("learner", "changes", "trials"),
+    [
+        ("chapter", {"success_on": "mean"}, 2),  # the noisy trial, then the rerun
+        ("pgpe", {"reward": "sparse"}, 1),  # the candidate's trial is the check: it fails
+        ("pgpe", {"reward": "sparse", "plant_jitter": 0.2}, 2),  # the rerun fails: no corners
+    ],
+)
+def test_a_failing_check_ends_the_test(
+    monkeypatch: pytest.MonkeyPatch, learner: str, changes: dict[str, Any], trials: int
+) -> None:
+    config = default_config(learner, max_trials=5, **changes)
+    count = Count(monkeypatch)
+    state = initial_state(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C, seed=0)
+    new, record = learning_step(state, Plant(), Controller(), SHORT, Protocol(), config)
+    assert not record.success
+    assert count.n == new.simulations == trials
+
+
+def test_passing_checks_all_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The chapter's final gains pass the rerun: the noisy trial plus the rerun, success."""
+    config = default_config("chapter", success_on="mean", max_trials=5)
+    count = Count(monkeypatch)
+    good = initial_state(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C, seed=0)
+    new, record = learning_step(good, Plant(), Controller(), Simulation(), Protocol(), config)
+    assert record.success and count.n == new.simulations == 2
+    # judged on the noisy trial alone, the same gains need one trial
+    count.n = 0
+    noisy = default_config("chapter", max_trials=5)
+    new, _ = learning_step(good, Plant(), Controller(), Simulation(), Protocol(), noisy)
+    assert count.n == new.simulations == 1
