@@ -77,6 +77,9 @@ def build(args: argparse.Namespace) -> dict[str, Any]:
     if history_path is not None:
         h = read_history(history_path)
         table = interpret.plasticity_table(h.W, h.reward)
+        from striatal.learners import RULES
+
+        rule = RULES.get(learner) if isinstance(learner, str) else None
         out["plasticity"] = {
             "history": str(history_path),
             "trials": len(h),
@@ -89,7 +92,7 @@ def build(args: argparse.Namespace) -> dict[str, Any]:
                 "dip = reward < 0. W6 sets sigma (exploration), not a pathway weight."
                 + (
                     ""
-                    if learner == "chapter"
+                    if rule is not None and rule.raw_reward_signal
                     else f" Learner {learner!r}: its dopamine-like signal is not the raw "
                     "reward (reward prediction error or shaped reward), so the split by the "
                     "reward's sign is only a first reading."

@@ -107,6 +107,7 @@ class ChapterRule(Rule):
     control = MappingProxyType({"alpha": 0.0})
     history_columns = ("sigma",)
     memory_names = ("trace",)
+    raw_reward_signal = True
 
     def plan(
         self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant

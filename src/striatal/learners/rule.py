@@ -120,6 +120,9 @@ class Rule:
     #: Why the rule's success test can only be judged on the mean policy (its trials act
     #: with it); empty: the rule also takes success_on "noisy".
     mean_policy_only: ClassVar[str] = ""
+    #: Whether the rule's dopamine-like signal is the raw reward of eqs 24-25 (the
+    #: chapter's), so that splitting its updates by the reward's sign reads bursts and dips.
+    raw_reward_signal: ClassVar[bool] = False
     #: Whether the rule runs its trial itself (:meth:`run`): a rule that changes W within
     #: the trial (ac). Otherwise the loop runs the plan with :mod:`striatal.sim.rollout`.
     runs_trial: ClassVar[bool] = False
