@@ -63,13 +63,14 @@ is reported as unsolved at ``max_trials``.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from striatal.learners.common import shaped_reward
-from striatal.learners.config import W1_FLOOR, SuccessOn
+from striatal.learners.config import W1_FLOOR, LearnerConfig, SuccessOn
 from striatal.learners.pgpe import THETA_C_LEARNED_RANGE
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
@@ -91,6 +92,7 @@ __all__ = [
     "LQR_Q",
     "LQR_R",
     "RANDOM_BOX",
+    "SEARCHES",
     "LqrFit",
     "cmaes",
     "fixed_controller",
@@ -100,7 +102,6 @@ __all__ = [
     "random_search",
 ]
 
-BASELINES: tuple[str, ...] = ("lqr", "hand", "random", "cmaes")
 
 #: LQR weights on (x, x_dot, theta, theta_dot) and on u.
 LQR_Q = np.eye(4)
@@ -401,3 +402,45 @@ def cmaes(
             break
         restarts += 1
     return _result(False, max_trials, p, seconds, runs, restarts=restarts - 1, popsize=popsize)
+
+
+#: What a baseline's search returns (success, trials, W, theta_c, simulations, ...).
+Found = dict[str, Any]
+Config = LearnerConfig
+
+
+def _budget(config: LearnerConfig) -> dict[str, Any]:
+    """What every baseline takes from the arm's config: its budget and its stop rule."""
+    return {
+        "max_trials": config.max_trials,
+        "success_on": config.success_on,
+        "robust": config.robust,
+        "hardware": config.hardware,
+    }
+
+
+def _lqr(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
+    W, theta_c = lqr_controller(plant)
+    return fixed_controller(plant, template, sim, W, theta_c, seed, **_budget(c))
+
+
+def _hand(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
+    W, theta_c = CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C
+    return fixed_controller(plant, template, sim, W, theta_c, seed, **_budget(c))
+
+
+def _random(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
+    return random_search(plant, template, sim, seed, **_budget(c))
+
+
+def _cmaes(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
+    W0, theta_c0 = template.gains, template.theta_c
+    return cmaes(plant, template, sim, W0, theta_c0, seed, **_budget(c))
+
+
+#: A baseline arm's search from ``template`` (its W(0) and theta_c(0)) under ``config``'s
+#: budget and stop rule: success, trials, W, theta_c, simulations, simulated_seconds.
+Search = Callable[[Plant, Controller, Simulation, int, LearnerConfig], dict[str, Any]]
+#: The baselines by name, in the order of ``--baselines``' help.
+SEARCHES: dict[str, Search] = {"lqr": _lqr, "hand": _hand, "random": _random, "cmaes": _cmaes}
+BASELINES: tuple[str, ...] = tuple(SEARCHES)

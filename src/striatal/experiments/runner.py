@@ -37,8 +37,6 @@ import math
 import time
 from typing import Any
 
-import numpy as np
-
 from striatal.errors import ParameterError
 from striatal.experiments import baselines
 from striatal.experiments.evaluate import pass_probability_steps
@@ -46,8 +44,8 @@ from striatal.experiments.spec import RunSpec, initial_gains
 from striatal.learners import LearnerConfig, check_config, rule_of
 from striatal.learners.common import initial_state
 from striatal.learners.loop import learn_steps
-from striatal.params import N_GAINS, Controller, Plant, Simulation
-from striatal.sim.batch import Steps, TrialRequest, drive
+from striatal.params import Controller, Plant, Simulation
+from striatal.sim.batch import Steps, drive, mean_policy_trial
 from striatal.sim.robust import check_robust
 from striatal.sim.rollout import Protocol
 
@@ -132,47 +130,9 @@ def search(spec: RunSpec, W0: tuple[float, ...]) -> Steps[dict[str, Any]]:
     cfg = spec.config
     if spec.method == "learn":
         return (yield from learning_steps(spec.plant, template, cfg, spec.seed, spec.sim))
-    if spec.method in ("lqr", "hand"):
-        if spec.method == "lqr":
-            W, theta_c = baselines.lqr_controller(spec.plant)
-        else:
-            W, theta_c = baselines.CHAPTER_FINAL_W, baselines.CHAPTER_FINAL_THETA_C
-        return baselines.fixed_controller(
-            spec.plant,
-            template,
-            spec.sim,
-            W,
-            theta_c,
-            spec.seed,
-            cfg.max_trials,
-            cfg.success_on,
-            robust=cfg.robust,
-            hardware=cfg.hardware,
-        )
-    if spec.method == "random":
-        return baselines.random_search(
-            spec.plant,
-            template,
-            spec.sim,
-            spec.seed,
-            cfg.max_trials,
-            cfg.success_on,
-            robust=cfg.robust,
-            hardware=cfg.hardware,
-        )
-    if spec.method == "cmaes":
-        return baselines.cmaes(
-            spec.plant,
-            template,
-            spec.sim,
-            W0,
-            spec.template.theta_c,
-            spec.seed,
-            cfg.max_trials,
-            cfg.success_on,
-            robust=cfg.robust,
-            hardware=cfg.hardware,
-        )
+    search = baselines.SEARCHES.get(spec.method)
+    if search is not None:
+        return search(spec.plant, template, spec.sim, spec.seed, cfg)
     raise ParameterError(f"unknown method {spec.method!r}; choose from {', '.join(METHODS)}")
 
 
@@ -201,16 +161,7 @@ def run_steps(spec: RunSpec) -> Steps[dict[str, Any]]:
     mean_ok = False
     if final is not None:
         (rerun,) = yield [
-            TrialRequest(
-                plant=spec.plant,
-                controller=final,
-                sim=spec.sim,
-                protocol=Protocol(),
-                trace=np.zeros(N_GAINS),
-                gamma=0.0,
-                rng=None,
-                hardware=cfg.hardware,
-            )
+            mean_policy_trial(spec.plant, final, spec.sim, Protocol(), hardware=cfg.hardware)
         ]
         mean_ok = rerun.success
     evals = 1 if final is not None else 0

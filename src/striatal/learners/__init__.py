@@ -22,7 +22,6 @@ from __future__ import annotations
 from striatal.learners.common import (
     initial_state,
     jitter_corners,
-    mean_policy_success,
     prediction_error_factor,
     random_initial_gains,
     shaped_reward,
@@ -65,7 +64,6 @@ __all__ = [
     "jitter_corners",
     "learn",
     "learning_step",
-    "mean_policy_success",
     "prediction_error_factor",
     "random_initial_gains",
     "register",

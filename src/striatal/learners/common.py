@@ -14,7 +14,6 @@ from striatal.learners.config import W1_FLOOR, ThetaCRule
 from striatal.learners.state import LearnerState
 from striatal.params import (
     N_GAINS,
-    Controller,
     Plant,
     Simulation,
     check_gains,
@@ -23,7 +22,7 @@ from striatal.params import (
 )
 from striatal.sim import kernel
 from striatal.sim.dynamics import energy_error, wrap_angle
-from striatal.sim.rollout import Protocol, TrialOutcome, run_trial
+from striatal.sim.rollout import Protocol, TrialOutcome
 
 __all__ = [
     "CLOSENESS_DECADES",
@@ -34,7 +33,6 @@ __all__ = [
     "baseline_memory",
     "initial_state",
     "jitter_corners",
-    "mean_policy_success",
     "prediction_error",
     "prediction_error_factor",
     "random_initial_gains",
@@ -92,33 +90,6 @@ def theta_c_rule(outcome: TrialOutcome, theta_c: float, rule: ThetaCRule) -> flo
     if rule == "clamped":
         return max(m, THETA_C_RESET_TO)
     return max(m, THETA_C_FLOOR)
-
-
-def mean_policy_success(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    protocol: Protocol,
-    W: np.ndarray,
-    action_every: int,
-    model: Plant | None = None,
-) -> bool:
-    """The success test on a noise-free run of the mean policy (eqs 22-23) with gains W.
-
-    ``model``: the plant the controller believes in (default: the true ``plant``).
-    """
-    return run_trial(
-        plant=plant,
-        controller=controller,
-        sim=sim,
-        protocol=protocol,
-        trace=np.zeros(N_GAINS),
-        gamma=0.0,
-        rng=None,
-        gains=W,
-        action_every=action_every,
-        model=model,
-    ).success
 
 
 def _closeness(states: np.ndarray, sim: Simulation) -> np.ndarray:

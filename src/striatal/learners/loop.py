@@ -44,8 +44,8 @@ from striatal.learners.pgpe import PGPE
 from striatal.learners.rpe import RPE
 from striatal.learners.rule import Rule, Trial, Update
 from striatal.learners.state import LearnerState, TrainResult, TrialRecord
-from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Plant, Simulation
-from striatal.sim.batch import Steps, TrialRequest, drive
+from striatal.params import Controller, Plant, Simulation
+from striatal.sim.batch import Steps, TrialRequest, drive, mean_policy_trial
 from striatal.sim.robust import nominal_is_the_case, stop_check
 from striatal.sim.rollout import Protocol, recorded_trial
 
@@ -175,32 +175,6 @@ def nominal_checked(config: LearnerConfig) -> bool:
     )
 
 
-def _mean_policy_trial(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    protocol: Protocol,
-    W: np.ndarray,
-    action_every: int,
-    model: Plant | None,
-    hardware: Hardware = CHAPTER_HARDWARE,
-) -> TrialRequest:
-    """The noise-free trial of the success test (``mean_policy_success`` with its outcome)."""
-    return TrialRequest(
-        plant=plant,
-        controller=controller,
-        sim=sim,
-        protocol=protocol,
-        trace=np.zeros(N_GAINS),
-        gamma=0.0,
-        rng=None,
-        gains=W,
-        action_every=action_every,
-        model=model,
-        hardware=hardware,
-    )
-
-
 def learning_step(
     state: LearnerState,
     plant: Plant,
@@ -304,15 +278,15 @@ def learning_steps(
             if not success:
                 break
             (rerun,) = yield [
-                _mean_policy_trial(
+                mean_policy_trial(
                     true_plant_i,
                     controller,
                     sim,
                     protocol,
-                    W,
-                    config.action_every,
-                    model_i,
-                    hardware,
+                    gains=W,
+                    action_every=config.action_every,
+                    model=model_i,
+                    hardware=hardware,
                 )
             ]
             simulations += 1

@@ -32,7 +32,7 @@ import numba
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
+from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Plant, Simulation
 from striatal.sim import kernel
 from striatal.sim.noise import row_parts, run_parts
 from striatal.sim.rollout import (
@@ -44,7 +44,15 @@ from striatal.sim.rollout import (
     run_trial,
 )
 
-__all__ = ["TRIAL_KERNELS", "Lockstep", "Steps", "TrialRequest", "drive", "run_requests"]
+__all__ = [
+    "TRIAL_KERNELS",
+    "Lockstep",
+    "Steps",
+    "TrialRequest",
+    "drive",
+    "mean_policy_trial",
+    "run_requests",
+]
 
 T = TypeVar("T")
 #: A computation that needs trials: it yields requests, is sent their outcomes, returns T.
@@ -121,6 +129,34 @@ class TrialRequest:
             self.hardware,
             self.draws_actions,
         )
+
+
+def mean_policy_trial(
+    plant: Plant,
+    controller: Controller,
+    sim: Simulation,
+    protocol: Protocol,
+    *,
+    gains: np.ndarray | None = None,
+    action_every: int = 1,
+    model: Plant | None = None,
+    hardware: Hardware = CHAPTER_HARDWARE,
+) -> TrialRequest:
+    """A noise-free trial of the mean policy (eqs 22-23), no trace: what every success
+    check, re-simulation and robustness case runs."""
+    return TrialRequest(
+        plant=plant,
+        controller=controller,
+        sim=sim,
+        protocol=protocol,
+        trace=np.zeros(N_GAINS),
+        gamma=0.0,
+        rng=None,
+        gains=gains,
+        action_every=action_every,
+        model=model,
+        hardware=hardware,
+    )
 
 
 def drive(steps: Steps[T]) -> T:

@@ -31,8 +31,9 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.params import CHAPTER_THETA0, N_GAINS, Controller, Hardware, Plant, Simulation
-from striatal.sim.rollout import NO_PROTOCOL, run_trial, simulate
+from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation
+from striatal.sim.batch import mean_policy_trial
+from striatal.sim.rollout import NO_PROTOCOL, simulate
 
 __all__ = [
     "ROBUST_CASES",
@@ -275,18 +276,10 @@ def stop_check(
         if nominal_passed and case == ROBUST_CASES[0]:
             continue
         sim = Simulation(theta0=case.theta0, x0=case.x0, duration=ROBUST_DURATION, dt=dt)
-        outcome = run_trial(
-            plant.scaled(pole_mass=case.pole_mass, length=case.length),
-            controller,
-            sim,
-            protocol=NO_PROTOCOL,
-            trace=np.zeros(N_GAINS),
-            gamma=0.0,
-            rng=None,
-            gains=W,
-            model=plant,
-            hardware=hardware,
-        )
+        true_plant = plant.scaled(pole_mass=case.pole_mass, length=case.length)
+        outcome = mean_policy_trial(
+            true_plant, controller, sim, NO_PROTOCOL, gains=W, model=plant, hardware=hardware
+        ).run()
         runs += 1
         seconds += outcome.ended_at
         if not outcome.success:
