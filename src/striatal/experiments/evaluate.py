@@ -22,14 +22,13 @@ from striatal.errors import ParameterError
 from striatal.experiments.stats import wilson_interval
 from striatal.params import (
     CHAPTER_HARDWARE,
-    N_GAINS,
     Controller,
     Hardware,
     Plant,
     Simulation,
     check_seed,
 )
-from striatal.sim.batch import Steps, TrialRequest, drive
+from striatal.sim.batch import Steps, TrialRequest, driven
 from striatal.sim.rollout import Protocol, SensorNoise
 
 __all__ = [
@@ -97,50 +96,6 @@ def check_draws(draws: object) -> int:
     raise ParameterError(f"draws must be a whole number in [1, {MAX_DRAWS:,}], got {draws!r}")
 
 
-def pass_probability(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    protocol: Protocol,
-    draws: int,
-    seed: int,
-    *,
-    action_every: int = 1,
-    model: Plant | None = None,
-    sensor: SensorNoise | None = None,
-    hardware: Hardware = CHAPTER_HARDWARE,
-    on_draw: Callable[[int], None] | None = None,
-) -> PassProbability:
-    """Chance that one noisy trial with ``controller``'s gains passes the success test.
-
-    Runs ``draws`` trials of the protocol under the Gaussian policy of eq 5
-    (sigma from W6, eqs 22-23), all from one ``np.random.default_rng(seed)`` in
-    sequence, and one with the mean policy. Each noisy trial's success is
-    :attr:`striatal.sim.rollout.TrialOutcome.success`, the one the learner uses when
-    success is judged on the noisy trial (docs/paper-notes.md, table row 8 and
-    section 8). ``sensor``: noise on what the controller sees (default none);
-    ``hardware``: the motor's hold and limit and the track (default: the chapter's
-    idealisation; docs/paper-notes.md section 9). Same seed, same result. For the
-    robustness set see :func:`striatal.sim.robust.check_robust`. ``on_draw(k)`` is called
-    after the k-th noisy trial (a progress bar); it does not touch the draws.
-    """
-    return drive(
-        pass_probability_steps(
-            plant,
-            controller,
-            sim,
-            protocol,
-            draws,
-            seed,
-            action_every=action_every,
-            model=model,
-            sensor=sensor,
-            hardware=hardware,
-            on_draw=on_draw,
-        )
-    )
-
-
 def pass_probability_steps(
     plant: Plant,
     controller: Controller,
@@ -156,20 +111,33 @@ def pass_probability_steps(
     on_draw: Callable[[int], None] | None = None,
     chunk: int = DRAWS_AT_ONCE,
 ) -> Steps[PassProbability]:
-    """:func:`pass_probability` as :data:`striatal.sim.batch.Steps`: the mean-policy
-    trial, then the noisy trials ``chunk`` at a time (the same draws, in the same order)."""
+    """Chance that one noisy trial with ``controller``'s gains passes the success test.
+
+    Runs ``draws`` trials of the protocol under the Gaussian policy of eq 5
+    (sigma from W6, eqs 22-23), all from one ``np.random.default_rng(seed)`` in
+    sequence, and one with the mean policy. Each noisy trial's success is
+    :attr:`striatal.sim.rollout.TrialOutcome.success`, the one the learner uses when
+    success is judged on the noisy trial (docs/paper-notes.md, table row 8 and
+    section 8). ``sensor``: noise on what the controller sees (default none);
+    ``hardware``: the motor's hold and limit and the track (default: the chapter's
+    idealisation; docs/paper-notes.md section 9). Same seed, same result. For the
+    robustness set see :func:`striatal.sim.robust.check_robust`. ``on_draw(k)`` is called
+    after the k-th noisy trial (a progress bar); it does not touch the draws.
+
+    As :data:`striatal.sim.batch.Steps`: the mean-policy trial, then the noisy trials
+    ``chunk`` at a time (the same draws in the same order, whichever driver runs them;
+    :func:`pass_probability` runs them on the scalar kernel).
+    """
     n = check_draws(draws)
     sensor = sensor or SensorNoise()
     rng = np.random.default_rng(check_seed(seed))
 
     def trial(mean_policy: bool) -> TrialRequest:
         return TrialRequest(
-            plant=plant,
-            controller=controller,
-            sim=sim,
-            protocol=protocol,
-            trace=np.zeros(N_GAINS),
-            gamma=0.0,
+            plant,
+            controller,
+            sim,
+            protocol,
             # the mean policy needs the generator only for sensor noise
             rng=None if mean_policy and not sensor.active else rng,
             action_every=action_every,
@@ -206,3 +174,7 @@ def pass_probability_steps(
         simulations=n + 1,
         simulated_seconds=seconds,
     )
+
+
+#: :func:`pass_probability_steps` run to its end on the scalar kernel.
+pass_probability = driven(pass_probability_steps)

@@ -45,7 +45,7 @@ from striatal.learners import LearnerConfig, check_config, rule_of
 from striatal.learners.common import initial_state
 from striatal.learners.loop import learn_steps
 from striatal.params import Controller, Plant, Simulation
-from striatal.sim.batch import Steps, drive, mean_policy_trial
+from striatal.sim.batch import Steps, TrialRequest, drive
 from striatal.sim.robust import check_robust
 from striatal.sim.rollout import Protocol
 
@@ -161,7 +161,7 @@ def run_steps(spec: RunSpec) -> Steps[dict[str, Any]]:
     mean_ok = False
     if final is not None:
         (rerun,) = yield [
-            mean_policy_trial(spec.plant, final, spec.sim, Protocol(), hardware=cfg.hardware)
+            TrialRequest(spec.plant, final, spec.sim, Protocol(), hardware=cfg.hardware)
         ]
         mean_ok = rerun.success
     evals = 1 if final is not None else 0

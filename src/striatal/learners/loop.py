@@ -45,7 +45,7 @@ from striatal.learners.rpe import RPE
 from striatal.learners.rule import Rule, Trial, Update
 from striatal.learners.state import LearnerState, TrainResult, TrialRecord
 from striatal.params import Controller, Plant, Simulation
-from striatal.sim.batch import Steps, TrialRequest, drive, mean_policy_trial
+from striatal.sim.batch import Steps, TrialRequest, drive, driven
 from striatal.sim.robust import nominal_is_the_case, stop_check
 from striatal.sim.rollout import Protocol, recorded_trial
 
@@ -175,23 +175,6 @@ def nominal_checked(config: LearnerConfig) -> bool:
     )
 
 
-def learning_step(
-    state: LearnerState,
-    plant: Plant,
-    template: Controller,
-    sim: Simulation,
-    protocol: Protocol,
-    config: LearnerConfig,
-) -> tuple[LearnerState, TrialRecord]:
-    """One trial with (W, theta_c) of ``state``, the success test, then the rule's update.
-
-    Pure: the same state gives the same result. ``template`` carries the readings
-    (balance sign, switch, inhibition); its gains are replaced by the state's. Its
-    trials run on the scalar kernel (:func:`learning_steps` for other drivers).
-    """
-    return drive(learning_steps(state, plant, template, sim, protocol, config))
-
-
 def learning_steps(
     state: LearnerState,
     plant: Plant,
@@ -200,9 +183,14 @@ def learning_steps(
     protocol: Protocol,
     config: LearnerConfig,
 ) -> Steps[tuple[LearnerState, TrialRecord]]:
-    """:func:`learning_step` as :data:`striatal.sim.batch.Steps`: the learning trial and the
-    success test's noise-free trials are yielded as requests; the trials that need more
-    than the summary (a recorded trial, a rule's own trial, the robustness set) run here.
+    """One trial with (W, theta_c) of ``state``, the success test, then the rule's update.
+
+    Pure: the same state gives the same result. ``template`` carries the readings
+    (balance sign, switch, inhibition); its gains are replaced by the state's. As
+    :data:`striatal.sim.batch.Steps`: the learning trial and the success test's noise-free
+    trials are yielded as requests (:func:`learning_step` runs them on the scalar
+    kernel); the trials that need more than the summary (a recorded trial, a rule's own
+    trial, the robustness set) run here.
     """
     rule = rule_of(config)
     rng = np.random.default_rng()
@@ -278,7 +266,7 @@ def learning_steps(
             if not success:
                 break
             (rerun,) = yield [
-                mean_policy_trial(
+                TrialRequest(
                     true_plant_i,
                     controller,
                     sim,
@@ -317,6 +305,10 @@ def learning_steps(
         simulated_seconds=state.simulated_seconds + seconds,
     )
     return new_state, record
+
+
+#: :func:`learning_steps` run to its end on the scalar kernel.
+learning_step = driven(learning_steps)
 
 
 def learn(

@@ -23,10 +23,11 @@ driver runs them.
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable, Generator, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal, TypeVar
+from typing import Any, Literal, ParamSpec, TypeVar
 
 import numba
 import numpy as np
@@ -50,11 +51,12 @@ __all__ = [
     "Steps",
     "TrialRequest",
     "drive",
-    "mean_policy_trial",
+    "driven",
     "run_requests",
 ]
 
 T = TypeVar("T")
+P = ParamSpec("P")
 #: A computation that needs trials: it yields requests, is sent their outcomes, returns T.
 Steps = Generator[list["TrialRequest"], list[TrialOutcome], T]
 #: The kernels :class:`Lockstep` can batch on: the exact one, or the SIMD one.
@@ -70,16 +72,17 @@ PARALLEL_NORMALS = 50_000
 class TrialRequest:
     """One trial of the protocol: the arguments of :func:`striatal.sim.rollout.run_trial`.
 
-    ``trace`` (6,) is updated in place when the trial runs, as ``run_trial`` does.
+    By default the mean policy (``rng`` None), no trace; ``trace`` (6,) is updated in
+    place when the trial runs, as ``run_trial`` does.
     """
 
     plant: Plant
     controller: Controller
     sim: Simulation
     protocol: Protocol
-    trace: np.ndarray
-    gamma: float
-    rng: np.random.Generator | None
+    rng: np.random.Generator | None = None
+    trace: np.ndarray = field(default_factory=lambda: np.zeros(N_GAINS))
+    gamma: float = 0.0
     gains: np.ndarray | None = None
     action_every: int = 1
     chapter_eligibility: bool = False
@@ -131,32 +134,14 @@ class TrialRequest:
         )
 
 
-def mean_policy_trial(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    protocol: Protocol,
-    *,
-    gains: np.ndarray | None = None,
-    action_every: int = 1,
-    model: Plant | None = None,
-    hardware: Hardware = CHAPTER_HARDWARE,
-) -> TrialRequest:
-    """A noise-free trial of the mean policy (eqs 22-23), no trace: what every success
-    check, re-simulation and robustness case runs."""
-    return TrialRequest(
-        plant=plant,
-        controller=controller,
-        sim=sim,
-        protocol=protocol,
-        trace=np.zeros(N_GAINS),
-        gamma=0.0,
-        rng=None,
-        gains=gains,
-        action_every=action_every,
-        model=model,
-        hardware=hardware,
-    )
+def driven(steps: Callable[P, Steps[T]]) -> Callable[P, T]:
+    """The function that runs ``steps``'s generator to its end with :func:`drive`."""
+
+    @functools.wraps(steps)
+    def run(*args: P.args, **kwargs: P.kwargs) -> T:
+        return drive(steps(*args, **kwargs))
+
+    return run
 
 
 def drive(steps: Steps[T]) -> T:

@@ -32,7 +32,7 @@ import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation
-from striatal.sim.batch import mean_policy_trial
+from striatal.sim.batch import TrialRequest
 from striatal.sim.rollout import NO_PROTOCOL, simulate
 
 __all__ = [
@@ -277,7 +277,7 @@ def stop_check(
             continue
         sim = Simulation(theta0=case.theta0, x0=case.x0, duration=ROBUST_DURATION, dt=dt)
         true_plant = plant.scaled(pole_mass=case.pole_mass, length=case.length)
-        outcome = mean_policy_trial(
+        outcome = TrialRequest(
             true_plant, controller, sim, NO_PROTOCOL, gains=W, model=plant, hardware=hardware
         ).run()
         runs += 1
