@@ -171,6 +171,41 @@ def test_summary_does_not_depend_on_completion_order() -> None:
     assert "theta_c still follows eq 21" in a["notes"][0]
 
 
+def test_each_learner_is_paired_with_each_baseline_on_its_seeds() -> None:
+    """learner_vs_baselines: McNemar's test on the seeds both ran, and the restricted mean
+    (unsolved seeds counted at what they spent) beside the rates."""
+    solved = {"learner": {1, 2, 3}, "random": {2, 3, 4, 5}, "lqr": set()}
+    rows = [
+        _row(
+            arm=arm,
+            role="learner" if arm == "learner" else "baseline",
+            method="learn" if arm == "learner" else arm,
+            init=init,
+            seed=seed,
+            success=seed in solved[arm],
+            trials=seed if seed in solved[arm] else 10,
+        )
+        for arm in solved
+        for init in ("chapter", "random")
+        for seed in range(1, 7)
+    ]
+    s = report.summarise(rows, 10, {"x": 1})
+    pairs = {(p["baseline"], p["init"]): p for p in s["learner_vs_baselines"]}
+    assert set(pairs) == {(b, i) for b in ("random", "lqr") for i in ("chapter", "random")}
+    mc = pairs[("random", "chapter")]["mcnemar"]
+    assert (mc["both"], mc["only_a"], mc["only_b"], mc["neither"]) == (2, 1, 2, 1)
+    assert pairs[("lqr", "random")]["mcnemar"]["only_a"] == 3
+    learner = next(a for a in s["arms"] if a["arm"] == "learner" and a["init"] == "chapter")
+    spent = [60.0 * t for t in (1, 2, 3, 10, 10, 10)]
+    assert learner["simulated_seconds_restricted_mean"] == pytest.approx(sum(spent) / 6)
+    lo, hi = learner["simulated_seconds_restricted_mean_ci"]
+    assert min(spent) <= lo <= sum(spent) / 6 <= hi <= max(spent)
+    # over solved seeds only, the median hides the unsolved ones: 120 s against ~ 360 s
+    assert learner["simulated_seconds_median"] == 120.0
+    table = report.markdown_table(s)
+    assert "| learner | random | chapter | 50% [19%, 81%] | 67% [30%, 90%] | 360 / 340 |" in table
+
+
 def test_duplicate_runs_are_dropped_on_read_and_refused_by_the_summary(tmp_path: Path) -> None:
     """Issue 16 item 4: a duplicated (arm, init, seed) line was counted twice."""
     rows = [_row(arm="learner", init="chapter", seed=s, success=True, trials=3) for s in (1, 2)]

@@ -32,6 +32,10 @@ def _finite_mean(values: Iterable[float]) -> float:
     return float(np.mean(x)) if x else math.nan
 
 
+def _mean(x: np.ndarray, axis: int = -1) -> np.ndarray:
+    return np.mean(x, axis=axis)
+
+
 def bootstrap_rng(arm: str, init: str) -> np.random.Generator:
     """The generator of an arm's bootstrap intervals: seeded by its name and init only."""
     return np.random.default_rng(zlib.crc32(f"{arm}|{init}".encode()))
@@ -55,7 +59,8 @@ def arm_statistics(
     solved = [float(r["trials"]) for r in rows if r["success"]]
     every = [float(r["trials"]) if r["success"] else float(max_trials) for r in rows]
     wall = [float(r["wall_seconds"]) for r in rows]
-    out = stats.arm_summary(rows, rng=rng if rng is not None else np.random.default_rng(0))
+    gen = rng if rng is not None else np.random.default_rng(0)
+    out = stats.arm_summary(rows, rng=gen)
     out.update(
         {
             "unsolved_share": (n - len(solved)) / n if n else math.nan,
@@ -76,16 +81,54 @@ def arm_statistics(
             "wall_seconds_median": _quantile(wall, 0.5),
         }
     )
+    spent = [float(r["simulated_seconds"]) for r in rows]
+    mean_all = (
+        stats.bootstrap_interval(spent, _mean, rng or np.random.default_rng(0)) if n else None
+    )
+    out.update(
+        {
+            "simulated_seconds_restricted_mean": float(np.mean(spent)) if n else math.nan,
+            "simulated_seconds_restricted_mean_ci": mean_all.bounds if mean_all else None,
+            "restricted_mean_note": "mean simulated seconds over every seed, an unsolved "
+            "seed counted at what it spent (its budget): the restricted mean, "
+            "percentile bootstrap interval",
+        }
+    )
     if out["trials_median"] is None:
         out["trials_median"] = math.nan
     return out
+
+
+def _paired(
+    a: dict[str, Any], b: dict[str, Any], groups: dict[tuple[str, str], list[dict[str, Any]]]
+) -> dict[str, Any]:
+    """Learner arm ``a`` against baseline arm ``b`` on the same init: their rates, their
+    restricted mean costs, and both tests (McNemar's on the shared seeds)."""
+    solved = {
+        arm["arm"]: {int(r["seed"]): bool(r["success"]) for r in groups[(arm["arm"], a["init"])]}
+        for arm in (a, b)
+    }
+    return {
+        "init": a["init"],
+        "arm": a["arm"],
+        "baseline": b["arm"],
+        "learner": a["learner"],
+        "success_rate": a["success_rate"],
+        "success_rate_ci": a["success_rate_ci"],
+        "baseline_success_rate": b["success_rate"],
+        "baseline_success_rate_ci": b["success_rate_ci"],
+        "simulated_seconds_restricted_mean": a["simulated_seconds_restricted_mean"],
+        "baseline_simulated_seconds_restricted_mean": b["simulated_seconds_restricted_mean"],
+        **stats.compare_arms(solved[a["arm"]], solved[b["arm"]]),
+    }
 
 
 def summarise(
     rows: Sequence[dict[str, Any]], max_trials: int, settings: dict[str, Any]
 ) -> dict[str, Any]:
     """summary.json: statistics per (arm, init) in sorted order, each learner arm against
-    its control (Fisher's exact test, and McNemar's on the shared seeds), settings.
+    its control and against each baseline (Fisher's exact test, and McNemar's on the
+    shared seeds), settings.
 
     Rows must have distinct (arm, init, seed): a duplicate would count one run twice
     (ParameterError).
@@ -146,10 +189,18 @@ def summarise(
                 **stats.compare_arms(solved[a["arm"]], solved[ctrl["arm"]]),
             }
         )
+    against_baselines = [
+        _paired(a, b, groups)
+        for a in arms
+        if a["role"] == "learner"
+        for b in arms
+        if b["role"] == "baseline" and b["init"] == a["init"]
+    ]
     learners = sorted({a["learner"] for a in arms} - {"-"})
     return {
         "arms": arms,
         "learner_vs_control": side_by_side,
+        "learner_vs_baselines": against_baselines,
         "notes": [*(control_note(x) for x in learners), NOTE_BUDGET],
         "settings": settings,
     }
@@ -214,6 +265,27 @@ def markdown_table(summary: dict[str, Any]) -> str:
                 f"{_num(c['control_success_rate'], '.0%')}"
                 f"{_ci(c.get('control_success_rate_ci'), '.0%')} | "
                 f"{_num(c['fisher']['p_value'], '.3g')} | "
+                f"{_num(mc.get('p_value'), '.3g')} ({mc.get('only_a', '-')} / "
+                f"{mc.get('only_b', '-')}) |"
+            )
+    against = summary.get("learner_vs_baselines") or []
+    if against:
+        lines += [
+            "",
+            "| learner arm | baseline | init | success | baseline success | "
+            "mean simulated s, all seeds (learner / baseline) | "
+            "McNemar p (only learner / only baseline) |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for c in against:
+            mc = c.get("mcnemar") or {}
+            lines.append(
+                f"| {c['arm']} | {c['baseline']} | {c['init']} | "
+                f"{_num(c['success_rate'], '.0%')}{_ci(c.get('success_rate_ci'), '.0%')} | "
+                f"{_num(c['baseline_success_rate'], '.0%')}"
+                f"{_ci(c.get('baseline_success_rate_ci'), '.0%')} | "
+                f"{_num(c['simulated_seconds_restricted_mean'], '.0f')} / "
+                f"{_num(c['baseline_simulated_seconds_restricted_mean'], '.0f')} | "
                 f"{_num(mc.get('p_value'), '.3g')} ({mc.get('only_a', '-')} / "
                 f"{mc.get('only_b', '-')}) |"
             )
