@@ -37,12 +37,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _arm_specs(folder: Path) -> dict[str, Any]:
-    """The ``settings.arms`` of ``folder``'s summary.json ({} when the sweep wrote none)."""
-    from striatal.cli.compare import load_summary
+    """The ``settings.arms`` of ``folder``'s summary.json ({} when the sweep wrote none
+    or it records no arms: the legend then uses the arm names)."""
+    from striatal.io.files import read_json
 
-    if not (folder / "summary.json").exists():
+    path = folder / "summary.json"
+    if not path.exists():
         return {}
-    arms = load_summary(folder).get("settings", {}).get("arms", {})
+    data = read_json(path, what="sweep summary")
+    settings = data.get("settings") if isinstance(data, dict) else None
+    arms = settings.get("arms") if isinstance(settings, dict) else None
     return arms if isinstance(arms, dict) else {}
 
 
