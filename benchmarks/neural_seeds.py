@@ -60,43 +60,11 @@ def summarize(paths: list[Path]) -> None:
 def curve_figure(paths: list[Path], out: Path) -> None:
     """Seeds upright over the last 10 s against the neuron count (cerebellar switch), with
     exact 95 % intervals: the curve of docs/neural.md."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from scipy.stats import binomtest
+    from striatal.neural.figures import upright_curve_figure
+    from striatal.viz.plots import save_figure
 
     rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
-    groups: dict[int, list[dict]] = {}
-    for r in rows:
-        if r["selection"] == "cerebellum":
-            groups.setdefault(r["neurons"], []).append(r)
-    ns = sorted(groups)
-    k = [sum(r["upright_last_10s"] for r in groups[n]) for n in ns]
-    m = [len(groups[n]) for n in ns]
-    cis = [binomtest(a, b).proportion_ci(0.95, method="exact") for a, b in zip(k, m, strict=True)]
-    frac = [a / b for a, b in zip(k, m, strict=True)]
-    fig, ax = plt.subplots(figsize=(5.5, 3.5), constrained_layout=True)
-    ax.errorbar(
-        ns,
-        frac,
-        yerr=[
-            [f - c.low for f, c in zip(frac, cis, strict=True)],
-            [c.high - f for f, c in zip(frac, cis, strict=True)],
-        ],
-        marker="o",
-        capsize=3,
-    )
-    for n, f, a, b in zip(ns, frac, k, m, strict=True):
-        ax.annotate(f"{a}/{b}", (n, f), textcoords="offset points", xytext=(4, -12), fontsize=8)
-    ax.set_xscale("log")
-    ax.set_xticks(ns, [str(n) for n in ns])
-    ax.minorticks_off()
-    ax.set_xlabel("LIF neurons (cortex, channels, switch)")
-    ax.set_ylabel("seeds with |theta| < 0.1 over the last 10 s")
-    ax.set_ylim(-0.05, 1.05)
-    ax.set_title("chapter's final gains, 60-s runs, exact 95 % intervals", fontsize=9)
-    fig.savefig(out, dpi=120)
+    save_figure(upright_curve_figure(rows), out)
 
 
 def main() -> int:

@@ -404,3 +404,70 @@ def test_mp4_goes_through_ffmpeg_on_path(
     assert main([*argv, "--width", "32", "--height", "16"]) == 0
     assert out.stat().st_size == 11 * 32 * 16 * 3
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bin", "run.mp4"]
+
+
+# --------------------------------------------------------------------------- the public module
+
+
+def test_plots_gathers_the_figure_modules() -> None:
+    from striatal.viz import animation, curves, profiles, trajectory
+
+    assert striatal.plots is plots
+    assert plots.figure5 is trajectory.figure5
+    assert plots.learning_curves is curves.learning_curves
+    assert plots.RULE_PANELS is curves.RULE_PANELS
+    assert plots.performance_profiles is profiles.performance_profiles
+    assert plots.save_animation is animation.save_animation
+    assert all(hasattr(plots, name) for name in plots.__all__)
+
+
+def test_a_failed_save_leaves_no_file_and_no_temp(tmp_path: Path) -> None:
+    fig = plots.switch_figure(0.9, [5.0])
+    out = tmp_path / "f.png"
+    out.write_bytes(b"old")
+    with pytest.raises(ValueError):
+        plots.save_figure(fig, tmp_path / "f.bogus")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.png"]
+    plots.save_figure(fig, out)
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.png"]
+    assert out.stat().st_mode & 0o777 == 0o666 & ~_umask()
+
+
+def _umask() -> int:
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+# --------------------------------------------------------------------------- neural seed curve
+
+
+def test_neural_upright_curve_reads_theta_as_the_other_figures_do() -> None:
+    from scipy.stats import binomtest
+
+    from striatal.neural.figures import upright_curve_figure
+
+    rows = [
+        {"selection": "cerebellum", "neurons": n, "upright_last_10s": i < k}
+        for n, k in ((500, 1), (2500, 4))
+        for i in range(4)
+    ]
+    rows.append({"selection": "basal-ganglia", "neurons": 500, "upright_last_10s": True})
+    fig = upright_curve_figure(rows)
+    ax = fig.axes[0]
+    label = ax.get_ylabel()
+    assert "θ" in label and "theta" not in label
+    assert "theta" not in ax.get_title() + ax.get_xlabel()
+    (line,) = ax.get_lines()[:1]
+    np.testing.assert_array_equal(line.get_xdata(), [500, 2500])
+    np.testing.assert_allclose(line.get_ydata(), [0.25, 1.0])
+    assert [t.get_text() for t in ax.texts] == ["1/4", "4/4"]
+    # the lower bar of the 1/4 point ends at the exact interval's lower bound
+    lows = [seg[0, 1] for seg in ax.collections[0].get_segments()]
+    exact = binomtest(1, 4).proportion_ci(0.95, method="exact")
+    assert min(lows) == pytest.approx(exact.low)
+    with pytest.raises(ParameterError):
+        upright_curve_figure([r for r in rows if r["selection"] != "cerebellum"])

@@ -6,6 +6,7 @@ import json
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -20,6 +21,7 @@ from striatal.experiments.profiles import (
 )
 from striatal.experiments.stats import wilson_interval
 from striatal.viz import plots
+from striatal.viz.profiles import curve_points, legend_overlap
 
 HEADER_OLD = "arm,method,init,seed,alpha,gamma,success,trials,wall_seconds\n"
 HEADER_NEW = "arm,seed,success,trials,simulations,simulated_seconds\n"
@@ -128,10 +130,13 @@ def test_reader_drops_a_cut_last_line_and_refuses_a_bad_one(tmp_path: Path) -> N
 def test_figure_has_a_line_and_a_band_per_arm(tmp_path: Path) -> None:
     d = write_old(tmp_path / "s", [("learner", 0, 1, 5), ("control", 0, 0, 50)])
     profiles, _, note = sweep_profiles([d])
-    fig = plots.performance_profiles(profiles, xlabel="trials", note=note)
+    assert note == NOTE_TRIALS_FALLBACK
+    fig = plots.performance_profiles(profiles, xlabel="trials")
     ax = fig.axes[0]
     assert len(ax.get_lines()) == 2 and len(ax.collections) == 2
     assert "1/1 solved" in ax.get_legend().get_texts()[0].get_text()
+    with pytest.raises(ParameterError):
+        plots.performance_profiles(profiles, xlabel="trials", labels=["one"])
 
 
 def test_cli_writes_the_png_and_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -142,6 +147,7 @@ def test_cli_writes_the_png_and_json(tmp_path: Path, capsys: pytest.CaptureFixtu
     data = json.loads(capsys.readouterr().out)
     assert data["x"] == "trials" and data["note"] == NOTE_TRIALS_FALLBACK
     assert data["profiles"][0]["solved"][-1] == 1.0
+    assert data["profiles"][0]["label"] == "learner"
 
 
 @pytest.mark.parametrize(
@@ -174,3 +180,175 @@ def test_help_texts_format(capsys: pytest.CaptureFixture[str]) -> None:
             main(argv)
         assert exc.value.code == 0
     assert "95 % band" in " ".join(capsys.readouterr().out.split())
+
+
+# --------------------------------------------------------------------------- labels and legend
+
+PGPE_ARMS = {
+    "learner": {"method": "learn", "role": "learner", "config": {"learner": "pgpe"}},
+    "control": {"method": "learn", "role": "control", "config": {"learner": "pgpe"}},
+    "lqr": {"method": "lqr", "role": "baseline"},
+    "random": {"method": "random", "role": "baseline", "config": {"learner": "pgpe"}},
+    "cmaes": {"method": "cmaes", "role": "baseline", "config": {"learner": "pgpe"}},
+}
+
+
+def write_summary(folder: Path, arms: dict[str, Any]) -> None:
+    (folder / "summary.json").write_text(json.dumps({"arms": [], "settings": {"arms": arms}}))
+
+
+def test_arm_label_reads_the_learner_and_the_method() -> None:
+    assert [plots.arm_label(a, s) for a, s in PGPE_ARMS.items()] == [
+        "pgpe (learner)",
+        "pgpe control (no learning)",
+        "LQR",
+        "random search",
+        "CMA-ES",
+    ]
+    # an older summary without roles: the arm name says which is the control
+    old = {"method": "learn", "config": {"learner": "chapter"}}
+    assert plots.arm_label("control", old) == "chapter control (no learning)"
+    assert plots.arm_label("learner", old) == "chapter (learner)"
+    # nothing usable recorded: the arm's own name
+    assert plots.arm_label("learner", None) == "learner"
+    assert plots.arm_label("learner", {"method": "learn", "config": {}}) == "learner"
+    assert plots.arm_label("odd", {"method": "simplex"}) == "odd"
+
+
+def test_arm_labels_name_the_source_only_of_a_repeated_label() -> None:
+    labels = plots.arm_labels(
+        [
+            ("a", "learner", PGPE_ARMS["learner"]),
+            ("a", "random", PGPE_ARMS["random"]),
+            ("b", "random", PGPE_ARMS["random"]),
+            ("b", "learner", None),
+        ]
+    )
+    assert labels == ["pgpe (learner)", "random search (a)", "random search (b)", "learner"]
+
+
+def _steep_and_flat(rng: np.random.Generator) -> list[Any]:
+    """Arms like those of the pgpe/chapter sweeps: five that rise steeply to 0.75-1 early
+    in the budget, two that stay low over all of it."""
+    arms = []
+    for name, rate, scale, cap in [
+        ("learner", 1.0, 30, 290),
+        ("control", 0.75, 80, 300),
+        ("lqr", 1.0, 1, 1),
+        ("random", 1.0, 33, 190),
+        ("cmaes", 0.87, 28, 300),
+        ("chapter", 0.28, 60, 600),
+        ("chapter-control", 0.02, 2, 600),
+    ]:
+        ok = rng.random(100) < rate
+        costs = np.where(ok, np.minimum(rng.exponential(scale, 100), cap), cap)
+        arms.append(performance_profile(name, costs, ok))
+    return arms
+
+
+def _step_points_px(ax: Any) -> np.ndarray:
+    """Points every pixel along each drawn line, read from the artists (post steps)."""
+    pts = []
+    for line in ax.get_lines():
+        x, y = np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float)
+        vx, vy = np.repeat(x, 2)[1:], np.repeat(y, 2)[:-1]
+        for i in range(len(vx) - 1):
+            t = np.linspace(0.0, 1.0, 200)
+            seg = np.column_stack(
+                [vx[i] + t * (vx[i + 1] - vx[i]), vy[i] + t * (vy[i + 1] - vy[i])]
+            )
+            pts.append(ax.transData.transform(seg))
+    return np.concatenate(pts)
+
+
+def _inside(box: Any, pts: np.ndarray) -> int:
+    x, y = pts[:, 0], pts[:, 1]
+    return int(np.count_nonzero((x > box.x0) & (x < box.x1) & (y > box.y0) & (y < box.y1)))
+
+
+def test_legend_covers_no_curve(tmp_path: Path) -> None:
+    profiles = _steep_and_flat(np.random.default_rng(0))
+    fig = plots.performance_profiles(profiles, xlabel="simulations")
+    plots.save_figure(fig, tmp_path / "p.png")  # the drawn layout is the one checked
+    ax = fig.axes[0]
+    legend = ax.get_legend()
+    box = legend.get_window_extent()
+    pts = _step_points_px(ax)
+    assert _inside(box, pts) == 0
+    # the steep part is upper left: where the old legend sat, it covers curves
+    legend.set_loc("upper left")
+    assert _inside(legend.get_window_extent(), pts) > 100
+    assert legend_overlap(legend, curve_points(ax, profiles)) > 0
+
+
+def test_legend_goes_outside_when_no_place_inside_is_free() -> None:
+    """Eleven flat lines 0.1 apart over the whole budget leave no gap a legend fits in."""
+    costs = np.linspace(1.0, 100.0, 10)
+    profiles = [
+        performance_profile(
+            f"arm{k}",
+            np.r_[0.0 * costs[:k] + 1.0, costs[k:] * 0 + 100],
+            [True] * k + [False] * (10 - k),
+        )
+        for k in range(11)
+    ]
+    fig = plots.performance_profiles(profiles, xlabel="trials")
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    box = ax.get_legend().get_window_extent()
+    assert box.x0 >= ax.get_window_extent().x1
+    assert _inside(box, _step_points_px(ax)) == 0
+
+
+def test_cli_names_arms_from_the_settings_and_keeps_the_note_off_the_figure(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    a = write_new(tmp_path / "pgpe-random", [(n, 0, 1, 5, 5) for n in PGPE_ARMS])
+    write_summary(a, PGPE_ARMS)
+    chapter = {"method": "learn", "role": "learner", "config": {"learner": "chapter"}}
+    b = write_new(tmp_path / "chapter", [("learner", 0, 1, 5, 9)])
+    write_summary(b, {"learner": chapter})
+    c = write_old(tmp_path / "old", [("learner", 0, 1, 5)])
+    drawn: list[Any] = []
+    monkeypatch.setattr(plots, "save_figure", lambda fig, out, dpi: drawn.append(fig))
+    assert main(["profile", str(a), str(b), "--out", str(tmp_path / "f.png")]) == 0
+    legend = [t.get_text() for t in drawn[0].axes[0].get_legend().get_texts()]
+    assert legend == [
+        "pgpe (learner): 1/1 solved",
+        "pgpe control (no learning): 1/1 solved",
+        "LQR: 1/1 solved",
+        "random search: 1/1 solved",
+        "CMA-ES: 1/1 solved",
+        "chapter (learner): 1/1 solved",
+    ]
+    out = capsys.readouterr().out
+    assert "pgpe-random/learner = pgpe (learner): 1/1 solved" in out
+    # a sweep without simulations: the note goes to stderr, no text of it in the figure
+    assert main(["profile", str(c), "--out", str(tmp_path / "g.png")]) == 0
+    captured = capsys.readouterr()
+    assert NOTE_TRIALS_FALLBACK in captured.err and "note" not in captured.out
+    from matplotlib.text import Text
+
+    texts = [t.get_text() for t in drawn[1].findobj(Text)]
+    assert "learner: 1/1 solved" in texts
+    assert not any("runs.csv" in t or "simulations" in t for t in texts)
+
+
+def test_robust_profile_names_its_learner(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    arms = {k: v for k, v in PGPE_ARMS.items() if k != "lqr"}
+    d = write_new(tmp_path / "robust", [(n, 0, 1, 5, 5) for n in arms])
+    write_summary(d, arms)
+    drawn: list[Any] = []
+    monkeypatch.setattr(plots, "save_figure", lambda fig, out, dpi: drawn.append(fig))
+    assert main(["profile", str(d), "--x", "simulated_seconds", "--out", str(d / "f.png")]) == 0
+    legend = [t.get_text() for t in drawn[0].axes[0].get_legend().get_texts()]
+    assert legend[0] == "pgpe (learner): 1/1 solved"
+    assert not any(t.startswith("learner") for t in legend)
+
+
+def test_cli_refuses_a_broken_summary(tmp_path: Path) -> None:
+    d = write_new(tmp_path / "s", [("learner", 0, 1, 5, 5)])
+    (d / "summary.json").write_text("{not json")
+    out = tmp_path / "f.png"
+    assert main(["profile", str(d), "--out", str(out)]) == 2
+    assert not out.exists()

@@ -5,16 +5,21 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from striatal.errors import ParameterError
 from striatal.io.files import dumps_json
+
+if TYPE_CHECKING:
+    from striatal.experiments.profiles import Profile
 
 DESCRIPTION = (
     "Performance profiles from the runs.csv of striatal sweep folders: for each arm, the "
     "fraction of its seeds solved within a budget of simulations, simulated seconds or "
     "learning trials, with a pointwise Wilson 95 % band. Unsolved seeds count in the "
     "denominator, so each line ends at the arm's success rate. Without --x: simulations "
-    "when every runs.csv has that column, else learning trials (with a note)."
+    "when every runs.csv has that column, else learning trials (with a note on stderr). "
+    "The legend names each arm from the settings in the sweep's summary.json."
 )
 
 
@@ -31,6 +36,35 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the curves as JSON")
 
 
+def _arm_specs(folder: Path) -> dict[str, Any]:
+    """The ``settings.arms`` of ``folder``'s summary.json ({} when the sweep wrote none
+    or it records no arms: the legend then uses the arm names)."""
+    from striatal.io.files import read_json
+
+    path = folder / "summary.json"
+    if not path.exists():
+        return {}
+    data = read_json(path, what="sweep summary")
+    settings = data.get("settings") if isinstance(data, dict) else None
+    arms = settings.get("arms") if isinstance(settings, dict) else None
+    return arms if isinstance(arms, dict) else {}
+
+
+def _labels(folders: list[Path], profiles: list[Profile]) -> list[str]:
+    """Legend labels of ``profiles`` (named ``arm`` or ``folder/arm``) from each sweep's
+    recorded settings."""
+    from striatal.viz import plots
+
+    triples = {}
+    for folder in folders:
+        for arm, spec in _arm_specs(folder).items():
+            name = arm if len(folders) == 1 else f"{folder.name}/{arm}"
+            triples[name] = (folder.name, arm, spec)
+    return plots.arm_labels(
+        [triples.get(p.arm, (p.arm.partition("/")[0], p.arm, None)) for p in profiles]
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     from striatal.experiments.profiles import X_LABELS, sweep_profiles
     from striatal.viz import plots
@@ -39,8 +73,11 @@ def run(args: argparse.Namespace) -> int:
     if not 10 <= args.dpi <= 1000:
         raise ParameterError(f"--dpi must be in [10, 1000], got {args.dpi}")
     profiles, column, note = sweep_profiles(args.sweeps, args.x)
-    fig = plots.performance_profiles(profiles, xlabel=X_LABELS[column], note=note)
+    labels = _labels(list(args.sweeps), profiles)
+    fig = plots.performance_profiles(profiles, xlabel=X_LABELS[column], labels=labels)
     plots.save_figure(fig, out, dpi=args.dpi)
+    if note:
+        print(f"note: {note}", file=sys.stderr)
     if args.json:
         sys.stdout.write(
             dumps_json(
@@ -48,17 +85,19 @@ def run(args: argparse.Namespace) -> int:
                     "x": column,
                     "note": note,
                     "band": "pointwise Wilson 95 %",
-                    "profiles": [p.to_dict() for p in profiles],
+                    "profiles": [
+                        {**p.to_dict(), "label": label}
+                        for p, label in zip(profiles, labels, strict=True)
+                    ],
                 }
             )
         )
         return 0
-    if note:
-        print(f"note: {note}")
-    for p in profiles:
+    for p, label in zip(profiles, labels, strict=True):
         lo, hi = p.low[-1], p.high[-1]
+        named = p.arm if label == p.arm else f"{p.arm} = {label}"
         print(
-            f"{p.arm}: {p.successes}/{p.runs} solved = {100 * p.success_rate:.3g} % "
+            f"{named}: {p.successes}/{p.runs} solved = {100 * p.success_rate:.3g} % "
             f"(95 % Wilson {100 * lo:.3g}-{100 * hi:.3g} %) within {p.budget[-1]:g} {column}"
         )
     print(f"wrote {out}")

@@ -25,6 +25,7 @@ from striatal.errors import DataFileError
 __all__ = [
     "MAX_INPUT_BYTES",
     "array_rows",
+    "atomic_write_file",
     "atomic_write_stream",
     "atomic_write_text",
     "check_no_dangling_link",
@@ -118,6 +119,24 @@ def atomic_write_stream(path: str | os.PathLike[str], write: Callable[[TextIO], 
     The text goes to the file as ``write`` produces it, so a large file never has
     to be held in memory. A folder that cannot be made or written raises DataFileError.
     """
+
+    def write_text(tmp: Path) -> None:
+        with tmp.open("w", encoding="utf-8", newline="") as fh:
+            write(fh)
+
+    atomic_write_file(path, write_text)
+
+
+def atomic_write_file(path: str | os.PathLike[str], write: Callable[[Path], object]) -> None:
+    """``write(tmp)`` writes a temporary file beside ``path`` by its name, then fsync and
+    rename onto ``path``.
+
+    For writers that open the file themselves (matplotlib's ``savefig``, Pillow,
+    ffmpeg): they must take the format from an argument, not from the name, which
+    ends in ``.tmp``. The file gets the mode an ordinary ``open(path, "w")`` would
+    give it. A folder that cannot be made or written, or a write that fails (a full
+    disk), raises DataFileError naming ``path``.
+    """
     target = Path(path)
     check_no_dangling_link(target.parent)
     try:
@@ -127,10 +146,12 @@ def atomic_write_stream(path: str | os.PathLike[str], write: Callable[[TextIO], 
         raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
     try:
         try:
-            os.fchmod(fd, 0o666 & ~_umask())
-            with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-                write(fh)
-                fh.flush()
+            try:
+                os.fchmod(fd, 0o666 & ~_umask())
+            finally:
+                os.close(fd)
+            write(Path(tmp))
+            with open(tmp, "rb") as fh:
                 os.fsync(fh.fileno())
         except OSError as exc:
             # a full disk (ENOSPC) or a quota: the error names no file, so name the target

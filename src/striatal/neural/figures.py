@@ -1,20 +1,25 @@
-"""Figures of the spiking controller: the circuit, and the populations' activity over a run."""
+"""Figures of the spiking controller: the circuit, the populations' activity over a run, and
+the seeds that hold the pole against the neuron count."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Literal
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from striatal.errors import ParameterError
 from striatal.neural.interpret import balancing_terms, swingup_terms
 from striatal.params import Controller, Plant
 from striatal.sim import kernel
+from striatal.viz.canvas import new_figure
 
 __all__ = [
     "EXCITATORY",
     "INHIBITORY",
     "activity_figure",
     "circuit_figure",
+    "upright_curve_figure",
 ]
 
 if TYPE_CHECKING:
@@ -26,22 +31,13 @@ EXCITATORY = "#1b7837"
 INHIBITORY = "#b2182b"
 
 
-def _figure(width: float, height: float, layout: Literal["constrained"] | None = None) -> Figure:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(width, height), layout=layout)
-    FigureCanvasAgg(fig)
-    return fig
-
-
 def activity_figure(run: NeuralRun, theta_c: float) -> Figure:
     """The pole angle, the motor command and each population's mean rate over the run.
 
     Rates are 10-ms bins of the population-mean spike count [Hz]; the dashed line
     marks each crossing of |theta| = theta_c.
     """
-    fig = _figure(9.0, 7.5, layout="constrained")
+    fig = new_figure(9.0, 7.5)
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [1.0, 0.8, 2.2]})
     t = run.data[:, 0]
     th = np.array([kernel.wrap_angle(v) for v in run.data[:, 3]])
@@ -89,7 +85,7 @@ def circuit_figure(controller: Controller, plant: Plant, selection: str = "cereb
     """
     from matplotlib.patches import FancyBboxPatch
 
-    fig = _figure(12.0, 6.6)
+    fig = new_figure(12.0, 6.6, layout=None)
     ax = fig.add_subplot(1, 1, 1)
     ax.set_xlim(0, 11.2)
     ax.set_ylim(0.4, 6.6)
@@ -208,4 +204,44 @@ def circuit_figure(controller: Controller, plant: Plant, selection: str = "cereb
         va="top",
     )
     fig.tight_layout()
+    return fig
+
+
+def upright_curve_figure(rows: Sequence[Mapping[str, Any]]) -> Figure:
+    """Fraction of network seeds with |θ| < 0.1 rad over the last 10 s against the neuron
+    count, cerebellar switch only, with exact (Clopper-Pearson) 95 % intervals.
+
+    ``rows``: one record per run, as ``benchmarks/neural_seeds.py`` writes them
+    (``selection``, ``neurons``, ``upright_last_10s``). Each point is labelled k/n.
+    """
+    from scipy.stats import binomtest
+
+    groups: dict[int, list[bool]] = {}
+    for r in rows:
+        if r["selection"] == "cerebellum":
+            groups.setdefault(int(r["neurons"]), []).append(bool(r["upright_last_10s"]))
+    if not groups:
+        raise ParameterError("no run with the cerebellar switch to draw")
+    ns = sorted(groups)
+    k = np.array([sum(groups[n]) for n in ns])
+    m = np.array([len(groups[n]) for n in ns])
+    cis = [
+        binomtest(int(a), int(b)).proportion_ci(0.95, method="exact")
+        for a, b in zip(k, m, strict=True)
+    ]
+    frac = k / m
+    low = frac - np.array([c.low for c in cis])
+    high = np.array([c.high for c in cis]) - frac
+    fig = new_figure(5.5, 3.5)
+    ax = fig.subplots()
+    ax.errorbar(ns, frac, yerr=[low, high], marker="o", capsize=3, gid="upright")
+    for n, f, a, b in zip(ns, frac, k, m, strict=True):
+        ax.annotate(f"{a}/{b}", (n, f), textcoords="offset points", xytext=(4, -12), fontsize=8)
+    ax.set_xscale("log")
+    ax.set_xticks(ns, [str(n) for n in ns])
+    ax.minorticks_off()
+    ax.set_xlabel("LIF neurons (cortex, channels, switch)")
+    ax.set_ylabel("seeds with |θ| < 0.1 rad over the last 10 s")
+    ax.set_ylim(-0.05, 1.05)
+    ax.set_title("chapter's final gains, 60-s runs, exact 95 % intervals", fontsize=9)
     return fig
