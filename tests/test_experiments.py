@@ -206,6 +206,28 @@ def test_each_learner_is_paired_with_each_baseline_on_its_seeds() -> None:
     assert "| learner | random | chapter | 50% [19%, 81%] | 67% [30%, 90%] | 360 / 340 |" in table
 
 
+def test_a_runs_file_from_before_the_imagined_columns_resumes(tmp_path: Path) -> None:
+    """Its rows read with 0 imagined trials, and the folder is rewritten with today's
+    columns, so the rows appended next line up."""
+    specs = _specs((11, 12), max_trials=3)
+    out = tmp_path / "old"
+    full = sweeps.run_sweep(specs, {"x": 1}, out=out, max_trials=3)
+    path = out / "runs.csv"
+    old_columns = runs_csv.COLUMNS_BEFORE_IMAGINED
+    old = [{k: r[k] for k in old_columns} for r in full.rows[:2]]
+    from striatal.io.files import csv_text
+
+    cells = [[int(r[c]) if isinstance(r[c], bool) else r[c] for c in old_columns] for r in old]
+    path.write_text(csv_text(old_columns, cells), encoding="utf-8")
+    rows, clean = runs_csv.read_runs(path)
+    assert [r["imagined_simulations"] for r in rows] == [0, 0]
+    assert clean.splitlines()[0] == ",".join(runs_csv.RUN_COLUMNS)
+    again = sweeps.run_sweep(specs, {"x": 1}, out=out, max_trials=3)
+    assert (again.skipped, again.ran) == (2, len(specs) - 2)
+    assert len(runs_csv.read_runs(path)[0]) == len(specs)
+    assert _no_wall(again.summary) == _no_wall(full.summary)
+
+
 def test_duplicate_runs_are_dropped_on_read_and_refused_by_the_summary(tmp_path: Path) -> None:
     """Issue 16 item 4: a duplicated (arm, init, seed) line was counted twice."""
     rows = [_row(arm="learner", init="chapter", seed=s, success=True, trials=3) for s in (1, 2)]

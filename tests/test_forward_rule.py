@@ -150,3 +150,19 @@ def test_the_rules_run_is_deterministic() -> None:
     b, _ = run(Plant(), 101)
     assert a.W == b.W and a.state.simulations == b.state.simulations
     assert np.array_equal(np.array(a.state.get("data")), np.array(b.state.get("data")))
+
+
+def test_a_sweep_row_counts_the_imagined_trials_apart() -> None:
+    """runs.csv: imagined_simulations / imagined_seconds hold what the model ran, never in
+    simulations; a rule that imagines nothing has 0."""
+    import striatal
+
+    result = striatal.sweep("forward", seeds=1, init="random", max_trials=3, eval_draws=0)
+    rows = {r["arm"]: r for r in result.rows}
+    learner, control = rows["learner"], rows["control"]
+    assert learner["imagined_simulations"] > 0 and learner["imagined_seconds"] > 0
+    assert control["imagined_simulations"] == 0 and control["imagined_seconds"] == 0.0
+    run = striatal.train("forward", seed=learner["seed"], init="random", max_trials=3)
+    assert learner["imagined_simulations"] == int(run.history.column("imagined").sum())
+    arms = {a["arm"]: a for a in result.summary["arms"]}
+    assert arms["learner"]["imagined_simulations_total"] == learner["imagined_simulations"]

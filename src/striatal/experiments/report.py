@@ -75,6 +75,12 @@ def arm_statistics(
             "simulated_seconds_total": float(sum(float(r["simulated_seconds"]) for r in rows)),
             "trials_total": int(sum(int(r["trials"]) for r in rows)),
             "eval_simulations_total": int(sum(int(r["eval_simulations"]) for r in rows)),
+            "imagined_simulations_total": int(
+                sum(int(r.get("imagined_simulations", 0)) for r in rows)
+            ),
+            "imagined_seconds_total": float(
+                sum(float(r.get("imagined_seconds", 0.0)) for r in rows)
+            ),
             "pass_rate_W0_mean": _finite_mean(r["pass_rate_W0"] for r in rows),
             "pass_rate_mean": _finite_mean(r["pass_rate"] for r in rows),
             "wall_seconds_total": float(sum(wall)),

@@ -120,6 +120,7 @@ def learning_steps(
         "theta_c": state.theta_c,
         "simulations": state.simulations,
         "simulated_seconds": state.simulated_seconds,
+        "imagined": rule_of(config).imagined(state),
     }
 
 
@@ -204,4 +205,6 @@ def run_steps(spec: RunSpec) -> Steps[dict[str, Any]]:
     row["pass_rate_W0"] = rate0
     row["pass_rate"] = rate
     row["wall_seconds"] = time.perf_counter() - t0
+    imagined = out.get("imagined", (0, 0.0))  # baselines imagine nothing
+    row["imagined_simulations"], row["imagined_seconds"] = int(imagined[0]), float(imagined[1])
     return row

@@ -40,10 +40,12 @@ RUN_COLUMNS: tuple[str, ...] = (
     "pass_rate_W0",
     "pass_rate",
     "wall_seconds",
+    "imagined_simulations",
+    "imagined_seconds",
 )
-
-
-_INT_COLUMNS = ("seed", "trials", "simulations", "eval_simulations")
+#: The columns a runs.csv had before imagined trials were recorded: read as 0 imagined.
+COLUMNS_BEFORE_IMAGINED = RUN_COLUMNS[:-2]
+_INT_COLUMNS = ("seed", "trials", "simulations", "eval_simulations", "imagined_simulations")
 
 
 _BOOL_COLUMNS = ("success", "mean_policy_success")
@@ -58,11 +60,11 @@ def row_text(row: dict[str, Any]) -> str:
     return csv_text(RUN_COLUMNS, [cells]).split("\n", 1)[1]
 
 
-def _parse_row(cells: list[str]) -> dict[str, Any]:
-    if len(cells) != len(RUN_COLUMNS):
-        raise ValueError(f"{len(cells)} cells, expected {len(RUN_COLUMNS)}")
-    row: dict[str, Any] = {}
-    for name, cell in zip(RUN_COLUMNS, cells, strict=True):
+def _parse_row(cells: list[str], columns: tuple[str, ...] = RUN_COLUMNS) -> dict[str, Any]:
+    if len(cells) != len(columns):
+        raise ValueError(f"{len(cells)} cells, expected {len(columns)}")
+    row: dict[str, Any] = {"imagined_simulations": 0, "imagined_seconds": 0.0}
+    for name, cell in zip(columns, cells, strict=True):
         if name in _STR_COLUMNS:
             if not cell:
                 raise ValueError(f"empty {name}")
@@ -82,17 +84,19 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
     """(rows, clean text) of runs.csv; a last line that does not parse is dropped.
 
     A last line without its newline or that does not parse is what a kill during
-    a write leaves; any other bad line raises DataFileError. A row whose (arm, init,
+    a write leaves; any other bad line raises DataFileError. A file written before the
+    imagined columns were recorded reads with 0 imagined trials (its clean text has
+    today's columns). A row whose (arm, init,
     seed) an earlier row already has is dropped (the first is kept), so no run is
     counted twice.
     """
     if not path.exists():
         return [], csv_text(RUN_COLUMNS, [])
     lines = read_text(path, what="runs file").splitlines(keepends=True)
-    header = ",".join(RUN_COLUMNS)
     if not lines or not lines[0].endswith("\n"):
         return [], csv_text(RUN_COLUMNS, [])
-    if lines[0].strip() != header:
+    columns = {",".join(c): c for c in (RUN_COLUMNS, COLUMNS_BEFORE_IMAGINED)}.get(lines[0].strip())
+    if columns is None:
         if lines[0].startswith("arm,"):
             raise DataFileError(
                 f"runs file {path} has the columns of another striatal version (an older "
@@ -108,7 +112,7 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
             if not line.endswith("\n"):
                 raise ValueError("line cut short")
             cells = next(csv.reader(io.StringIO(line)))
-            row = _parse_row(cells)
+            row = _parse_row(cells, columns)
         except (ValueError, StopIteration, csv.Error) as exc:
             if last:
                 break
@@ -119,6 +123,8 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
         seen.add(key)
         rows.append(row)
         kept.append(line)
+    if columns is not RUN_COLUMNS:  # an older file: its rows again, with today's columns
+        return rows, csv_text(RUN_COLUMNS, []) + "".join(row_text(r) for r in rows)
     return rows, "".join(kept)
 
 

@@ -182,6 +182,11 @@ class Rule:
         (or, with :attr:`judges_candidate`, become the plan's: the controller judged)."""
         raise NotImplementedError
 
+    def imagined(self, state: LearnerState) -> tuple[int, float]:
+        """The trials run so far on a model rather than the plant, and their simulated
+        seconds: counted apart from ``LearnerState.simulations`` (none for most rules)."""
+        return 0, 0.0
+
     def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
         """Values of :attr:`history_columns` for the trial run from ``state``."""
         return ()

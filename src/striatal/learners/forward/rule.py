@@ -233,6 +233,11 @@ class ForwardRule(Rule):
             ),
         )
 
+    def imagined(self, state: LearnerState) -> tuple[int, float]:
+        """The imagined trials so far and their simulated seconds (memory "imagined")."""
+        done = state.get("imagined") or (0.0, 0.0)
+        return int(done[0]), float(done[1])
+
     def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
         """The imagined simulations after this trial, the fitted pole mass [kg] and length
         [m] they ran on, and whether imagination found a solution (0 when none ran)."""
