@@ -430,3 +430,14 @@ def test_no_docstring_or_help_points_at_a_notes_file() -> None:
     src = Path(__file__).resolve().parents[1] / "src" / "striatal"
     said = [str(p) for p in src.rglob("*.py") if "NOTES" in p.read_text(encoding="utf-8")]
     assert said == []
+
+
+def test_the_sweep_offers_one_baseline_option() -> None:
+    """--baselines are the comparison arms; the reward baseline b of eq 1 is
+    --reward-baseline, so no command has both --baseline and --baselines."""
+    for name, parser in _commands().items():
+        flags = {o for a in parser._actions for o in a.option_strings}
+        assert "--baseline" not in flags, name
+    sweep = _commands()["sweep"]
+    flags = {o for a in sweep._actions for o in a.option_strings}
+    assert {"--baselines", "--reward-baseline"} <= flags

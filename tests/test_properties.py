@@ -351,7 +351,7 @@ def test_simulate_with_any_numbers_runs_or_is_exit_2(parts: tuple[list[str], ...
 TRAIN_VALID = {
     "--alpha": pos(0, 1e3),
     "--gamma": pos(0, 0.999),
-    "--baseline": st.floats(-10, 10),
+    "--reward-baseline": st.floats(-10, 10),
     "--max-step": pos(1e-3, 10),
     "--rpe-rate": pos(0.01, 1),
     "--explore": pos(0.01, 3),

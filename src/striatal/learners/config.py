@@ -92,7 +92,8 @@ class LearnerConfig:
         ),
     )
     baseline: float = field(
-        default=0.0, metadata=meta("reinforcement baseline b of eq 1 (chapter learner)")
+        default=0.0,
+        metadata=meta("reinforcement baseline b of eq 1 (chapter learner)", flag="reward-baseline"),
     )
     action_every: int = field(
         default=1, metadata=meta("draw a new action every N control steps and hold it")
