@@ -70,7 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="slope [1/rad] of the criterion clip(gamma (theta_c - |theta|), -1, 1)",
     )
     net.add_argument("--synapse", type=float, default=0.005, help="synaptic time constant [s]")
-    net.add_argument("--seed", type=int, default=1, help="network seed (encoders, gains, biases)")
+    net.add_argument("--seed", type=int, default=0, help="network seed (encoders, gains, biases)")
     run_g = parser.add_argument_group("run")
     run_g.add_argument("--theta0", type=float, default=CHAPTER_THETA0, help="initial angle [rad]")
     run_g.add_argument("--x0", type=float, default=0.0, help="initial cart position [m]")
