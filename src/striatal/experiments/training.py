@@ -435,8 +435,9 @@ def _run(
     def record(s: LearnerState, rec: TrialRecord) -> None:
         nonlocal recorded
         if rundir is not None:
-            rundir.append(rec)
-        records.append(rec)
+            rundir.append(rec)  # the rows live on disk: memory stays flat however long
+        else:
+            records.append(rec)
         recorded = s
         if s.trials_done % checkpoint_every == 0:
             checkpoint(s)
@@ -472,11 +473,16 @@ def _run(
         if rundir is not None:
             rundir.close_history()
     columns = rule_columns(config)
-    history = (
-        past.plus(records)
-        if past is not None
-        else History.of(config.learner, records, config.reward)
-    )
+    if rundir is not None:
+        history = (
+            rundir.read_history()
+            if recorded.trials_done
+            else History.of(config.learner, [], config.reward)
+        )
+    elif past is not None:
+        history = past.plus(records)
+    else:
+        history = History.of(config.learner, records, config.reward)
     if not history.columns:
         history = History(config.learner, columns, (), config.reward)
     learned = setup.template.with_gains(result.W, result.theta_c)
