@@ -141,8 +141,9 @@ REAL_COMPILES = textwrap.dedent(
     delivered = 0
     for i in range(40):
         interrupts._state.update(received=False, pending=False)
-        threading.Timer(random.uniform(0, 0.03), signal.raise_signal, (signal.SIGINT,)).start()
         try:
+            # inside the try: on a loaded machine the signal can land before start() returns
+            threading.Timer(random.uniform(0, 0.03), signal.raise_signal, (signal.SIGINT,)).start()
             @vectorize(["float64(float64)"])
             def f(x):
                 return math.exp(x) + i
