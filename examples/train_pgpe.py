@@ -1,7 +1,7 @@
 """Train pgpe from random gains, then plot its learning curves and its Figure 5.
 
 Uses ``striatal`` and its figures, ``striatal.viz.plots``. Run: ``python examples/train_pgpe.py [OUT_FOLDER]``
-(set STRIATAL_EXAMPLE_TRIALS to cut the run short, as tests/test_learn.py does).
+(set STRIATAL_EXAMPLE_TRIALS to cut the run short, as tests/test_chapter.py does).
 """
 
 from __future__ import annotations

@@ -26,3 +26,24 @@ def plant() -> Plant:
 @pytest.fixture
 def sim60() -> Simulation:
     return Simulation()
+
+
+class Cli:
+    """``striatal ARGS...`` run in this process: exit code, stdout and stderr."""
+
+    def __init__(self, capsys: pytest.CaptureFixture[str]) -> None:
+        self._capsys = capsys
+
+    def __call__(self, *argv: object) -> tuple[int, str, str]:
+        from striatal.cli import main
+
+        self._capsys.readouterr()  # what earlier calls printed is not this call's
+        code = main([str(a) for a in argv])
+        out, err = self._capsys.readouterr()
+        return code, out, err
+
+
+@pytest.fixture
+def cli(capsys: pytest.CaptureFixture[str]) -> Cli:
+    """The shared way to run a command in a test: ``code, out, err = cli("train", ...)``."""
+    return Cli(capsys)

@@ -13,7 +13,6 @@ from typing import Any
 import pytest
 
 import striatal
-from striatal.cli import main
 from striatal.errors import ParameterError
 from striatal.experiments import runs_csv
 from striatal.learners import RULES, register
@@ -101,23 +100,20 @@ def test_a_new_rule_runs_through_train_and_both_sweep_engines(hill: Any) -> None
     assert "step" in run.history.columns
 
 
-def test_a_new_rule_runs_from_the_command_line(
-    hill: Any, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_a_new_rule_runs_from_the_command_line(hill: Any, tmp_path: Path, cli: Any) -> None:
     out = tmp_path / "t"
     argv = ["--learner", "hill", "--max-trials", "3", "--duration", "10", "--no-progress"]
-    assert main(["train", *argv, "--seed", "2", "--out", str(out)]) == 0
+    assert cli("train", *argv, "--seed", "2", "--out", out)[0] == 0
     result = json.loads((out / "result.json").read_text())
     assert result["settings"]["learner"] == "hill"
     sweep = ["sweep", *argv, "--seeds", "2", "--eval-draws", "0"]
-    assert main([*sweep, "--out", str(tmp_path / "p")]) == 0
-    assert main([*sweep, "--engine", "batch", "--out", str(tmp_path / "b")]) == 0
-    capsys.readouterr()
+    assert cli(*sweep, "--out", tmp_path / "p")[0] == 0
+    assert cli(*sweep, "--engine", "batch", "--out", tmp_path / "b")[0] == 0
     rows = {k: runs_csv.sort_rows(runs_csv.read_runs(tmp_path / k / "runs.csv")[0]) for k in "pb"}
     assert _no_wall(rows["p"]) == _no_wall(rows["b"]) and len(rows["p"]) == 4
     # an option the rule does not read is refused, naming it
-    assert main(["train", *argv, "--gamma", "0.5", "--out", str(tmp_path / "x")]) == 2
-    assert "does not use gamma" in capsys.readouterr().err
+    code, _, err = cli("train", *argv, "--gamma", "0.5", "--out", tmp_path / "x")
+    assert code == 2 and "does not use gamma" in err
 
 
 def test_a_name_is_registered_once(hill: Any) -> None:

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 import striatal
-from striatal.cli import main
 from striatal.errors import ParameterError
 from striatal.experiments import sweeps
 
@@ -17,12 +17,11 @@ def _without_wall(rows: list[dict]) -> list[dict]:
     return [{k: v for k, v in r.items() if k != "wall_seconds"} for r in rows]
 
 
-def test_the_api_runs_what_the_command_runs(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+def test_the_api_runs_what_the_command_runs(tmp_path: Path, cli: Any) -> None:
     api = striatal.sweep(seeds=4, init="random", learner="pgpe", success_on="mean", max_trials=50)
     argv = ["sweep", "--seeds", "4", "--init", "random", "--learner", "pgpe"]
     argv += ["--success-on", "mean", "--max-trials", "50", "--no-progress"]
-    assert main([*argv, "--out", str(tmp_path / "cli")]) == 0
-    capsys.readouterr()
+    assert cli(*argv, "--out", tmp_path / "cli")[0] == 0
     cli = json.loads((tmp_path / "cli" / "summary.json").read_text())
 
     def arms(summary: dict) -> list[tuple]:
@@ -40,17 +39,15 @@ def test_the_api_runs_what_the_command_runs(tmp_path: Path, capsys: pytest.Captu
     assert sweeps.json_roundtrip(api.summary["settings"]) == settings
 
 
-def test_a_folder_the_api_wrote_resumes_from_the_command(
-    tmp_path: Path, capsys: pytest.CaptureFixture
-) -> None:
+def test_a_folder_the_api_wrote_resumes_from_the_command(tmp_path: Path, cli: Any) -> None:
     out = tmp_path / "s"
     first = striatal.sweep(
         seeds=2, max_trials=3, eval_draws=0, sim=striatal.Simulation(duration=5), out=out
     )
     assert first.ran == 4 and first.skipped == 0
     argv = ["sweep", "--seeds", "2", "--max-trials", "3", "--eval-draws", "0"]
-    assert main([*argv, "--duration", "5", "--no-progress", "--out", str(out)]) == 0
-    assert "ran 0 runs, 4 already in --out" in capsys.readouterr().out
+    code, printed, _ = cli(*argv, "--duration", "5", "--no-progress", "--out", out)
+    assert code == 0 and "ran 0 runs, 4 already in --out" in printed
 
 
 @pytest.mark.parametrize(

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 import pytest
-from test_learn import outcome
+from test_chapter import outcome
 
 from striatal.learners import TrialRecord, default_config, learn, theta_c_rule
 from striatal.learners.common import THETA_C_FLOOR, THETA_C_RESET_ABOVE, THETA_C_RESET_TO
