@@ -12,13 +12,13 @@ from __future__ import annotations
 import json
 import tempfile
 
-import harness
+from striatal.bench import measure
 
 
 def main() -> None:
-    warm = harness.second_process()
+    warm = measure.second_process()
     with tempfile.TemporaryDirectory(prefix="striatal-numba-") as empty:
-        cold = harness.second_process(cache_dir=empty)
+        cold = measure.second_process(cache_dir=empty)
     print(json.dumps({"cached": warm, "cold": cold}, indent=2))
 
 

@@ -3,7 +3,7 @@
     python benchmarks/bench_kernel.py [--quick] [--json] [--batch-size B] [--seconds S]
 
 Same options and output as ``striatal bench``; the measurements live in
-benchmarks/harness.py and the figures in docs/performance.md.
+the package striatal.bench and the figures in docs/performance.md.
 """
 
 from __future__ import annotations

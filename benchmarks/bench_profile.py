@@ -10,9 +10,9 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-import harness
 import numpy as np
 
+from striatal.bench import measure
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
 from striatal.sim import bench, kernel, rollout
 
@@ -33,7 +33,7 @@ def main() -> None:
     rng = np.random.default_rng(0)
     setup = bench.TrialSetup.chapter(60.0, 0.01)
     out = np.empty(kernel.N_OUT)
-    harness.first_calls(rng)
+    measure.first_calls(rng)
     fixed_noise = rng.standard_normal(setup.n_steps)
 
     def direct(noise: np.ndarray) -> None:

@@ -7,8 +7,9 @@ from __future__ import annotations
 
 import argparse
 
-import harness
 import numpy as np
+
+from striatal.bench import measure, timing
 
 
 def main() -> None:
@@ -17,10 +18,10 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=0.3)
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
-    config = harness.BenchConfig(seconds=args.seconds, repeats=args.repeats, dt=args.dt)
+    config = timing.BenchConfig(seconds=args.seconds, repeats=args.repeats, dt=args.dt)
     rng = np.random.default_rng(0)
-    harness.first_calls(rng)  # warm-up (compile or cache load) outside the timings
-    result = harness.scaling(config, rng)
+    measure.first_calls(rng)  # warm-up (compile or cache load) outside the timings
+    result = measure.scaling(config, rng)
     for row in result["rows"]:
         print(
             f"{row['duration']:>7g} s {row['n_steps']:>8d} steps "

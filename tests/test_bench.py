@@ -1,6 +1,7 @@
 """The benchmark runs and reports finite rates; the batched kernel equals the scalar one.
 
-The harness is benchmarks/harness.py, found by :func:`striatal.sim.bench.load_harness`.
+The harness is the package :mod:`striatal.bench`; it runs from an installed package,
+with no benchmarks/ folder beside it.
 
 No speed thresholds here: timings depend on the machine (docs/performance.md has them).
 """
@@ -9,12 +10,20 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import shutil
+import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+import striatal
+from striatal.bench import QUICK, BenchConfig, Timing, anchors
+from striatal.bench.measure import run_sweep
+from striatal.bench.timing import linear_fit
 from striatal.cli import main
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plant, Simulation
@@ -23,7 +32,6 @@ from striatal.sim.rollout import Protocol, batch_args, trial_args
 
 SIM = Simulation(duration=35.0)  # past the 30-s check of eq 24
 PROTOCOL = Protocol()
-HARNESS = bench.load_harness()  # benchmarks/harness.py
 
 
 def _positive_finite(x: object) -> bool:
@@ -122,14 +130,14 @@ def test_same_seed_same_benchmark_trial() -> None:
 
 def test_linear_fit_recovers_a_line() -> None:
     x = np.array([1.0, 2.0, 4.0, 8.0])
-    fit = HARNESS.linear_fit(x, 3.0 + 0.5 * x)
+    fit = linear_fit(x, 3.0 + 0.5 * x)
     assert fit["slope"] == pytest.approx(0.5)
     assert fit["intercept"] == pytest.approx(3.0)
     assert fit["r2"] == pytest.approx(1.0)
 
 
 def test_timing_rates() -> None:
-    t = HARNESS.Timing("x", (100, 100, 100), (1.0, 0.5, 2.0))
+    t = Timing("x", (100, 100, 100), (1.0, 0.5, 2.0))
     assert t.best_steps_per_second == 200.0
     assert t.median_steps_per_second == 100.0
 
@@ -139,19 +147,7 @@ def test_timing_rates() -> None:
 )
 def test_bad_config_raises(kwargs: dict[str, float]) -> None:
     with pytest.raises(ParameterError):
-        HARNESS.BenchConfig(**kwargs)
-
-
-def test_harness_outside_a_checkout_is_one_clear_line(
-    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """No benchmarks/ folder to be found: one line on stderr, exit 2."""
-    monkeypatch.setattr(bench, "__file__", "/nonexistent/src/striatal/sim/bench.py")
-    monkeypatch.setenv(bench.BENCHMARKS_ENV, str(tmp_path))
-    monkeypatch.delitem(sys.modules, "striatal_benchmarks_harness")
-    assert main(["bench", "--quick"]) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "benchmarks/harness.py" in err
+        BenchConfig(**kwargs)
 
 
 def test_anchors_without_the_extra_is_one_clear_line(
@@ -168,8 +164,33 @@ def test_anchors_without_the_extra_is_one_clear_line(
     monkeypatch.setattr(importlib.util, "find_spec", no_envpool)
     assert main(["bench", "--quick", "--anchors"]) == 2
     captured = capsys.readouterr()
-    assert captured.err.count("\n") == 1 and "pip install -e '.[bench]'" in captured.err
+    assert captured.err.count("\n") == 1 and "pip install 'striatal[bench]'" in captured.err
     assert "envpool" in captured.err and captured.out == ""
+
+
+def test_gymnax_missing_names_the_install_line(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Without gymnax the gymnax rows are skipped, with one line saying how to add it."""
+    import importlib.util
+
+    found = object()
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *args: found)
+    assert anchors.gymnax_missing() is None
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *args: None if name == "gymnax" else found
+    )
+    why = anchors.gymnax_missing()
+    assert why is not None and "\n" not in why
+    assert "gymnax not installed" in why and anchors.GYMNAX_INSTALL in why
+    anchors.check_installed()  # EnvPool is found: --anchors runs, without the gymnax rows
+
+
+def test_bench_extra_leaves_gymnasium_alone() -> None:
+    """[bench] names no package that requires gymnasium < 1.4 (every gymnax release does)."""
+    pyproject = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
+    bench_extra = pyproject["project"]["optional-dependencies"]["bench"]
+    assert any(req.startswith("envpool") for req in bench_extra)
+    assert not any(req.startswith("gymnax") for req in bench_extra)
+    assert "--no-deps 'gymnax" in anchors.GYMNAX_INSTALL
 
 
 @pytest.mark.parametrize("size", ["0", "100000000"])
@@ -196,13 +217,13 @@ def test_bench_quick_json_reports_positive_finite_figures(
             comp["reference"]["best_steps_per_second"],
         ):
             assert _positive_finite(value)
-    assert report["batch_vs_gymnasium_vector"]["batch_size"] == HARNESS.QUICK.batch_size
+    assert report["batch_vs_gymnasium_vector"]["batch_size"] == QUICK.batch_size
     fit = report["scaling"]["fit"]
     assert _positive_finite(fit["slope"]) and fit["r2"] <= 1.0
-    assert len(report["scaling"]["rows"]) == len(HARNESS.QUICK.scaling_durations)
+    assert len(report["scaling"]["rows"]) == len(QUICK.scaling_durations)
     train = report["train"]
     assert _positive_finite(train["process_wall_seconds"])
-    assert train["trials"] == HARNESS.QUICK.train_max_trials
+    assert train["trials"] == QUICK.train_max_trials
     for where in ("this_process", "second_process"):
         info = report["compile"][where]
         assert _positive_finite(info["first_run_trial_seconds"])
@@ -213,7 +234,35 @@ def test_bench_quick_json_reports_positive_finite_figures(
 
 
 def test_sweep_measurement_runs_learner_and_control_arm() -> None:
-    info = HARNESS.run_sweep(1, 1, 3)
+    info = run_sweep(1, 1, 3)
     assert info["runs"] == 2  # one seed x (learner + alpha = 0 control arm)
     assert info["command"].startswith("striatal sweep --seeds 1 --workers 1")
     assert _positive_finite(info["wall_seconds"]) and _positive_finite(info["peak_rss_mib"])
+
+
+def test_bench_runs_from_a_package_without_a_checkout(tmp_path: Path) -> None:
+    """``striatal bench`` from a copy of the package alone (as a wheel installs it).
+
+    The copy keeps the source files' times, so the kernels load from the copied Numba
+    cache; ``python -P`` keeps the working directory off ``sys.path``.
+    """
+    site = tmp_path / "site"
+    shutil.copytree(Path(striatal.__file__).parent, site / "striatal")
+    env = {**os.environ, "PYTHONPATH": str(site)}
+    where = subprocess.run(
+        [sys.executable, "-P", "-c", "import striatal; print(striatal.__file__)"],
+        capture_output=True,
+        text=True,
+        check=True,
+        env=env,
+        cwd=tmp_path,
+    )
+    assert Path(where.stdout.strip()).parent == site / "striatal"
+    assert not (site / "benchmarks").exists() and not (tmp_path / "benchmarks").exists()
+    cmd = [sys.executable, "-P", "-m", "striatal", "bench", "--quick", "--no-train", "--json"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False, env=env, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-500:]
+    report = json.loads(proc.stdout)
+    assert _positive_finite(report["scalar_vs_gymnasium"]["ratio"])
+    assert report["compile"]["second_process"]["compile_included"] is False
+    assert report["train"] is None and "train" in report["not_measured"]

@@ -1,6 +1,6 @@
 """``striatal bench``: the kernel's speed beside Gymnasium's cart-pole, in one process.
 
-A thin entry: the harness is benchmarks/harness.py of the source checkout.
+A thin entry: the measurements and the report are :mod:`striatal.bench`.
 """
 
 from __future__ import annotations
@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import sys
 from dataclasses import replace
-from types import ModuleType
 from typing import Any
 
 from striatal.cli.guards import bounded_float, bounded_int
@@ -84,15 +83,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--anchors",
         action="store_true",
-        help="also time gymnax CartPole-v1 (1 env and the batch size) and EnvPool CartPole-v1 "
-        "and DMC CartpoleSwingup-v1 beside the kernel (needs the [bench] extra)",
+        help="also time EnvPool CartPole-v1 and DMC CartpoleSwingup-v1 (needs the [bench] "
+        "extra) and gymnax CartPole-v1 (1 env and the batch size; installed apart, else "
+        "skipped with the line to install it) beside the kernel",
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of the policy noise")
 
 
-def config_from(args: argparse.Namespace, harness: ModuleType) -> Any:
-    """The harness's BenchConfig the options ask for (validated)."""
-    base = harness.QUICK if args.quick else harness.BenchConfig()
+def config_from(args: argparse.Namespace) -> Any:
+    """The :class:`striatal.bench.BenchConfig` the options ask for (validated)."""
+    from striatal.bench.timing import QUICK, BenchConfig
+
+    base = QUICK if args.quick else BenchConfig()
     return replace(
         base,
         batch_size=base.batch_size if args.batch_size is None else args.batch_size,
@@ -106,14 +108,13 @@ def config_from(args: argparse.Namespace, harness: ModuleType) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    from striatal.sim.bench import load_harness
+    from striatal.bench.harness import format_report, run_all
 
-    harness = load_harness()  # benchmarks/harness.py of the checkout
-    config = config_from(args, harness)
+    config = config_from(args)
     seed = check_seed(args.seed)
-    report = harness.run_all(config, seed=seed)
+    report = run_all(config, seed=seed)
     if args.json:
         sys.stdout.write(dumps_json(report.to_dict()))
     else:
-        sys.stdout.write(harness.format_report(report) + "\n")
+        sys.stdout.write(format_report(report) + "\n")
     return 0

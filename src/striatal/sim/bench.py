@@ -1,41 +1,31 @@
-"""Timing primitives of the kernel for ``striatal bench`` (the harness is benchmarks/).
+"""Timing primitives of the kernel for ``striatal bench`` (the harness is :mod:`striatal.bench`).
 
-The library keeps what a timing needs to call the kernel with no wrapper cost (one
-chapter trial set up once, :func:`run_scalar_trial`, :func:`run_batch_trials`), two
-timing loops and the Numba cache counter. The harness that compares them with
-Gymnasium, the subprocess measurements and the report live in ``benchmarks/harness.py``
-of a source checkout; :func:`load_harness` finds and imports it (``striatal bench``
-does). The figures and their commands: docs/performance.md.
+What a timing needs to call the kernel with no wrapper cost (one chapter trial set up
+once, :func:`run_scalar_trial`, :func:`run_batch_trials`), two timing loops and the
+Numba cache counter. The measurements that compare them with Gymnasium, the subprocess
+scripts and the report are :mod:`striatal.bench`. The figures and their commands:
+docs/performance.md.
 """
 
 from __future__ import annotations
 
-import importlib.util
-import os
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 
-from striatal.errors import ParameterError
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
 from striatal.sim import kernel, rollout
 from striatal.sim.noise import row_parts, run_parts
 from striatal.sim.rollout import Protocol
 
 __all__ = [
-    "BENCHMARKS_ENV",
     "TRACE_GAMMA",
     "TrialSetup",
     "batch_normals",
-    "benchmarks_dir",
     "cache_misses",
     "calibrate",
-    "load_harness",
     "run_batch_trials",
     "run_kernel_trial",
     "run_scalar_trial",
@@ -44,9 +34,6 @@ __all__ = [
 
 #: The eligibility-trace discount of the chapter's learner (LearnerConfig.gamma).
 TRACE_GAMMA = 0.999
-
-#: Environment variable naming the benchmarks folder when it is not beside src/.
-BENCHMARKS_ENV = "STRIATAL_BENCHMARKS"
 
 
 @dataclass(frozen=True)
@@ -174,38 +161,3 @@ def timed(run: Callable[[], int], calls: int) -> tuple[int, float]:
     for _ in range(calls):
         steps += run()
     return steps, time.perf_counter() - t0
-
-
-# ---------------------------------------------------------------------------- harness
-
-
-def benchmarks_dir() -> Path:
-    """The benchmarks/ folder: ``$STRIATAL_BENCHMARKS``, else the one beside src/ (a checkout)."""
-    env = os.environ.get(BENCHMARKS_ENV)
-    here = Path(__file__).resolve().parents[3] / "benchmarks"
-    for folder in ([Path(env)] if env else []) + [here]:
-        if (folder / "harness.py").is_file():
-            return folder
-    raise ParameterError(
-        "the benchmark harness is benchmarks/harness.py of a source checkout; run from a "
-        f"git clone (pip install -e .) or set {BENCHMARKS_ENV}=path/to/benchmarks"
-    )
-
-
-def load_harness() -> ModuleType:
-    """Import benchmarks/harness.py (once per process) and return it."""
-    name = "striatal_benchmarks_harness"
-    if name in sys.modules:
-        return sys.modules[name]
-    path = benchmarks_dir() / "harness.py"
-    spec = importlib.util.spec_from_file_location(name, path)
-    if spec is None or spec.loader is None:  # pragma: no cover - a .py file always has one
-        raise ParameterError(f"cannot import {path}")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    try:
-        spec.loader.exec_module(module)
-    except BaseException:
-        del sys.modules[name]
-        raise
-    return module
