@@ -93,7 +93,23 @@ def finite_trace(trace: np.ndarray) -> tuple[float, ...]:
     return tuple(float(v) for v in trace)
 
 
-class ChapterRule(Rule):
+class PolicyRule(Rule):
+    """A rule that explores per step with the Gaussian policy of eq 5 (chapter, rpe):
+    the plan is :func:`policy_plan`, the history column its sigma."""
+
+    history_columns = ("sigma",)
+
+    def plan(
+        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
+    ) -> TrialPlan:
+        return policy_plan(state, config, rng)
+
+    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
+        """sigma = exp(W6)-like policy std of eq 5 (:func:`striatal.sim.kernel.sigma_of`)."""
+        return (("sigma", float(sigma_of(plan.W[5]))),)
+
+
+class ChapterRule(PolicyRule):
     """The chapter's rule: Gaussian policy per step (eq 5), trace D (eq 3), update eq 4.
 
     No preset: the chapter's learner with striatal's defaults (alpha 5, gamma 0.999),
@@ -105,14 +121,8 @@ class ChapterRule(Rule):
     config_type = ChapterConfig
     preset = MappingProxyType({})
     control = MappingProxyType({"alpha": 0.0})
-    history_columns = ("sigma",)
     memory_names = ("trace",)
     raw_reward_signal = True
-
-    def plan(
-        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
-    ) -> TrialPlan:
-        return policy_plan(state, config, rng)
 
     def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
         plan, outcome, reward, success = trial.plan, trial.outcome, trial.reward, trial.success
@@ -135,10 +145,6 @@ class ChapterRule(Rule):
             theta_c=float(theta_c),
             memory=(("trace", finite_trace(plan.trace)),),
         )
-
-    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
-        """sigma = exp(W6)-like policy std of eq 5 (:func:`striatal.sim.kernel.sigma_of`)."""
-        return (("sigma", float(sigma_of(plan.W[5]))),)
 
 
 CHAPTER = ChapterRule()

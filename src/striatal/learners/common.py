@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from striatal.errors import ParameterError
 from striatal.learners.config import W1_FLOOR, ThetaCRule
 from striatal.learners.state import LearnerState
 from striatal.params import (
@@ -31,6 +32,7 @@ __all__ = [
     "THETA_C_RESET_ABOVE",
     "THETA_C_RESET_TO",
     "baseline_memory",
+    "check_decay",
     "initial_state",
     "jitter_corners",
     "prediction_error",
@@ -210,3 +212,10 @@ def baseline_memory(
         ("reward_mean", (b,) if math.isfinite(b) else old_b),
         ("rpe_square", (square,) if math.isfinite(square) else old_sq),
     )
+
+
+def check_decay(rate: float, decay: float) -> None:
+    """ParameterError unless the decay per update (``rate`` x ``decay``) is below 1, so
+    that -rate*decay*W never overshoots zero."""
+    if rate * decay >= 1.0:
+        raise ParameterError(f"the decay per update (rate x decay = {rate * decay:g}) must be < 1")

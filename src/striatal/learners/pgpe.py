@@ -37,6 +37,7 @@ import numpy as np
 from striatal.errors import ParameterError
 from striatal.learners.common import (
     baseline_memory,
+    check_decay,
     prediction_error,
     prediction_error_factor,
     theta_c_rule,
@@ -158,10 +159,7 @@ class PgpeRule(Rule):
             raise ParameterError(
                 "learner 'pgpe' adapts its exploration (sigma_rate) only without --symmetric"
             )
-        if config.alpha * config.decay >= 1.0:
-            raise ParameterError(
-                f"the decay per update (rate x decay = {config.alpha * config.decay:g}) must be < 1"
-            )
+        check_decay(config.alpha, config.decay)
 
     def plan(
         self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant

@@ -15,19 +15,17 @@ from types import MappingProxyType
 
 import numpy as np
 
-from striatal.errors import ParameterError
-from striatal.learners.chapter import finite_trace, policy_plan
+from striatal.learners.chapter import PolicyRule, finite_trace
 from striatal.learners.common import (
     baseline_memory,
+    check_decay,
     prediction_error,
     theta_c_rule,
     three_factor_update,
 )
 from striatal.learners.config import Eligibility, LearnerConfig, RewardKind, ThetaCRule, pick
-from striatal.learners.rule import Rule, Trial, TrialPlan, Update
+from striatal.learners.rule import Trial, Update
 from striatal.learners.state import LearnerState
-from striatal.params import Plant
-from striatal.sim.kernel import sigma_of
 
 __all__ = ["RPE", "RpeConfig", "RpeRule"]
 
@@ -54,7 +52,7 @@ class RpeConfig:
         return self.alpha * (1.0 - self.gamma)
 
 
-class RpeRule(Rule):
+class RpeRule(PolicyRule):
     """Eq 4 with a tracked reward baseline (a reward prediction error).
 
     Its preset (normalise) was chosen on ``striatal ablation``'s seeds S = 0..99, which no
@@ -72,15 +70,7 @@ class RpeRule(Rule):
     def check(self, config: LearnerConfig) -> None:
         super().check(config)
         c = pick(RpeConfig, config)
-        if c.rate * c.decay >= 1.0:
-            raise ParameterError(
-                f"the decay per update (rate x decay = {c.rate * c.decay:g}) must be < 1"
-            )
-
-    def plan(
-        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
-    ) -> TrialPlan:
-        return policy_plan(state, config, rng)
+        check_decay(c.rate, c.decay)
 
     def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
         plan, outcome, reward, success = trial.plan, trial.outcome, trial.reward, trial.success
@@ -98,10 +88,6 @@ class RpeRule(Rule):
             theta_c=float(theta_c),
             memory=(("trace", finite_trace(plan.trace)), *baseline_memory(state, b, square)),
         )
-
-    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
-        """sigma of eq 5's per-step policy (:func:`striatal.sim.kernel.sigma_of` of W6)."""
-        return (("sigma", float(sigma_of(plan.W[5]))),)
 
 
 RPE = RpeRule()
