@@ -105,26 +105,45 @@ def arm_statistics(
     return out
 
 
+def _control_of(a: dict[str, Any], arms: Sequence[dict[str, Any]]) -> dict[str, Any] | None:
+    """The control arm of learner arm ``a``: its learner's, on its init (None if none ran)."""
+    return next(
+        (
+            c
+            for c in arms
+            if c["role"] == "control" and c["init"] == a["init"] and c["learner"] == a["learner"]
+        ),
+        None,
+    )
+
+
 def _paired(
-    a: dict[str, Any], b: dict[str, Any], groups: dict[tuple[str, str], list[dict[str, Any]]]
+    a: dict[str, Any],
+    b: dict[str, Any],
+    groups: dict[tuple[str, str], list[dict[str, Any]]],
+    other: str,
 ) -> dict[str, Any]:
-    """Learner arm ``a`` against baseline arm ``b`` on the same init: their rates, their
-    restricted mean costs, and both tests (McNemar's on the shared seeds)."""
+    """Learner arm ``a`` against arm ``b`` (its ``other``: "control" or "baseline") on the
+    same init: both rates, costs over solved seeds and restricted means, and both tests
+    (McNemar's on the shared seeds)."""
     solved = {
         arm["arm"]: {int(r["seed"]): bool(r["success"]) for r in groups[(arm["arm"], a["init"])]}
         for arm in (a, b)
     }
+    keys = (
+        "success_rate",
+        "success_rate_ci",
+        "simulations_median",
+        "trials_median",
+        "simulated_seconds_restricted_mean",
+    )
     return {
         "init": a["init"],
         "arm": a["arm"],
-        "baseline": b["arm"],
+        other: b["arm"],
         "learner": a["learner"],
-        "success_rate": a["success_rate"],
-        "success_rate_ci": a["success_rate_ci"],
-        "baseline_success_rate": b["success_rate"],
-        "baseline_success_rate_ci": b["success_rate_ci"],
-        "simulated_seconds_restricted_mean": a["simulated_seconds_restricted_mean"],
-        "baseline_simulated_seconds_restricted_mean": b["simulated_seconds_restricted_mean"],
+        **{k: a[k] for k in keys},
+        **{f"{other}_{k}": b[k] for k in keys},
         **stats.compare_arms(solved[a["arm"]], solved[b["arm"]]),
     }
 
@@ -160,43 +179,11 @@ def summarise(
     ]
     side_by_side = []
     for a in arms:
-        if a["role"] != "learner":
-            continue
-        ctrl = next(
-            (
-                c
-                for c in arms
-                if c["role"] == "control"
-                and c["init"] == a["init"]
-                and c["learner"] == a["learner"]
-            ),
-            None,
-        )
-        if ctrl is None:
-            continue
-        solved = {
-            name: {int(r["seed"]): bool(r["success"]) for r in groups[(name, a["init"])]}
-            for name in (a["arm"], ctrl["arm"])
-        }
-        side_by_side.append(
-            {
-                "init": a["init"],
-                "arm": a["arm"],
-                "control": ctrl["arm"],
-                "learner": a["learner"],
-                "success_rate": a["success_rate"],
-                "success_rate_ci": a["success_rate_ci"],
-                "control_success_rate": ctrl["success_rate"],
-                "control_success_rate_ci": ctrl["success_rate_ci"],
-                "simulations_median": a["simulations_median"],
-                "control_simulations_median": ctrl["simulations_median"],
-                "trials_median": a["trials_median"],
-                "control_trials_median": ctrl["trials_median"],
-                **stats.compare_arms(solved[a["arm"]], solved[ctrl["arm"]]),
-            }
-        )
+        control = _control_of(a, arms) if a["role"] == "learner" else None
+        if control is not None:
+            side_by_side.append(_paired(a, control, groups, "control"))
     against_baselines = [
-        _paired(a, b, groups)
+        _paired(a, b, groups, "baseline")
         for a in arms
         if a["role"] == "learner"
         for b in arms
@@ -232,6 +219,21 @@ def _robust_cell(arm: dict[str, Any]) -> str:
     )
 
 
+def _pair_cells(c: dict[str, Any], other: str) -> str:
+    """The first cells of a pair's row: the arms, the init and both success rates."""
+    return (
+        f"| {c['arm']} | {c[other]} | {c['init']} | "
+        f"{_num(c['success_rate'], '.0%')}{_ci(c.get('success_rate_ci'), '.0%')} | "
+        f"{_num(c[f'{other}_success_rate'], '.0%')}"
+        f"{_ci(c.get(f'{other}_success_rate_ci'), '.0%')} |"
+    )
+
+
+def _mcnemar_cell(c: dict[str, Any]) -> str:
+    mc = c.get("mcnemar") or {}
+    return f"{_num(mc.get('p_value'), '.3g')} ({mc.get('only_a', '-')} / {mc.get('only_b', '-')}) |"
+
+
 def markdown_table(summary: dict[str, Any]) -> str:
     """The comparison table of a summary, one line per (arm, init), then each learner
     against its control. Intervals are 95 %: Wilson for rates, bootstrap for the median
@@ -264,15 +266,9 @@ def markdown_table(summary: dict[str, Any]) -> str:
             "|---|---|---|---|---|---|---|",
         ]
         for c in pairs:
-            mc = c.get("mcnemar") or {}
             lines.append(
-                f"| {c['arm']} | {c['control']} | {c['init']} | "
-                f"{_num(c['success_rate'], '.0%')}{_ci(c.get('success_rate_ci'), '.0%')} | "
-                f"{_num(c['control_success_rate'], '.0%')}"
-                f"{_ci(c.get('control_success_rate_ci'), '.0%')} | "
-                f"{_num(c['fisher']['p_value'], '.3g')} | "
-                f"{_num(mc.get('p_value'), '.3g')} ({mc.get('only_a', '-')} / "
-                f"{mc.get('only_b', '-')}) |"
+                f"{_pair_cells(c, 'control')} {_num(c['fisher']['p_value'], '.3g')} | "
+                f"{_mcnemar_cell(c)}"
             )
     against = summary.get("learner_vs_baselines") or []
     if against:
@@ -284,15 +280,10 @@ def markdown_table(summary: dict[str, Any]) -> str:
             "|---|---|---|---|---|---|---|",
         ]
         for c in against:
-            mc = c.get("mcnemar") or {}
             lines.append(
-                f"| {c['arm']} | {c['baseline']} | {c['init']} | "
-                f"{_num(c['success_rate'], '.0%')}{_ci(c.get('success_rate_ci'), '.0%')} | "
-                f"{_num(c['baseline_success_rate'], '.0%')}"
-                f"{_ci(c.get('baseline_success_rate_ci'), '.0%')} | "
+                f"{_pair_cells(c, 'baseline')} "
                 f"{_num(c['simulated_seconds_restricted_mean'], '.0f')} / "
                 f"{_num(c['baseline_simulated_seconds_restricted_mean'], '.0f')} | "
-                f"{_num(mc.get('p_value'), '.3g')} ({mc.get('only_a', '-')} / "
-                f"{mc.get('only_b', '-')}) |"
+                f"{_mcnemar_cell(c)}"
             )
     return "\n".join(lines) + "\n"
