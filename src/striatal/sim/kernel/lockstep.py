@@ -12,7 +12,14 @@ import numpy as np
 from numba import njit, prange
 
 from striatal.sim.kernel.libm import TWO_PI, sincos_poly, wrap_angle
-from striatal.sim.kernel.plant import PlantArgs, accelerations_terms, force_terms
+from striatal.sim.kernel.plant import (
+    PlantArgs,
+    PlantTerms,
+    accelerations_terms,
+    force_terms,
+    plant_terms,
+    rk4,
+)
 from striatal.sim.kernel.policy import ControlArgs, Gains, balancing_roots, sigma_of
 from striatal.sim.kernel.traces import TraceArgs
 from striatal.sim.kernel.trials import (
@@ -45,6 +52,13 @@ __all__ = [
 
 #: Trials per lockstep block (one block per thread at a time).
 LOCKSTEP_BLOCK = 64
+
+
+@njit(cache=True, inline="always")
+def _poly_stage(theta: float, theta_dot: float, u: float, pt: PlantTerms) -> tuple[float, float]:
+    """An RK4 stage of eqs 13-14 (u held) with the polynomial sin/cos (no libm call)."""
+    s, c = sincos_poly(theta)
+    return accelerations_terms(s, c, theta_dot, u, pt)
 
 
 @njit(cache=True)
@@ -90,18 +104,11 @@ def _lockstep_block(
     status = np.full(LOCKSTEP_BLOCK, STATUS_RUNNING)
     end_step = np.full(LOCKSTEP_BLOCK, protocol.n_steps)
     reward = np.zeros(LOCKSTEP_BLOCK)
-    p = plant.plant
-    model = plant.model
-    mismatch = plant.mismatch
-    dt = plant.dt
-    h = 0.5 * dt
-    w6 = dt / 6.0
-    length = model[2]
-    g = model[3]
-    m = model[1]
     # parameters as plain floats: the loops over lanes read no parameter array
-    p_cart, p_pole, p_len, p_g = p[0], p[1], p[2], p[3]
-    q_cart, q_pole, q_len, q_g = model[0], model[1], model[2], model[3]
+    pt = plant_terms(plant)
+    length = pt.model_length
+    g = pt.model_g
+    m = pt.model_m
     sign = control.sign
     soft = control.soft
     inhibition = control.inhibition
@@ -232,84 +239,13 @@ def _lockstep_block(
             xd0 = S[_F_XD, j]
             thd0 = S[_F_THD, j]
             s1, c1 = sincos_poly(t)
-            f = abs(force_terms(s1, c1, thd0, u, q_cart, q_pole, q_len, q_g))
-            a1, b1 = accelerations_terms(
-                xd0,
-                s1,
-                c1,
-                thd0,
-                u,
-                p_cart,
-                p_pole,
-                p_len,
-                p_g,
-                q_cart,
-                q_pole,
-                q_len,
-                q_g,
-                mismatch,
+            f = abs(
+                force_terms(
+                    s1, c1, thd0, u, pt.model_cart_mass, pt.model_m, pt.model_length, pt.model_g
+                )
             )
-            xd2 = xd0 + h * a1
-            thd2 = thd0 + h * b1
-            s2, c2 = sincos_poly(t + h * thd0)
-            a2, b2 = accelerations_terms(
-                xd2,
-                s2,
-                c2,
-                thd2,
-                u,
-                p_cart,
-                p_pole,
-                p_len,
-                p_g,
-                q_cart,
-                q_pole,
-                q_len,
-                q_g,
-                mismatch,
-            )
-            xd3 = xd0 + h * a2
-            thd3 = thd0 + h * b2
-            s3, c3 = sincos_poly(t + h * thd2)
-            a3, b3 = accelerations_terms(
-                xd3,
-                s3,
-                c3,
-                thd3,
-                u,
-                p_cart,
-                p_pole,
-                p_len,
-                p_g,
-                q_cart,
-                q_pole,
-                q_len,
-                q_g,
-                mismatch,
-            )
-            xd4 = xd0 + dt * a3
-            thd4 = thd0 + dt * b3
-            s4, c4 = sincos_poly(t + dt * thd3)
-            a4, b4 = accelerations_terms(
-                xd4,
-                s4,
-                c4,
-                thd4,
-                u,
-                p_cart,
-                p_pole,
-                p_len,
-                p_g,
-                q_cart,
-                q_pole,
-                q_len,
-                q_g,
-                mismatch,
-            )
-            nx = x0 + w6 * (xd0 + 2.0 * xd2 + 2.0 * xd3 + xd4)
-            nxd = xd0 + w6 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-            nth = t + w6 * (thd0 + 2.0 * thd2 + 2.0 * thd3 + thd4)
-            nthd = thd0 + w6 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+            a1, b1 = accelerations_terms(s1, c1, thd0, u, pt)
+            nx, nxd, nth, nthd = rk4(_poly_stage, x0, xd0, t, thd0, a1, b1, u, pt)
             run = S[_F_ACTIVE, j] > 0.0
             mf = S[_F_MAXF, j]
             S[_F_MAXF, j] = f if (run and f > mf) else mf

@@ -257,7 +257,7 @@ def run_trial(
     start from the sampled state (the angle the controller sees) with the ``model``,
     held, and the true plant's eqs 8-9 are integrated (:func:`rk4_force_step`).
     ``plant.max_force`` (finite) clips f: with the force held, the held f; with u held,
-    the force of every RK4 stage (:func:`_rk4_limited`), so the plant gets u only while
+    the force of every RK4 stage (:func:`plant_step`), so the plant gets u only while
     the motor can deliver it (docs/paper-notes.md section 9). The recorded force and
     OUT_MAX_ABS_FORCE are the (clipped) force at the step's start.
     """
