@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from striatal.sim.kernel.libm import TWO_PI, sincos_poly, wrap_angle
+from striatal.sim.kernel.libm import TWO_PI, sincos_poly
 from striatal.sim.kernel.plant import (
     PlantArgs,
     PlantTerms,
@@ -24,25 +24,12 @@ from striatal.sim.kernel.policy import ControlArgs, Gains, balancing_roots, sigm
 from striatal.sim.kernel.traces import TraceArgs
 from striatal.sim.kernel.trials import (
     BLOW_UP,
-    OUT_EARLY,
-    OUT_END_STEP,
-    OUT_FAULT,
-    OUT_MAX_ABS_FORCE,
-    OUT_MAX_ABS_X,
-    OUT_MIN_ABS_THETA,
-    OUT_MIN_ABS_THETA_SWINGUP,
-    OUT_N_SWITCHES,
-    OUT_REWARD,
-    OUT_THETA,
-    OUT_THETA_DOT,
-    OUT_TRACK,
-    OUT_X,
-    OUT_X_DOT,
-    STATUS_EARLY,
     STATUS_FAULT,
     STATUS_RUNNING,
     ProtocolArgs,
+    Tally,
     judge,
+    write_summary,
 )
 
 __all__ = [
@@ -278,21 +265,11 @@ def _lockstep_block(
                 S[_F_MAXX, j] = ax if (S[_F_ACTIVE, j] > 0.0 and ax > mx) else mx
     for j in range(n):
         b = lo + j
-        out = outs[b]
-        out[OUT_REWARD] = reward[j]
-        out[OUT_END_STEP] = end_step[j]
-        out[OUT_X] = S[_F_X, j]
-        out[OUT_X_DOT] = S[_F_XD, j]
-        out[OUT_THETA] = wrap_angle(S[_F_TH, j])
-        out[OUT_THETA_DOT] = S[_F_THD, j]
-        out[OUT_MIN_ABS_THETA_SWINGUP] = S[_F_MINSW, j]
-        out[OUT_MIN_ABS_THETA] = S[_F_MINALL, j]
-        out[OUT_FAULT] = 1.0 if status[j] == STATUS_FAULT else 0.0
-        out[OUT_EARLY] = 1.0 if status[j] == STATUS_EARLY else 0.0
-        out[OUT_N_SWITCHES] = S[_F_NSW, j]
-        out[OUT_MAX_ABS_X] = S[_F_MAXX, j]
-        out[OUT_MAX_ABS_FORCE] = S[_F_MAXF, j]
-        out[OUT_TRACK] = 0.0
+        tally = Tally(
+            S[_F_MINSW, j], S[_F_MINALL, j], int(S[_F_NSW, j]), -1, S[_F_MAXX, j], S[_F_MAXF, j]
+        )
+        x, x_dot, theta, theta_dot = S[_F_X, j], S[_F_XD, j], S[_F_TH, j], S[_F_THD, j]
+        write_summary(outs[b], status[j], reward[j], end_step[j], x, x_dot, theta, theta_dot, tally)
         if stochastic:
             for i in range(6):
                 learning.trace[b, i] = S[_F_D0 + i, j]
