@@ -45,11 +45,11 @@ from striatal.sim.kernel import (
     PlantArgs,
     ProtocolArgs,
     TraceArgs,
-    draw_action,
     judge,
     judge_start,
     load_trace,
     motor_force,
+    next_action,
     plant_step,
     plant_terms,
     policy_of,
@@ -253,24 +253,10 @@ def run_online_trial(
             value = _dot(v, phi)
             for i in range(N_FEATURES):
                 z[i] = discount * critic.critic_decay * z[i] + phi[i]
-            if hold == 0:
-                hold = control.action_every
-                normal = noise.action[draw] if stochastic else 0.0
-                a, d = draw_action(
-                    x,
-                    x_dot,
-                    th,
-                    theta_dot,
-                    c,
-                    th == theta,
-                    pol,
-                    normal,
-                    stochastic,
-                    learning.gamma,
-                    d,
-                )
-                draw += 1
-            hold -= 1
+            seen = (x, x_dot, th, theta_dot)
+            a, d, hold, draw = next_action(
+                hold, draw, a, d, seen, c, th == theta, pol, control, noise.action, learning.gamma
+            )
             f = motor_force(s, c, theta, theta_dot, a, False, pt)
             tally = tally_force(f, tally)
             x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)

@@ -62,11 +62,11 @@ __all__ = [
     "NoiseArgs",
     "ProtocolArgs",
     "Tally",
-    "draw_action",
     "judge",
     "judge_batch",
     "judge_start",
     "load_trace",
+    "next_action",
     "run_trial",
     "run_trials_batch",
     "store_trace",
@@ -267,29 +267,41 @@ def judge_start(
     return STATUS_RUNNING, 0.0, protocol.n_steps
 
 
-@njit(cache=True)
-def draw_action(
-    x: float,
-    x_dot: float,
-    th: float,
-    theta_dot: float,
+@njit(cache=True, inline="always")
+def next_action(
+    hold: int,
+    draw: int,
+    a: float,
+    d: tuple[float, float, float, float, float, float],
+    seen: tuple[float, float, float, float],
     cos_th: float,
     have_cos: bool,
     pol: PolicyTerms,
-    normal: float,
-    stochastic: bool,
+    control: ControlArgs,
+    normals: np.ndarray,
     gamma: float,
-    d: tuple[float, float, float, float, float, float],
-) -> tuple[float, tuple[float, float, float, float, float, float]]:
-    """(a, D) at a draw: the mean of eqs 22-23 (:func:`policy_terms`) plus sigma ``normal``
-    (eq 5), and the trace D (6,) of eq 3 (:func:`trace_step`); without ``stochastic`` the
-    mean, D unchanged. ``x``, ``th`` (wrapped): what the controller sees."""
-    mu, g1, g2, g3, g4, g5 = policy_terms(x, x_dot, th, theta_dot, cos_th, have_cos, pol)
-    if not stochastic:
-        return mu, d
-    eps = pol.sigma * normal
-    d0, d1, d2, d3, d4, d5 = d
-    return mu + eps, trace_step(eps, pol.sigma, gamma, g1, g2, g3, g4, g5, d0, d1, d2, d3, d4, d5)
+) -> tuple[float, tuple[float, float, float, float, float, float], int, int]:
+    """(a, D, hold, draw) after a step's policy: a new action every ``control.action_every``
+    steps (``hold`` steps left, 0: draw now), held in between.
+
+    At a draw the action is the mean of eqs 22-23 (:func:`policy_terms`) at ``seen``
+    (x, x_dot, th wrapped, theta_dot as the controller sees them; ``cos_th`` = cos th
+    when ``have_cos``) plus sigma ``normals[draw]`` (eq 5), and the trace D (6,) of
+    eq 3 takes its eligibility (:func:`trace_step`); empty ``normals``: the mean, D kept.
+    """
+    if hold == 0:
+        hold = control.action_every
+        x, x_dot, th, theta_dot = seen
+        mu, g1, g2, g3, g4, g5 = policy_terms(x, x_dot, th, theta_dot, cos_th, have_cos, pol)
+        if normals.shape[0] > 0:
+            eps = pol.sigma * normals[draw]
+            a = mu + eps
+            d0, d1, d2, d3, d4, d5 = d
+            d = trace_step(eps, pol.sigma, gamma, g1, g2, g3, g4, g5, d0, d1, d2, d3, d4, d5)
+        else:
+            a = mu
+        draw += 1
+    return a, d, hold - 1, draw
 
 
 @njit(cache=True)
@@ -426,28 +438,14 @@ def run_trial(
                 otheta += noise.sensor_std_theta * sensor_noise[k, 1]
             th = wrap_angle(otheta)
             mode, tally = tally_mode(abs(th), theta_c, tally)
-            if hold == 0:
-                hold = control.action_every
-                normal = noise.action[draw] if stochastic else 0.0
-                a, d = draw_action(
-                    ox,
-                    x_dot,
-                    th,
-                    theta_dot,
-                    c,
-                    th == theta,
-                    pol,
-                    normal,
-                    stochastic,
-                    learning.gamma,
-                    d,
-                )
-                draw += 1
-            hold -= 1
+            seen = (ox, x_dot, th, theta_dot)
+            a, d, hold, draw = next_action(
+                hold, draw, a, d, seen, c, th == theta, pol, control, noise.action, learning.gamma
+            )
             f = motor_force(s, c, otheta, theta_dot, a, noisy_sensor, pt)
-            tally = tally_force(f, tally)
             if record:
                 _record(traj, k, dt, (x, x_dot, theta, theta_dot), a, f, mode)
+            tally = tally_force(f, tally)
             x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
             status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
             tally = tally_x(x, status, tally)
