@@ -67,13 +67,7 @@ _N_FIELDS = 29
 def _lockstep_block(
     lo: int,
     hi: int,
-    states0: np.ndarray,
-    gains: Gains,
-    plant: PlantArgs,
-    control: ControlArgs,
-    protocol: ProtocolArgs,
-    noise: np.ndarray,
-    learning: TraceArgs,
+    args: tuple[np.ndarray, Gains, PlantArgs, ControlArgs, ProtocolArgs, np.ndarray, TraceArgs],
     outs: np.ndarray,
 ) -> None:
     """Trials lo..hi-1 of :func:`run_trials_lockstep`, advanced step by step together.
@@ -83,6 +77,7 @@ def _lockstep_block(
     trials rounded up to a multiple of 4, the extra lanes idle copies of the first
     trial, inactive from the start.
     """
+    states0, gains, plant, control, protocol, noise, learning = args
     n = hi - lo
     # lanes actually stepped: the trials rounded up to a multiple of 4 (one AVX2
     # vector); the array keeps LOCKSTEP_BLOCK lanes so its row stride is a constant
@@ -96,10 +91,6 @@ def _lockstep_block(
     length = pt.model_length
     g = pt.model_g
     m = pt.model_m
-    sign = control.sign
-    soft = control.soft
-    inhibition = control.inhibition
-    chapter = control.chapter_eligibility
     gamma = learning.gamma
     stochastic = noise.shape[1] > 0
     n_steps = protocol.n_steps
@@ -171,10 +162,10 @@ def _lockstep_block(
                 tc = S[_F_TC, j]
                 abs_th = abs(tw)
                 bal = abs_th < tc
-                wb_soft = _clip01(inhibition * (tc - abs_th))
-                ws_soft = _clip01(inhibition * (abs_th - tc))
-                wb = wb_soft if soft else (1.0 if bal else 0.0)
-                ws = ws_soft if soft else (0.0 if bal else 1.0)
+                wb_soft = _clip01(control.inhibition * (tc - abs_th))
+                ws_soft = _clip01(control.inhibition * (abs_th - tc))
+                wb = wb_soft if control.soft else (1.0 if bal else 0.0)
+                ws = ws_soft if control.soft else (0.0 if bal else 1.0)
                 on_b = wb > 0.0
                 on_s = ws > 0.0
                 xj = S[_F_X, j]
@@ -184,13 +175,14 @@ def _lockstep_block(
                 w5 = S[_F_W5, j]
                 inv_root = S[_F_INVROOT, j]
                 mu_b = (
-                    sign * ((1.0 + w1 * length) * g * tw + 2.0 * length * S[_F_ROOT, j] * thdj)
+                    control.sign
+                    * ((1.0 + w1 * length) * g * tw + 2.0 * length * S[_F_ROOT, j] * thdj)
                     - S[_F_W2, j] * xj
                     - S[_F_W3, j] * xdj
                 )
                 d1_chapter = -length * (g * tw - inv_root * thdj)
-                d1_score = sign * length * (g * tw + inv_root * thdj)
-                d1 = d1_chapter if chapter else d1_score
+                d1_score = control.sign * length * (g * tw + inv_root * thdj)
+                d1 = d1_chapter if control.chapter_eligibility else d1_score
                 _, cth = sincos_poly(tw)
                 e_t = 0.5 * m * length * length * thdj * thdj + m * g * length * (cth - 1.0)
                 mu_s = S[_F_W4, j] * e_t * thdj * cth - 0.25 * w5 * w5 * xj - w5 * xdj
@@ -308,4 +300,5 @@ def run_trials_lockstep(
     for i in prange(n_blocks):
         lo = i * LOCKSTEP_BLOCK
         hi = min(lo + LOCKSTEP_BLOCK, B)
-        _lockstep_block(lo, hi, states0, gains, plant, control, protocol, noise, learning, outs)
+        args = (states0, gains, plant, control, protocol, noise, learning)
+        _lockstep_block(lo, hi, args, outs)
