@@ -221,13 +221,17 @@ def run_online_trial(
     pt = plant_terms(plant)
     dt = plant.dt
     x, x_dot, theta, theta_dot = state0[0], state0[1], state0[2], state0[3]
-    stochastic = noise.action.shape[0] > 0
     discount = critic.discount
     v = critic.weights
     z = critic.trace
     stats = critic.stats
-    pol = policy_of(W, theta_c, control, pt.model_m, pt.model_length, pt.model_g)
-    d = load_trace(learning.trace)
+    square = critic.square
+    sq_rate = critic.square_rate
+    m, length, g = pt.model_m, pt.model_length, pt.model_g
+    pol = policy_of(W, theta_c, control, m, length, g)
+    # D (eq 3) stays in learning.trace between steps: this loop holds too many values to
+    # keep it in registers as run_trial does (measured: slower)
+    trace = learning.trace
     phi = np.empty(N_FEATURES)
     phi_next = np.empty(N_FEATURES)
     v_fail = failure_value(dt, discount)
@@ -254,9 +258,11 @@ def run_online_trial(
             for i in range(N_FEATURES):
                 z[i] = discount * critic.critic_decay * z[i] + phi[i]
             seen = (x, x_dot, th, theta_dot)
+            d = load_trace(trace)
             a, d, hold, draw = next_action(
                 hold, draw, a, d, seen, c, th == theta, pol, control, noise.action, learning.gamma
             )
+            store_trace(trace, d)
             f = motor_force(s, c, theta, theta_dot, a, False, pt)
             tally = tally_force(f, tally)
             x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
@@ -277,57 +283,35 @@ def run_online_trial(
                 n_td += 1
                 for i in range(N_FEATURES):
                     v[i] += critic.beta * delta * z[i]
-                if _actor_step(W, d, delta, critic):
-                    pol = policy_of(W, theta_c, control, pt.model_m, pt.model_length, pt.model_g)
+                # the actor's factor: delta, or delta over its running rms
+                sq = square[0]
+                sq = delta * delta if sq <= 0.0 else (1.0 - sq_rate) * sq + sq_rate * delta * delta
+                square[0] = sq
+                factor = delta
+                if critic.normalise:
+                    factor = delta / math.sqrt(sq) if sq > 0.0 else 0.0
+                if critic.alpha != 0.0:
+                    changed = False
+                    for i in range(6):
+                        step = critic.alpha * factor * trace[i]
+                        step = min(max(step, -critic.max_step), critic.max_step)
+                        if math.isfinite(step) and step != 0.0:
+                            W[i] += step
+                            changed = True
+                    if changed:
+                        W[0] = max(W[0], critic.w1_floor)
+                        pol = policy_of(
+                            W, theta_c, control, pt.model_m, pt.model_length, pt.model_g
+                        )
             tally = tally_x(x, status, tally)
             if status != STATUS_RUNNING:
                 end_step = k + 1
                 break
-    if stochastic:
-        store_trace(learning.trace, d)
     stats[STAT_SUM_DELTA] = sum_delta
     stats[STAT_SUM_DELTA2] = sum_delta2
     stats[STAT_N] = n_td
     stats[STAT_RETURN] = ret
     write_summary(out, status, reward, end_step, x, x_dot, theta, theta_dot, tally)
-
-
-@njit(cache=True, inline="always")
-def _actor_step(
-    W: np.ndarray,
-    d: tuple[float, float, float, float, float, float],
-    delta: float,
-    critic: CriticArgs,
-) -> bool:
-    """W <- W + clip(alpha factor D, +-max_step) in place (W1 floored); True if W changed.
-
-    The factor is delta, or with ``critic.normalise`` delta over the root of its running
-    mean square ``critic.square`` (updated here in either case).
-    """
-    square = critic.square
-    sq = square[0]
-    sq = (
-        delta * delta
-        if sq <= 0.0
-        else (1.0 - critic.square_rate) * sq + critic.square_rate * delta * delta
-    )
-    square[0] = sq
-    factor = delta
-    if critic.normalise:
-        factor = delta / math.sqrt(sq) if sq > 0.0 else 0.0
-    if critic.alpha == 0.0:
-        return False
-    changed = False
-    max_step = critic.max_step
-    scale = critic.alpha * factor
-    for i, di in enumerate(d):
-        step = min(max(scale * di, -max_step), max_step)
-        if math.isfinite(step) and step != 0.0:
-            W[i] += step
-            changed = True
-    if changed and W[0] < critic.w1_floor:
-        W[0] = critic.w1_floor
-    return changed
 
 
 class OnlineTrial(NamedTuple):
