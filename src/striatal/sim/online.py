@@ -229,9 +229,7 @@ def run_online_trial(
     sq_rate = critic.square_rate
     m, length, g = pt.model_m, pt.model_length, pt.model_g
     pol = policy_of(W, theta_c, control, m, length, g)
-    # D (eq 3) stays in learning.trace between steps: this loop holds too many values to
-    # keep it in registers as run_trial does (measured: slower)
-    trace = learning.trace
+    d = load_trace(learning.trace)
     phi = np.empty(N_FEATURES)
     phi_next = np.empty(N_FEATURES)
     v_fail = failure_value(dt, discount)
@@ -258,11 +256,9 @@ def run_online_trial(
             for i in range(N_FEATURES):
                 z[i] = discount * critic.critic_decay * z[i] + phi[i]
             seen = (x, x_dot, th, theta_dot)
-            d = load_trace(trace)
             a, d, hold, draw = next_action(
                 hold, draw, a, d, seen, c, th == theta, pol, control, noise.action, learning.gamma
             )
-            store_trace(trace, d)
             f = motor_force(s, c, theta, theta_dot, a, False, pt)
             tally = tally_force(f, tally)
             x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
@@ -293,7 +289,7 @@ def run_online_trial(
                 if critic.alpha != 0.0:
                     changed = False
                     for i in range(6):
-                        step = critic.alpha * factor * trace[i]
+                        step = critic.alpha * factor * d[i]
                         step = min(max(step, -critic.max_step), critic.max_step)
                         if math.isfinite(step) and step != 0.0:
                             W[i] += step
@@ -311,6 +307,8 @@ def run_online_trial(
     stats[STAT_SUM_DELTA2] = sum_delta2
     stats[STAT_N] = n_td
     stats[STAT_RETURN] = ret
+    if noise.action.shape[0] > 0:
+        store_trace(learning.trace, d)
     write_summary(out, status, reward, end_step, x, x_dot, theta, theta_dot, tally)
 
 
