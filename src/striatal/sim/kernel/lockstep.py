@@ -20,7 +20,14 @@ from striatal.sim.kernel.plant import (
     plant_terms,
     rk4,
 )
-from striatal.sim.kernel.policy import ControlArgs, Gains, balancing_roots, sigma_of
+from striatal.sim.kernel.policy import (
+    ControlArgs,
+    Gains,
+    balancing_law,
+    balancing_roots,
+    sigma_of,
+    swingup_law,
+)
 from striatal.sim.kernel.traces import TraceArgs
 from striatal.sim.kernel.trials import (
     BLOW_UP,
@@ -174,18 +181,23 @@ def _lockstep_block(
                 w1 = S[_F_W1, j]
                 w5 = S[_F_W5, j]
                 inv_root = S[_F_INVROOT, j]
-                mu_b = (
-                    control.sign
-                    * ((1.0 + w1 * length) * g * tw + 2.0 * length * S[_F_ROOT, j] * thdj)
-                    - S[_F_W2, j] * xj
-                    - S[_F_W3, j] * xdj
+                mu_b, d1 = balancing_law(
+                    xj,
+                    xdj,
+                    tw,
+                    thdj,
+                    w1,
+                    S[_F_W2, j],
+                    S[_F_W3, j],
+                    control.sign,
+                    length,
+                    g,
+                    S[_F_ROOT, j],
+                    inv_root,
+                    control.chapter_eligibility,
                 )
-                d1_chapter = -length * (g * tw - inv_root * thdj)
-                d1_score = control.sign * length * (g * tw + inv_root * thdj)
-                d1 = d1_chapter if control.chapter_eligibility else d1_score
                 _, cth = sincos_poly(tw)
-                e_t = 0.5 * m * length * length * thdj * thdj + m * g * length * (cth - 1.0)
-                mu_s = S[_F_W4, j] * e_t * thdj * cth - 0.25 * w5 * w5 * xj - w5 * xdj
+                mu_s, e_t = swingup_law(xj, xdj, thdj, cth, S[_F_W4, j], w5, m, length, g)
                 mu = (wb * mu_b if on_b else 0.0) + (ws * mu_s if on_s else 0.0)
                 sg = S[_F_SIGMA, j]
                 eps = sg * S[_F_EPS, j]

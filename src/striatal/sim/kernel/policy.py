@@ -20,11 +20,13 @@ __all__ = [
     "ControlArgs",
     "Gains",
     "PolicyTerms",
+    "balancing_law",
     "balancing_roots",
     "policy_mean",
     "policy_of",
     "policy_terms",
     "sigma_of",
+    "swingup_law",
     "switch_weights",
 ]
 
@@ -210,22 +212,74 @@ def policy_terms(
         inv_root = pol.inv_root
         if w1 == 0.0:
             inv_root = math.sqrt(g / w1)  # raises ZeroDivisionError: W1 = 0 has no law
-        mu += wb * (
-            sign * ((1.0 + w1 * length) * g * th + 2.0 * length * pol.root * theta_dot)
-            - pol.w2 * x
-            - pol.w3 * x_dot
+        mu_1, d1 = balancing_law(
+            x,
+            x_dot,
+            th,
+            theta_dot,
+            w1,
+            pol.w2,
+            pol.w3,
+            sign,
+            length,
+            g,
+            pol.root,
+            inv_root,
+            pol.chapter_eligibility,
         )
-        if pol.chapter_eligibility:
-            d1 = -length * (g * th - inv_root * theta_dot)
-        else:
-            d1 = sign * length * (g * th + inv_root * theta_dot)
+        mu += wb * mu_1
         g1 = wb * d1
         g2 = -wb * x
         g3 = -wb * x_dot
     if ws > 0.0:
         c = cos_th if have_cos else math.cos(th)
-        e_tilde = 0.5 * m * length * length * theta_dot * theta_dot + m * g * length * (c - 1.0)
-        mu += ws * (pol.w4 * e_tilde * theta_dot * c - 0.25 * w5 * w5 * x - w5 * x_dot)
+        mu_2, e_tilde = swingup_law(x, x_dot, theta_dot, c, pol.w4, w5, m, length, g)
+        mu += ws * mu_2
         g4 = ws * e_tilde * theta_dot * c
         g5 = -ws * (0.5 * w5 * x + x_dot)
     return mu, g1, g2, g3, g4, g5
+
+
+@njit(cache=True, inline="always")
+def balancing_law(
+    x: float,
+    x_dot: float,
+    th: float,
+    theta_dot: float,
+    w1: float,
+    w2: float,
+    w3: float,
+    sign: float,
+    length: float,
+    g: float,
+    root: float,
+    inv_root: float,
+    chapter_eligibility: bool,
+) -> tuple[float, float]:
+    """(mu_1, d mu_1 / d W1) of eq 22 at the wrapped ``th`` [rad]:
+    mu_1 = sign ((1 + W1 l) g th + 2 l sqrt(W1 g) theta_dot) - W2 x - W3 x_dot, with
+    ``root`` = sqrt(W1 g) and ``inv_root`` = sqrt(g / W1); with ``chapter_eligibility``
+    the chapter's printed -l (g th - sqrt(g / W1) theta_dot) instead of the derivative."""
+    mu_1 = sign * ((1.0 + w1 * length) * g * th + 2.0 * length * root * theta_dot) - w2 * x
+    mu_1 -= w3 * x_dot
+    if chapter_eligibility:
+        return mu_1, -length * (g * th - inv_root * theta_dot)
+    return mu_1, sign * length * (g * th + inv_root * theta_dot)
+
+
+@njit(cache=True, inline="always")
+def swingup_law(
+    x: float,
+    x_dot: float,
+    theta_dot: float,
+    c: float,
+    w4: float,
+    w5: float,
+    m: float,
+    length: float,
+    g: float,
+) -> tuple[float, float]:
+    """(mu_2, E~) of eq 23 with c = cos theta: mu_2 = W4 E~ theta_dot c - W5^2/4 x - W5 x_dot,
+    E~ = m l^2 theta_dot^2 / 2 + m g l (c - 1) of eqs 15-16 (the model's m, l, g)."""
+    e_tilde = 0.5 * m * length * length * theta_dot * theta_dot + m * g * length * (c - 1.0)
+    return w4 * e_tilde * theta_dot * c - 0.25 * w5 * w5 * x - w5 * x_dot, e_tilde
