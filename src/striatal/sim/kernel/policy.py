@@ -195,12 +195,8 @@ def policy_terms(
 
     ``cos_th`` = cos th when ``have_cos`` (else computed here); ``pol``: :func:`policy_of`.
     """
-    w1 = pol.w1
-    w5 = pol.w5
-    length = pol.length
-    g = pol.g
-    m = pol.m
-    sign = pol.sign
+    w1, w5, sign = pol.w1, pol.w5, pol.sign
+    m, length, g = pol.m, pol.length, pol.g
     wb, ws = switch_weights(abs(th), pol.theta_c, pol.soft, pol.inhibition)
     mu = 0.0
     g1 = 0.0
