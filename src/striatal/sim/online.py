@@ -19,10 +19,11 @@ step, in the manner of Doya (2000, continuous-time actor-critic) and Frémaux et
   at every step (W1 floored), delta optionally divided by its running rms;
 - the critic's trace z <- gamma_v lambda z + phi(s_k) and v <- v + beta delta_k z.
 
-The plant, the controllers and the eligibilities are the kernel's njit functions
-(:func:`striatal.sim.kernel.plant_step`, ``policy_terms``, ``trace_step``, ``judge``,
-``write_summary``): no physics is written here. With alpha = beta = 0 the trial is
-:func:`striatal.sim.kernel.run_trial`'s bit for bit (tests/test_online.py).
+The plant, the controllers, the eligibilities and the trial's bookkeeping are the
+kernel's njit functions (:func:`striatal.sim.kernel.plant_step`, ``next_action``,
+``judge``, ``Tally``, ``write_summary``): no physics is written here. With
+alpha = beta = 0 the trial is :func:`striatal.sim.kernel.run_trial`'s bit for bit
+(tests/test_online.py).
 """
 
 from __future__ import annotations
