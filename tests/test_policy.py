@@ -113,3 +113,26 @@ def test_same_noise_same_trial(plant: Plant) -> None:
         results.append((o, trace.copy()))
     assert results[0][0] == results[1][0]
     np.testing.assert_array_equal(results[0][1], results[1][1])
+
+
+def test_kernel_policy_with_w1_zero_raises_only_where_the_balancing_law_acts() -> None:
+    """W1 = 0 has no balancing law (eq 22): the kernel raises there, not in swing-up."""
+    model = np.array([1.0, 0.1, 0.5, 9.81])
+    W = np.array(CHAPTER_INITIAL_W, dtype=float)
+    W[0] = 0.0
+    grad = np.empty(5)
+    mu = kernel.policy_mean(0.1, 0.0, 2.0, 0.3, W, 0.6, 1.0, False, 50.0, model, False, grad)
+    assert np.isfinite(mu) and grad[0] == 0.0 and grad[3] != 0.0
+    with pytest.raises(ZeroDivisionError):
+        kernel.policy_mean(0.1, 0.0, 0.1, 0.3, W, 0.6, 1.0, False, 50.0, model, False, grad)
+
+
+def test_kernel_policy_mean_needs_no_sigma_gain() -> None:
+    """policy_mean reads W1..W5 only: five gains give the mean of six."""
+    model = np.array([1.0, 0.1, 0.5, 9.81])
+    W = np.array(CHAPTER_FINAL_W, dtype=float)
+    g6, g5 = np.empty(5), np.empty(5)
+    for theta in (0.1, 2.0):
+        mu6 = kernel.policy_mean(0.1, 0.2, theta, 0.3, W, 0.6, 1.0, True, 20.0, model, True, g6)
+        mu5 = kernel.policy_mean(0.1, 0.2, theta, 0.3, W[:5], 0.6, 1.0, True, 20.0, model, True, g5)
+        assert mu5 == mu6 and np.array_equal(g5, g6)

@@ -19,10 +19,11 @@ step, in the manner of Doya (2000, continuous-time actor-critic) and Frémaux et
   at every step (W1 floored), delta optionally divided by its running rms;
 - the critic's trace z <- gamma_v lambda z + phi(s_k) and v <- v + beta delta_k z.
 
-The plant, the controllers and the eligibilities are the kernel's njit functions
-(:func:`striatal.sim.kernel.plant_step`, ``policy_terms``, ``trace_step``, ``judge``,
-``write_summary``): no physics is written here. With alpha = beta = 0 the trial is
-:func:`striatal.sim.kernel.run_trial`'s bit for bit (tests/test_online.py).
+The plant, the controllers, the eligibilities and the trial's bookkeeping are the
+kernel's njit functions (:func:`striatal.sim.kernel.plant_step`, ``next_action``,
+``judge``, ``Tally``, ``write_summary``): no physics is written here. With
+alpha = beta = 0 the trial is :func:`striatal.sim.kernel.run_trial`'s bit for bit
+(tests/test_online.py).
 """
 
 from __future__ import annotations
@@ -36,8 +37,6 @@ from numba import njit
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
 from striatal.sim.kernel import (
-    MODE_BALANCE,
-    MODE_SWINGUP,
     STATUS_FAULT,
     STATUS_RUNNING,
     STATUS_TRACK,
@@ -47,14 +46,19 @@ from striatal.sim.kernel import (
     PlantArgs,
     ProtocolArgs,
     TraceArgs,
-    balancing_roots,
     judge,
+    judge_start,
+    load_trace,
     motor_force,
+    next_action,
     plant_step,
     plant_terms,
-    policy_terms,
-    sigma_of,
-    trace_step,
+    policy_of,
+    store_trace,
+    tally_force,
+    tally_mode,
+    tally_start,
+    tally_x,
     wrap_angle,
     write_summary,
 )
@@ -217,117 +221,47 @@ def run_online_trial(
     model = plant.model
     pt = plant_terms(plant)
     dt = plant.dt
-    action_every = control.action_every
-    trace = learning.trace
-    gamma = learning.gamma
-    n_steps = protocol.n_steps
-    x = state0[0]
-    x_dot = state0[1]
-    theta = state0[2]
-    theta_dot = state0[3]
-    stochastic = noise.action.shape[0] > 0
-    sign = control.sign
-    soft = control.soft
-    inhibition = control.inhibition
-    chapter_eligibility = control.chapter_eligibility
-    alpha = critic.alpha
-    beta = critic.beta
+    x, x_dot, theta, theta_dot = state0[0], state0[1], state0[2], state0[3]
     discount = critic.discount
-    lam = critic.critic_decay
-    max_step = critic.max_step
     v = critic.weights
     z = critic.trace
     stats = critic.stats
     square = critic.square
     sq_rate = critic.square_rate
-    normalise = critic.normalise
-    sigma = sigma_of(W[5])
-    root, inv_root = balancing_roots(W[0], model[3])
-    d = np.empty(6)
-    for i in range(6):
-        d[i] = trace[i]
+    m, length, g = pt.model_m, pt.model_length, pt.model_g
+    pol = policy_of(W, theta_c, control, m, length, g)
+    d = load_trace(learning.trace)
     phi = np.empty(N_FEATURES)
     phi_next = np.empty(N_FEATURES)
     v_fail = failure_value(dt, discount)
-    min_swing = math.inf
-    min_all = math.inf
-    n_switches = 0
-    prev_mode = -1
-    max_abs_x = abs(x)
-    max_abs_f = 0.0
+    tally = tally_start(x)
     a = 0.0
     draw = 0
     hold = 0
-    status = STATUS_RUNNING
-    reward = 0.0
-    end_step = n_steps
     sum_delta = 0.0
     sum_delta2 = 0.0
     n_td = 0
     ret = 0.0
     features(x, x_dot, wrap_angle(theta), theta_dot, model, critic.check_x, phi)
     stats[STAT_VALUE0] = _dot(v, phi)
-    if protocol.check_step == 0:
-        status, reward = judge(x, x_dot, theta, theta_dot, 0, protocol)
-        if status != STATUS_RUNNING:
-            end_step = 0
+    status, reward, end_step = judge_start(x, x_dot, theta, theta_dot, protocol)
     if status == STATUS_RUNNING:
-        for k in range(n_steps):
+        for k in range(protocol.n_steps):
             s = math.sin(theta)
             c = math.cos(theta)
             th = wrap_angle(theta)
-            abs_th = abs(th)
-            mode = MODE_BALANCE if abs_th < theta_c else MODE_SWINGUP
-            if mode == MODE_SWINGUP and abs_th < min_swing:
-                min_swing = abs_th
-            if abs_th < min_all:
-                min_all = abs_th
-            if prev_mode >= 0 and mode != prev_mode:
-                n_switches += 1
-            prev_mode = mode
+            _, tally = tally_mode(abs(th), theta_c, tally)
             # the critic's view of s_k (with the weights as they are now)
             features(x, x_dot, th, theta_dot, model, critic.check_x, phi)
             value = _dot(v, phi)
             for i in range(N_FEATURES):
-                z[i] = discount * lam * z[i] + phi[i]
-            if hold == 0:
-                hold = action_every
-                mu, g1, g2, g3, g4, g5 = policy_terms(
-                    x,
-                    x_dot,
-                    th,
-                    theta_dot,
-                    W[0],
-                    W[1],
-                    W[2],
-                    W[3],
-                    W[4],
-                    theta_c,
-                    sign,
-                    soft,
-                    inhibition,
-                    model[1],
-                    model[2],
-                    model[3],
-                    chapter_eligibility,
-                    root,
-                    inv_root,
-                    c,
-                    th == theta,
-                )
-                if stochastic:
-                    eps = sigma * noise.action[draw]
-                    a = mu + eps
-                    d[0], d[1], d[2], d[3], d[4], d[5] = trace_step(
-                        eps, sigma, gamma, g1, g2, g3, g4, g5, d[0], d[1], d[2], d[3], d[4], d[5]
-                    )
-                else:
-                    a = mu
-                draw += 1
-            hold -= 1
+                z[i] = discount * critic.critic_decay * z[i] + phi[i]
+            seen = (x, x_dot, th, theta_dot)
+            a, d, hold, draw = next_action(
+                hold, draw, a, d, seen, c, th == theta, pol, control, noise.action, learning.gamma
+            )
             f = motor_force(s, c, theta, theta_dot, a, False, pt)
-            if abs(f) > max_abs_f:
-                max_abs_f = abs(f)
+            tally = tally_force(f, tally)
             x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
             status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
             # the TD error: the ends of the protocol in time (eq 24's check at 30 s, T_f)
@@ -345,57 +279,38 @@ def run_online_trial(
                 sum_delta2 += delta * delta
                 n_td += 1
                 for i in range(N_FEATURES):
-                    v[i] += beta * delta * z[i]
+                    v[i] += critic.beta * delta * z[i]
                 # the actor's factor: delta, or delta over its running rms
                 sq = square[0]
                 sq = delta * delta if sq <= 0.0 else (1.0 - sq_rate) * sq + sq_rate * delta * delta
                 square[0] = sq
                 factor = delta
-                if normalise:
+                if critic.normalise:
                     factor = delta / math.sqrt(sq) if sq > 0.0 else 0.0
-                if alpha != 0.0:
+                if critic.alpha != 0.0:
                     changed = False
                     for i in range(6):
-                        step = alpha * factor * d[i]
-                        step = min(max(step, -max_step), max_step)
+                        step = critic.alpha * factor * d[i]
+                        step = min(max(step, -critic.max_step), critic.max_step)
                         if math.isfinite(step) and step != 0.0:
                             W[i] += step
                             changed = True
                     if changed:
-                        if W[0] < critic.w1_floor:
-                            W[0] = critic.w1_floor
-                        sigma = sigma_of(W[5])
-                        root, inv_root = balancing_roots(W[0], model[3])
-            if status == STATUS_FAULT:
-                end_step = k + 1
-                break
-            if abs(x) > max_abs_x:
-                max_abs_x = abs(x)
+                        W[0] = max(W[0], critic.w1_floor)
+                        pol = policy_of(
+                            W, theta_c, control, pt.model_m, pt.model_length, pt.model_g
+                        )
+            tally = tally_x(x, status, tally)
             if status != STATUS_RUNNING:
                 end_step = k + 1
                 break
-    if stochastic:
-        for i in range(6):
-            trace[i] = d[i]
     stats[STAT_SUM_DELTA] = sum_delta
     stats[STAT_SUM_DELTA2] = sum_delta2
     stats[STAT_N] = n_td
     stats[STAT_RETURN] = ret
-    write_summary(
-        out,
-        status,
-        reward,
-        end_step,
-        x,
-        x_dot,
-        theta,
-        theta_dot,
-        min_swing,
-        min_all,
-        n_switches,
-        max_abs_x,
-        max_abs_f,
-    )
+    if noise.action.shape[0] > 0:
+        store_trace(learning.trace, d)
+    write_summary(out, status, reward, end_step, x, x_dot, theta, theta_dot, tally)
 
 
 class OnlineTrial(NamedTuple):

@@ -22,144 +22,18 @@ their names.
 
 from __future__ import annotations
 
-from striatal.sim.kernel.libm import (
-    TWO_PI,
-    exp_libm,
-    log10_libm,
-    sincos_poly,
-    wrap_angle,
-    wrap_angles,
-)
-from striatal.sim.kernel.lockstep import LOCKSTEP_BLOCK, run_trials_lockstep
-from striatal.sim.kernel.plant import (
-    PlantArgs,
-    PlantTerms,
-    accelerations,
-    accelerations_terms,
-    clip_force,
-    energy_error,
-    force,
-    force_accelerations,
-    force_terms,
-    motor_force,
-    plant_step,
-    plant_terms,
-    rk4_force_step,
-    rk4_step,
-    step_batch,
-)
-from striatal.sim.kernel.policy import (
-    MODE_BALANCE,
-    MODE_SWINGUP,
-    ControlArgs,
-    Gains,
-    balancing_roots,
-    policy_mean,
-    policy_terms,
-    sigma_of,
-    switch_weights,
-)
-from striatal.sim.kernel.traces import TraceArgs, trace_step
-from striatal.sim.kernel.trials import (
-    BLOW_UP,
-    N_OUT,
-    N_TRAJ,
-    OUT_EARLY,
-    OUT_END_STEP,
-    OUT_FAULT,
-    OUT_MAX_ABS_FORCE,
-    OUT_MAX_ABS_X,
-    OUT_MIN_ABS_THETA,
-    OUT_MIN_ABS_THETA_SWINGUP,
-    OUT_N_SWITCHES,
-    OUT_REWARD,
-    OUT_THETA,
-    OUT_THETA_DOT,
-    OUT_TRACK,
-    OUT_X,
-    OUT_X_DOT,
-    STATUS_EARLY,
-    STATUS_FAILURE,
-    STATUS_FAULT,
-    STATUS_RUNNING,
-    STATUS_SUCCESS,
-    STATUS_TRACK,
-    TRAJ_COLUMNS,
-    Buffers,
-    NoiseArgs,
-    ProtocolArgs,
-    judge,
-    judge_batch,
-    run_trial,
-    run_trials_batch,
-    write_summary,
-)
+from striatal.sim.kernel import libm, lockstep, plant, policy, traces, trials
+from striatal.sim.kernel.libm import *  # noqa: F403
+from striatal.sim.kernel.lockstep import *  # noqa: F403
+from striatal.sim.kernel.plant import *  # noqa: F403
+from striatal.sim.kernel.policy import *  # noqa: F403
+from striatal.sim.kernel.traces import *  # noqa: F403
+from striatal.sim.kernel.trials import *  # noqa: F403
 
-__all__ = [
-    "BLOW_UP",
-    "LOCKSTEP_BLOCK",
-    "MODE_BALANCE",
-    "MODE_SWINGUP",
-    "N_OUT",
-    "N_TRAJ",
-    "OUT_EARLY",
-    "OUT_END_STEP",
-    "OUT_FAULT",
-    "OUT_MAX_ABS_FORCE",
-    "OUT_MAX_ABS_X",
-    "OUT_MIN_ABS_THETA",
-    "OUT_MIN_ABS_THETA_SWINGUP",
-    "OUT_N_SWITCHES",
-    "OUT_REWARD",
-    "OUT_THETA",
-    "OUT_THETA_DOT",
-    "OUT_TRACK",
-    "OUT_X",
-    "OUT_X_DOT",
-    "STATUS_EARLY",
-    "STATUS_FAILURE",
-    "STATUS_FAULT",
-    "STATUS_RUNNING",
-    "STATUS_SUCCESS",
-    "STATUS_TRACK",
-    "TRAJ_COLUMNS",
-    "TWO_PI",
-    "Buffers",
-    "ControlArgs",
-    "Gains",
-    "NoiseArgs",
-    "PlantArgs",
-    "PlantTerms",
-    "ProtocolArgs",
-    "TraceArgs",
-    "accelerations",
-    "accelerations_terms",
-    "balancing_roots",
-    "clip_force",
-    "energy_error",
-    "exp_libm",
-    "force",
-    "force_accelerations",
-    "force_terms",
-    "judge",
-    "judge_batch",
-    "log10_libm",
-    "motor_force",
-    "plant_step",
-    "plant_terms",
-    "policy_mean",
-    "policy_terms",
-    "rk4_force_step",
-    "rk4_step",
-    "run_trial",
-    "run_trials_batch",
-    "run_trials_lockstep",
-    "sigma_of",
-    "sincos_poly",
-    "step_batch",
-    "switch_weights",
-    "trace_step",
-    "wrap_angle",
-    "wrap_angles",
-    "write_summary",
-]
+__all__ = []
+__all__ += libm.__all__
+__all__ += lockstep.__all__
+__all__ += plant.__all__
+__all__ += policy.__all__
+__all__ += traces.__all__
+__all__ += trials.__all__

@@ -11,31 +11,32 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from striatal.sim.kernel.libm import TWO_PI, sincos_poly, wrap_angle
-from striatal.sim.kernel.plant import PlantArgs, accelerations_terms, force_terms
-from striatal.sim.kernel.policy import ControlArgs, Gains, balancing_roots, sigma_of
+from striatal.sim.kernel.libm import TWO_PI, sincos_poly
+from striatal.sim.kernel.plant import (
+    PlantArgs,
+    PlantTerms,
+    accelerations_terms,
+    force_terms,
+    plant_terms,
+    rk4,
+)
+from striatal.sim.kernel.policy import (
+    ControlArgs,
+    Gains,
+    balancing_law,
+    balancing_roots,
+    sigma_of,
+    swingup_law,
+)
 from striatal.sim.kernel.traces import TraceArgs
 from striatal.sim.kernel.trials import (
     BLOW_UP,
-    OUT_EARLY,
-    OUT_END_STEP,
-    OUT_FAULT,
-    OUT_MAX_ABS_FORCE,
-    OUT_MAX_ABS_X,
-    OUT_MIN_ABS_THETA,
-    OUT_MIN_ABS_THETA_SWINGUP,
-    OUT_N_SWITCHES,
-    OUT_REWARD,
-    OUT_THETA,
-    OUT_THETA_DOT,
-    OUT_TRACK,
-    OUT_X,
-    OUT_X_DOT,
-    STATUS_EARLY,
     STATUS_FAULT,
     STATUS_RUNNING,
     ProtocolArgs,
+    Tally,
     judge,
+    write_summary,
 )
 
 __all__ = [
@@ -45,6 +46,13 @@ __all__ = [
 
 #: Trials per lockstep block (one block per thread at a time).
 LOCKSTEP_BLOCK = 64
+
+
+@njit(cache=True, inline="always")
+def _poly_stage(theta: float, theta_dot: float, u: float, pt: PlantTerms) -> tuple[float, float]:
+    """An RK4 stage of eqs 13-14 (u held) with the polynomial sin/cos (no libm call)."""
+    s, c = sincos_poly(theta)
+    return accelerations_terms(s, c, theta_dot, u, pt)
 
 
 @njit(cache=True)
@@ -66,13 +74,7 @@ _N_FIELDS = 29
 def _lockstep_block(
     lo: int,
     hi: int,
-    states0: np.ndarray,
-    gains: Gains,
-    plant: PlantArgs,
-    control: ControlArgs,
-    protocol: ProtocolArgs,
-    noise: np.ndarray,
-    learning: TraceArgs,
+    args: tuple[np.ndarray, Gains, PlantArgs, ControlArgs, ProtocolArgs, np.ndarray, TraceArgs],
     outs: np.ndarray,
 ) -> None:
     """Trials lo..hi-1 of :func:`run_trials_lockstep`, advanced step by step together.
@@ -82,6 +84,7 @@ def _lockstep_block(
     trials rounded up to a multiple of 4, the extra lanes idle copies of the first
     trial, inactive from the start.
     """
+    states0, gains, plant, control, protocol, noise, learning = args
     n = hi - lo
     # lanes actually stepped: the trials rounded up to a multiple of 4 (one AVX2
     # vector); the array keeps LOCKSTEP_BLOCK lanes so its row stride is a constant
@@ -90,22 +93,11 @@ def _lockstep_block(
     status = np.full(LOCKSTEP_BLOCK, STATUS_RUNNING)
     end_step = np.full(LOCKSTEP_BLOCK, protocol.n_steps)
     reward = np.zeros(LOCKSTEP_BLOCK)
-    p = plant.plant
-    model = plant.model
-    mismatch = plant.mismatch
-    dt = plant.dt
-    h = 0.5 * dt
-    w6 = dt / 6.0
-    length = model[2]
-    g = model[3]
-    m = model[1]
     # parameters as plain floats: the loops over lanes read no parameter array
-    p_cart, p_pole, p_len, p_g = p[0], p[1], p[2], p[3]
-    q_cart, q_pole, q_len, q_g = model[0], model[1], model[2], model[3]
-    sign = control.sign
-    soft = control.soft
-    inhibition = control.inhibition
-    chapter = control.chapter_eligibility
+    pt = plant_terms(plant)
+    length = pt.model_length
+    g = pt.model_g
+    m = pt.model_m
     gamma = learning.gamma
     stochastic = noise.shape[1] > 0
     n_steps = protocol.n_steps
@@ -177,10 +169,10 @@ def _lockstep_block(
                 tc = S[_F_TC, j]
                 abs_th = abs(tw)
                 bal = abs_th < tc
-                wb_soft = _clip01(inhibition * (tc - abs_th))
-                ws_soft = _clip01(inhibition * (abs_th - tc))
-                wb = wb_soft if soft else (1.0 if bal else 0.0)
-                ws = ws_soft if soft else (0.0 if bal else 1.0)
+                wb_soft = _clip01(control.inhibition * (tc - abs_th))
+                ws_soft = _clip01(control.inhibition * (abs_th - tc))
+                wb = wb_soft if control.soft else (1.0 if bal else 0.0)
+                ws = ws_soft if control.soft else (0.0 if bal else 1.0)
                 on_b = wb > 0.0
                 on_s = ws > 0.0
                 xj = S[_F_X, j]
@@ -189,17 +181,23 @@ def _lockstep_block(
                 w1 = S[_F_W1, j]
                 w5 = S[_F_W5, j]
                 inv_root = S[_F_INVROOT, j]
-                mu_b = (
-                    sign * ((1.0 + w1 * length) * g * tw + 2.0 * length * S[_F_ROOT, j] * thdj)
-                    - S[_F_W2, j] * xj
-                    - S[_F_W3, j] * xdj
+                mu_b, d1 = balancing_law(
+                    xj,
+                    xdj,
+                    tw,
+                    thdj,
+                    w1,
+                    S[_F_W2, j],
+                    S[_F_W3, j],
+                    control.sign,
+                    length,
+                    g,
+                    S[_F_ROOT, j],
+                    inv_root,
+                    control.chapter_eligibility,
                 )
-                d1_chapter = -length * (g * tw - inv_root * thdj)
-                d1_score = sign * length * (g * tw + inv_root * thdj)
-                d1 = d1_chapter if chapter else d1_score
                 _, cth = sincos_poly(tw)
-                e_t = 0.5 * m * length * length * thdj * thdj + m * g * length * (cth - 1.0)
-                mu_s = S[_F_W4, j] * e_t * thdj * cth - 0.25 * w5 * w5 * xj - w5 * xdj
+                mu_s, e_t = swingup_law(xj, xdj, thdj, cth, S[_F_W4, j], w5, m, length, g)
                 mu = (wb * mu_b if on_b else 0.0) + (ws * mu_s if on_s else 0.0)
                 sg = S[_F_SIGMA, j]
                 eps = sg * S[_F_EPS, j]
@@ -232,84 +230,13 @@ def _lockstep_block(
             xd0 = S[_F_XD, j]
             thd0 = S[_F_THD, j]
             s1, c1 = sincos_poly(t)
-            f = abs(force_terms(s1, c1, thd0, u, q_cart, q_pole, q_len, q_g))
-            a1, b1 = accelerations_terms(
-                xd0,
-                s1,
-                c1,
-                thd0,
-                u,
-                p_cart,
-                p_pole,
-                p_len,
-                p_g,
-                q_cart,
-                q_pole,
-                q_len,
-                q_g,
-                mismatch,
+            f = abs(
+                force_terms(
+                    s1, c1, thd0, u, pt.model_cart_mass, pt.model_m, pt.model_length, pt.model_g
+                )
             )
-            xd2 = xd0 + h * a1
-            thd2 = thd0 + h * b1
-            s2, c2 = sincos_poly(t + h * thd0)
-            a2, b2 = accelerations_terms(
-                xd2,
-                s2,
-                c2,
-                thd2,
-                u,
-                p_cart,
-                p_pole,
-                p_len,
-                p_g,
-                q_cart,
-                q_pole,
-                q_len,
-                q_g,
-                mismatch,
-            )
-            xd3 = xd0 + h * a2
-            thd3 = thd0 + h * b2
-            s3, c3 = sincos_poly(t + h * thd2)
-            a3, b3 = accelerations_terms(
-                xd3,
-                s3,
-                c3,
-                thd3,
-                u,
-                p_cart,
-                p_pole,
-                p_len,
-                p_g,
-                q_cart,
-                q_pole,
-                q_len,
-                q_g,
-                mismatch,
-            )
-            xd4 = xd0 + dt * a3
-            thd4 = thd0 + dt * b3
-            s4, c4 = sincos_poly(t + dt * thd3)
-            a4, b4 = accelerations_terms(
-                xd4,
-                s4,
-                c4,
-                thd4,
-                u,
-                p_cart,
-                p_pole,
-                p_len,
-                p_g,
-                q_cart,
-                q_pole,
-                q_len,
-                q_g,
-                mismatch,
-            )
-            nx = x0 + w6 * (xd0 + 2.0 * xd2 + 2.0 * xd3 + xd4)
-            nxd = xd0 + w6 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-            nth = t + w6 * (thd0 + 2.0 * thd2 + 2.0 * thd3 + thd4)
-            nthd = thd0 + w6 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+            a1, b1 = accelerations_terms(s1, c1, thd0, u, pt)
+            nx, nxd, nth, nthd = rk4(_poly_stage, x0, xd0, t, thd0, a1, b1, u, pt)
             run = S[_F_ACTIVE, j] > 0.0
             mf = S[_F_MAXF, j]
             S[_F_MAXF, j] = f if (run and f > mf) else mf
@@ -342,21 +269,11 @@ def _lockstep_block(
                 S[_F_MAXX, j] = ax if (S[_F_ACTIVE, j] > 0.0 and ax > mx) else mx
     for j in range(n):
         b = lo + j
-        out = outs[b]
-        out[OUT_REWARD] = reward[j]
-        out[OUT_END_STEP] = end_step[j]
-        out[OUT_X] = S[_F_X, j]
-        out[OUT_X_DOT] = S[_F_XD, j]
-        out[OUT_THETA] = wrap_angle(S[_F_TH, j])
-        out[OUT_THETA_DOT] = S[_F_THD, j]
-        out[OUT_MIN_ABS_THETA_SWINGUP] = S[_F_MINSW, j]
-        out[OUT_MIN_ABS_THETA] = S[_F_MINALL, j]
-        out[OUT_FAULT] = 1.0 if status[j] == STATUS_FAULT else 0.0
-        out[OUT_EARLY] = 1.0 if status[j] == STATUS_EARLY else 0.0
-        out[OUT_N_SWITCHES] = S[_F_NSW, j]
-        out[OUT_MAX_ABS_X] = S[_F_MAXX, j]
-        out[OUT_MAX_ABS_FORCE] = S[_F_MAXF, j]
-        out[OUT_TRACK] = 0.0
+        tally = Tally(
+            S[_F_MINSW, j], S[_F_MINALL, j], int(S[_F_NSW, j]), -1, S[_F_MAXX, j], S[_F_MAXF, j]
+        )
+        x, x_dot, theta, theta_dot = S[_F_X, j], S[_F_XD, j], S[_F_TH, j], S[_F_THD, j]
+        write_summary(outs[b], status[j], reward[j], end_step[j], x, x_dot, theta, theta_dot, tally)
         if stochastic:
             for i in range(6):
                 learning.trace[b, i] = S[_F_D0 + i, j]
@@ -395,4 +312,5 @@ def run_trials_lockstep(
     for i in prange(n_blocks):
         lo = i * LOCKSTEP_BLOCK
         hi = min(lo + LOCKSTEP_BLOCK, B)
-        _lockstep_block(lo, hi, states0, gains, plant, control, protocol, noise, learning, outs)
+        args = (states0, gains, plant, control, protocol, noise, learning)
+        _lockstep_block(lo, hi, args, outs)

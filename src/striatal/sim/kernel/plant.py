@@ -8,7 +8,7 @@ Plant arrays are ``[M, m, l, g]``; states ``[x, x_dot, theta, theta_dot]`` in
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -26,6 +26,7 @@ __all__ = [
     "motor_force",
     "plant_step",
     "plant_terms",
+    "rk4",
     "rk4_force_step",
     "rk4_step",
     "step_batch",
@@ -64,54 +65,77 @@ def accelerations(
     Without ``mismatch`` the partial feedback linearization is exact: x_ddot = u and
     theta_ddot = (g sin theta - u cos theta) / l. With ``mismatch`` the motor pushes
     the force of eq 12 computed with the controller's ``model`` parameters, and the
-    true ``plant`` answers through eqs 8-9.
+    true ``plant`` answers through eqs 8-9. ``x_dot`` enters neither.
     """
-    return accelerations_terms(
-        x_dot,
-        math.sin(theta),
-        math.cos(theta),
-        theta_dot,
-        u,
-        plant[0],
-        plant[1],
-        plant[2],
-        plant[3],
-        model[0],
-        model[1],
-        model[2],
-        model[3],
-        mismatch,
-    )
+    pt = _array_terms(plant, model, mismatch, 0.0)
+    return accelerations_terms(math.sin(theta), math.cos(theta), theta_dot, u, pt)
 
 
 @njit(cache=True, error_model="numpy")
 def accelerations_terms(
-    x_dot: float,
-    s: float,
-    c: float,
-    theta_dot: float,
-    u: float,
-    cart_mass: float,
-    m: float,
-    length: float,
-    g: float,
-    model_cart_mass: float,
-    mh: float,
-    model_length: float,
-    model_g: float,
-    mismatch: bool,
+    s: float, c: float, theta_dot: float, u: float, pt: PlantTerms
 ) -> tuple[float, float]:
-    """Eqs 13-14 (or eqs 12 and 8-9 with ``mismatch``) on plain floats: plant [M, m, l, g]
-    and model, so that loops over trials hold no array of parameters."""
-    if mismatch:
-        f = (model_cart_mass + mh - mh * c * c) * u + mh * model_g * c * s
-        f -= mh * model_length * theta_dot * theta_dot * s
-        x_ddot = (f + m * length * theta_dot * theta_dot * s - m * g * s * c) / (
-            cart_mass + m - m * c * c
+    """:func:`accelerations` given s = sin theta and c = cos theta, on :class:`PlantTerms`:
+    eqs 13-14, or with ``pt.mismatch`` the model's force of eq 12 into the plant's eqs 8-9."""
+    if pt.mismatch:
+        f = force_terms(
+            s, c, theta_dot, u, pt.model_cart_mass, pt.model_m, pt.model_length, pt.model_g
         )
-    else:
-        x_ddot = u
-    return x_ddot, (g * s - x_ddot * c) / length
+        return force_accelerations(s, c, theta_dot, f, pt.cart_mass, pt.m, pt.length, pt.g)
+    return u, (pt.g * s - u * c) / pt.length
+
+
+@njit(cache=True, inline="always")
+def rk4(
+    stage: Any,
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    a1: float,
+    b1: float,
+    u: float,
+    pt: PlantTerms,
+) -> tuple[float, float, float, float]:
+    """One classical Runge-Kutta step of length pt.dt with the input u held.
+
+    (a1, b1): the accelerations at the step's start; ``stage(theta, theta_dot, u, pt)``
+    gives (x_ddot, theta_ddot) at the later stages (the accelerations depend on neither
+    x nor x_dot). The one RK4 of the kernel: u held, force held, limited motor, and the
+    lockstep's polynomial sin/cos differ only in ``stage``.
+    """
+    dt = pt.dt
+    h = 0.5 * dt
+    xd2 = x_dot + h * a1
+    thd2 = theta_dot + h * b1
+    a2, b2 = stage(theta + h * theta_dot, thd2, u, pt)
+    xd3 = x_dot + h * a2
+    thd3 = theta_dot + h * b2
+    a3, b3 = stage(theta + h * thd2, thd3, u, pt)
+    xd4 = x_dot + dt * a3
+    thd4 = theta_dot + dt * b3
+    a4, b4 = stage(theta + dt * thd3, thd4, u, pt)
+    w = dt / 6.0
+    return (
+        x + w * (x_dot + 2.0 * xd2 + 2.0 * xd3 + xd4),
+        x_dot + w * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
+        theta + w * (theta_dot + 2.0 * thd2 + 2.0 * thd3 + thd4),
+        theta_dot + w * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
+    )
+
+
+@njit(cache=True)
+def _u_stage(theta: float, theta_dot: float, u: float, pt: PlantTerms) -> tuple[float, float]:
+    """The accelerations of eqs 13-14 (or 12 and 8-9) with u held: an RK4 stage."""
+    return accelerations_terms(math.sin(theta), math.cos(theta), theta_dot, u, pt)
+
+
+@njit(cache=True)
+def _force_stage(theta: float, theta_dot: float, f: float, pt: PlantTerms) -> tuple[float, float]:
+    """The plant's accelerations of eqs 8-9 with the force f [N] held: an RK4 stage."""
+    return force_accelerations(
+        math.sin(theta), math.cos(theta), theta_dot, f, pt.cart_mass, pt.m, pt.length, pt.g
+    )
 
 
 @njit(cache=True)
@@ -127,142 +151,17 @@ def rk4_step(
     mismatch: bool,
 ) -> tuple[float, float, float, float]:
     """One classical Runge-Kutta step of length dt with u held constant."""
-    return _rk4_terms(
-        x,
-        x_dot,
-        theta,
-        theta_dot,
-        math.sin(theta),
-        math.cos(theta),
-        u,
-        dt,
-        plant[0],
-        plant[1],
-        plant[2],
-        plant[3],
-        model[0],
-        model[1],
-        model[2],
-        model[3],
-        mismatch,
-    )
-
-
-@njit(cache=True, error_model="numpy")
-def _rk4_terms(
-    x: float,
-    x_dot: float,
-    theta: float,
-    theta_dot: float,
-    s: float,
-    c: float,
-    u: float,
-    dt: float,
-    cart_mass: float,
-    m: float,
-    length: float,
-    g: float,
-    model_cart_mass: float,
-    mh: float,
-    model_length: float,
-    model_g: float,
-    mismatch: bool,
-) -> tuple[float, float, float, float]:
-    """:func:`rk4_step` on plain floats, given s = sin theta and c = cos theta of the first
-    stage: plant [M, m, l, g] and model (eqs 13-14, or 12 and 8-9)."""
-    a1, b1 = accelerations_terms(
-        x_dot,
-        s,
-        c,
-        theta_dot,
-        u,
-        cart_mass,
-        m,
-        length,
-        g,
-        model_cart_mass,
-        mh,
-        model_length,
-        model_g,
-        mismatch,
-    )
-    h = 0.5 * dt
-    xd2 = x_dot + h * a1
-    thd2 = theta_dot + h * b1
-    t2 = theta + h * theta_dot
-    a2, b2 = accelerations_terms(
-        xd2,
-        math.sin(t2),
-        math.cos(t2),
-        thd2,
-        u,
-        cart_mass,
-        m,
-        length,
-        g,
-        model_cart_mass,
-        mh,
-        model_length,
-        model_g,
-        mismatch,
-    )
-    xd3 = x_dot + h * a2
-    thd3 = theta_dot + h * b2
-    t3 = theta + h * thd2
-    a3, b3 = accelerations_terms(
-        xd3,
-        math.sin(t3),
-        math.cos(t3),
-        thd3,
-        u,
-        cart_mass,
-        m,
-        length,
-        g,
-        model_cart_mass,
-        mh,
-        model_length,
-        model_g,
-        mismatch,
-    )
-    xd4 = x_dot + dt * a3
-    thd4 = theta_dot + dt * b3
-    t4 = theta + dt * thd3
-    a4, b4 = accelerations_terms(
-        xd4,
-        math.sin(t4),
-        math.cos(t4),
-        thd4,
-        u,
-        cart_mass,
-        m,
-        length,
-        g,
-        model_cart_mass,
-        mh,
-        model_length,
-        model_g,
-        mismatch,
-    )
-    w = dt / 6.0
-    return (
-        x + w * (x_dot + 2.0 * xd2 + 2.0 * xd3 + xd4),
-        x_dot + w * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
-        theta + w * (theta_dot + 2.0 * thd2 + 2.0 * thd3 + thd4),
-        theta_dot + w * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
-    )
+    pt = _array_terms(plant, model, mismatch, dt)
+    a1, b1 = _u_stage(theta, theta_dot, u, pt)
+    return rk4(_u_stage, x, x_dot, theta, theta_dot, a1, b1, u, pt)
 
 
 @njit(cache=True)
 def force(theta: float, theta_dot: float, u: float, plant: np.ndarray) -> float:
     """Cart force f [N] that realises x_ddot = u, eq 12."""
-    return _force_sc(math.sin(theta), math.cos(theta), theta_dot, u, plant)
-
-
-@njit(cache=True, error_model="numpy")
-def _force_sc(s: float, c: float, theta_dot: float, u: float, plant: np.ndarray) -> float:
-    """:func:`force` given s = sin theta and c = cos theta."""
-    return force_terms(s, c, theta_dot, u, plant[0], plant[1], plant[2], plant[3])
+    return force_terms(
+        math.sin(theta), math.cos(theta), theta_dot, u, plant[0], plant[1], plant[2], plant[3]
+    )
 
 
 @njit(cache=True, error_model="numpy")
@@ -314,48 +213,9 @@ def rk4_force_step(
     plant: np.ndarray,
 ) -> tuple[float, float, float, float]:
     """One classical RK4 step of length dt of eqs 8-9 with the cart force f [N] held."""
-    return _rk4_force_terms(
-        x, x_dot, theta, theta_dot, f, dt, plant[0], plant[1], plant[2], plant[3]
-    )
-
-
-@njit(cache=True)
-def _rk4_force_terms(
-    x: float,
-    x_dot: float,
-    theta: float,
-    theta_dot: float,
-    f: float,
-    dt: float,
-    cart_mass: float,
-    m: float,
-    length: float,
-    g: float,
-) -> tuple[float, float, float, float]:
-    """:func:`rk4_force_step` on plain floats: the true plant [M, m, l, g]."""
-    a1, b1 = force_accelerations(
-        math.sin(theta), math.cos(theta), theta_dot, f, cart_mass, m, length, g
-    )
-    h = 0.5 * dt
-    xd2 = x_dot + h * a1
-    thd2 = theta_dot + h * b1
-    t2 = theta + h * theta_dot
-    a2, b2 = force_accelerations(math.sin(t2), math.cos(t2), thd2, f, cart_mass, m, length, g)
-    xd3 = x_dot + h * a2
-    thd3 = theta_dot + h * b2
-    t3 = theta + h * thd2
-    a3, b3 = force_accelerations(math.sin(t3), math.cos(t3), thd3, f, cart_mass, m, length, g)
-    xd4 = x_dot + dt * a3
-    thd4 = theta_dot + dt * b3
-    t4 = theta + dt * thd3
-    a4, b4 = force_accelerations(math.sin(t4), math.cos(t4), thd4, f, cart_mass, m, length, g)
-    w = dt / 6.0
-    return (
-        x + w * (x_dot + 2.0 * xd2 + 2.0 * xd3 + xd4),
-        x_dot + w * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
-        theta + w * (theta_dot + 2.0 * thd2 + 2.0 * thd3 + thd4),
-        theta_dot + w * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
-    )
+    pt = _array_terms(plant, plant, False, dt)
+    a1, b1 = _force_stage(theta, theta_dot, f, pt)
+    return rk4(_force_stage, x, x_dot, theta, theta_dot, a1, b1, f, pt)
 
 
 class PlantTerms(NamedTuple):
@@ -383,30 +243,42 @@ class PlantTerms(NamedTuple):
 
 
 @njit(cache=True)
+def _array_terms(
+    plant: np.ndarray,
+    model: np.ndarray,
+    mismatch: bool,
+    dt: float,
+    hold_force: bool = False,
+    max_force: float = math.inf,
+) -> PlantTerms:
+    """The :class:`PlantTerms` of the plant and model arrays [M, m, l, g]."""
+    return PlantTerms(
+        plant[0],
+        plant[1],
+        plant[2],
+        plant[3],
+        model[0],
+        model[1],
+        model[2],
+        model[3],
+        mismatch,
+        dt,
+        hold_force,
+        max_force,
+        max_force < math.inf,
+    )
+
+
+@njit(cache=True)
 def plant_terms(plant: PlantArgs) -> PlantTerms:
     """The :class:`PlantTerms` of ``plant``: its arrays' entries read once."""
-    p = plant.plant
-    q = plant.model
-    return PlantTerms(
-        p[0],
-        p[1],
-        p[2],
-        p[3],
-        q[0],
-        q[1],
-        q[2],
-        q[3],
-        plant.mismatch,
-        plant.dt,
-        plant.hold_force,
-        plant.max_force,
-        plant.max_force < math.inf,
+    return _array_terms(
+        plant.plant, plant.model, plant.mismatch, plant.dt, plant.hold_force, plant.max_force
     )
 
 
 @njit(cache=True, error_model="numpy")
 def _accelerations_limited(
-    x_dot: float,
     theta: float,
     theta_dot: float,
     u: float,
@@ -416,61 +288,15 @@ def _accelerations_limited(
 
     The force of eq 12 that realises u (with the model) is computed at this state;
     within the limit the accelerations are :func:`accelerations`' (the same arithmetic),
-    beyond it the true plant answers the clipped force through eqs 8-9.
+    beyond it the true plant answers the clipped force through eqs 8-9. An RK4 stage.
     """
     s = math.sin(theta)
     c = math.cos(theta)
     f = force_terms(s, c, theta_dot, u, pt.model_cart_mass, pt.model_m, pt.model_length, pt.model_g)
     if abs(f) <= pt.max_force:
-        return accelerations_terms(
-            x_dot,
-            s,
-            c,
-            theta_dot,
-            u,
-            pt.cart_mass,
-            pt.m,
-            pt.length,
-            pt.g,
-            pt.model_cart_mass,
-            pt.model_m,
-            pt.model_length,
-            pt.model_g,
-            pt.mismatch,
-        )
+        return accelerations_terms(s, c, theta_dot, u, pt)
     fc = pt.max_force if f > 0.0 else -pt.max_force
     return force_accelerations(s, c, theta_dot, fc, pt.cart_mass, pt.m, pt.length, pt.g)
-
-
-@njit(cache=True)
-def _rk4_limited(
-    x: float,
-    x_dot: float,
-    theta: float,
-    theta_dot: float,
-    u: float,
-    pt: PlantTerms,
-) -> tuple[float, float, float, float]:
-    """:func:`rk4_step` (u held), every stage's force clipped (:func:`_accelerations_limited`)."""
-    dt = pt.dt
-    a1, b1 = _accelerations_limited(x_dot, theta, theta_dot, u, pt)
-    h = 0.5 * dt
-    xd2 = x_dot + h * a1
-    thd2 = theta_dot + h * b1
-    a2, b2 = _accelerations_limited(xd2, theta + h * theta_dot, thd2, u, pt)
-    xd3 = x_dot + h * a2
-    thd3 = theta_dot + h * b2
-    a3, b3 = _accelerations_limited(xd3, theta + h * thd2, thd3, u, pt)
-    xd4 = x_dot + dt * a3
-    thd4 = theta_dot + dt * b3
-    a4, b4 = _accelerations_limited(xd4, theta + dt * thd3, thd4, u, pt)
-    w = dt / 6.0
-    return (
-        x + w * (x_dot + 2.0 * xd2 + 2.0 * xd3 + xd4),
-        x_dot + w * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
-        theta + w * (theta_dot + 2.0 * thd2 + 2.0 * thd3 + thd4),
-        theta_dot + w * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
-    )
 
 
 @njit(cache=True)
@@ -526,35 +352,18 @@ def plant_step(
     ``s``, ``c``: sin and cos of theta; ``f``: the step's motor force
     (:func:`motor_force`); ``pt``: :func:`plant_terms` of the trial's PlantArgs. With
     ``hold_force`` f is held (:func:`rk4_force_step`'s arithmetic); with a finite
-    ``max_force`` u is held behind the limited motor (:func:`_rk4_limited`); otherwise
-    u is held (:func:`rk4_step`'s arithmetic). The one plant step of :func:`run_trial`
-    and of the online learners' compiled loops.
+    ``max_force`` u is held behind the limited motor (:func:`_accelerations_limited` at
+    every stage); otherwise u is held (:func:`rk4_step`'s arithmetic). The one plant
+    step of :func:`run_trial` and of the online learners' compiled loops.
     """
     if pt.hold_force:
-        return _rk4_force_terms(
-            x, x_dot, theta, theta_dot, f, pt.dt, pt.cart_mass, pt.m, pt.length, pt.g
-        )
+        a1, b1 = force_accelerations(s, c, theta_dot, f, pt.cart_mass, pt.m, pt.length, pt.g)
+        return rk4(_force_stage, x, x_dot, theta, theta_dot, a1, b1, f, pt)
     if pt.limited:
-        return _rk4_limited(x, x_dot, theta, theta_dot, a, pt)
-    return _rk4_terms(
-        x,
-        x_dot,
-        theta,
-        theta_dot,
-        s,
-        c,
-        a,
-        pt.dt,
-        pt.cart_mass,
-        pt.m,
-        pt.length,
-        pt.g,
-        pt.model_cart_mass,
-        pt.model_m,
-        pt.model_length,
-        pt.model_g,
-        pt.mismatch,
-    )
+        a1, b1 = _accelerations_limited(theta, theta_dot, a, pt)
+        return rk4(_accelerations_limited, x, x_dot, theta, theta_dot, a1, b1, a, pt)
+    a1, b1 = accelerations_terms(s, c, theta_dot, a, pt)
+    return rk4(_u_stage, x, x_dot, theta, theta_dot, a1, b1, a, pt)
 
 
 @njit(cache=True)

@@ -19,10 +19,14 @@ __all__ = [
     "MODE_SWINGUP",
     "ControlArgs",
     "Gains",
+    "PolicyTerms",
+    "balancing_law",
     "balancing_roots",
     "policy_mean",
+    "policy_of",
     "policy_terms",
     "sigma_of",
+    "swingup_law",
     "switch_weights",
 ]
 
@@ -82,6 +86,56 @@ def sigma_of(w6: float) -> float:
     return 0.1 + 1.0 / (1.0 + math.exp(-w6))
 
 
+class PolicyTerms(NamedTuple):
+    """The policy of a trial as plain floats (:func:`policy_of`): W1..W5, theta_c, sigma
+    (eq 5), sqrt(W1 g) and sqrt(g / W1) (eq 22), the readings of :class:`ControlArgs` and
+    the model's m [kg], l [m], g [m/s^2]. Rebuilt when the gains change."""
+
+    w1: float
+    w2: float
+    w3: float
+    w4: float
+    w5: float
+    theta_c: float
+    sigma: float
+    root: float
+    inv_root: float
+    sign: float
+    soft: bool
+    inhibition: float
+    chapter_eligibility: bool
+    m: float
+    length: float
+    g: float
+
+
+@njit(cache=True)
+def policy_of(
+    W: np.ndarray, theta_c: float, control: ControlArgs, m: float, length: float, g: float
+) -> PolicyTerms:
+    """The :class:`PolicyTerms` of gains W (6,) (or (5,): sigma NaN), theta_c and the model."""
+    root, inv_root = balancing_roots(W[0], g)
+    sigma = sigma_of(W[5]) if W.shape[0] > 5 else math.nan
+    return PolicyTerms(
+        W[0],
+        W[1],
+        W[2],
+        W[3],
+        W[4],
+        theta_c,
+        sigma,
+        root,
+        inv_root,
+        control.sign,
+        control.soft,
+        control.inhibition,
+        control.chapter_eligibility,
+        m,
+        length,
+        g,
+    )
+
+
 @njit(cache=True)
 def policy_mean(
     x: float,
@@ -106,25 +160,9 @@ def policy_mean(
     With ``chapter_eligibility`` the W1 entry is the chapter's printed
     -l (g theta - sqrt(g / W1) theta_dot) instead of the true derivative.
     """
-    th = wrap_angle(theta)
-    root, inv_root = balancing_roots(W[0], model[3])
-    mu, g1, g2, g3, g4, g5 = _policy_wrapped(
-        x,
-        x_dot,
-        th,
-        theta_dot,
-        W,
-        theta_c,
-        sign,
-        soft,
-        inhibition,
-        model,
-        chapter_eligibility,
-        root,
-        inv_root,
-        0.0,
-        False,
-    )
+    control = ControlArgs(sign, soft, inhibition, 1, chapter_eligibility)
+    pol = policy_of(W, theta_c, control, model[1], model[2], model[3])
+    mu, g1, g2, g3, g4, g5 = policy_terms(x, x_dot, wrap_angle(theta), theta_dot, 0.0, False, pol)
     grad[0] = g1
     grad[1] = g2
     grad[2] = g3
@@ -144,79 +182,22 @@ def balancing_roots(w1: float, g: float) -> tuple[float, float]:
 
 
 @njit(cache=True)
-def _policy_wrapped(
-    x: float,
-    x_dot: float,
-    th: float,
-    theta_dot: float,
-    W: np.ndarray,
-    theta_c: float,
-    sign: float,
-    soft: bool,
-    inhibition: float,
-    model: np.ndarray,
-    chapter_eligibility: bool,
-    root: float,
-    inv_root: float,
-    cos_th: float,
-    have_cos: bool,
-) -> tuple[float, float, float, float, float, float]:
-    """(mu, d mu / d W1..W5) of :func:`policy_mean` for a wrapped ``th``.
-
-    ``root`` = sqrt(W1 g) and ``inv_root`` = sqrt(g / W1) (constant over a trial);
-    ``cos_th`` = cos th when ``have_cos`` (else computed here). The same arithmetic.
-    """
-    return policy_terms(
-        x,
-        x_dot,
-        th,
-        theta_dot,
-        W[0],
-        W[1],
-        W[2],
-        W[3],
-        W[4],
-        theta_c,
-        sign,
-        soft,
-        inhibition,
-        model[1],
-        model[2],
-        model[3],
-        chapter_eligibility,
-        root,
-        inv_root,
-        cos_th,
-        have_cos,
-    )
-
-
-@njit(cache=True)
 def policy_terms(
     x: float,
     x_dot: float,
     th: float,
     theta_dot: float,
-    w1: float,
-    w2: float,
-    w3: float,
-    w4: float,
-    w5: float,
-    theta_c: float,
-    sign: float,
-    soft: bool,
-    inhibition: float,
-    m: float,
-    length: float,
-    g: float,
-    chapter_eligibility: bool,
-    root: float,
-    inv_root: float,
     cos_th: float,
     have_cos: bool,
+    pol: PolicyTerms,
 ) -> tuple[float, float, float, float, float, float]:
-    """:func:`_policy_wrapped` on plain floats: W1..W5 and the model's m, l, g (eqs 22-23)."""
-    wb, ws = switch_weights(abs(th), theta_c, soft, inhibition)
+    """(mu, d mu / d W1..W5) of :func:`policy_mean` for a wrapped ``th`` [rad] (eqs 22-23).
+
+    ``cos_th`` = cos th when ``have_cos`` (else computed here); ``pol``: :func:`policy_of`.
+    """
+    w1, w5, sign = pol.w1, pol.w5, pol.sign
+    m, length, g = pol.m, pol.length, pol.g
+    wb, ws = switch_weights(abs(th), pol.theta_c, pol.soft, pol.inhibition)
     mu = 0.0
     g1 = 0.0
     g2 = 0.0
@@ -224,24 +205,77 @@ def policy_terms(
     g4 = 0.0
     g5 = 0.0
     if wb > 0.0:
+        inv_root = pol.inv_root
         if w1 == 0.0:
             inv_root = math.sqrt(g / w1)  # raises ZeroDivisionError: W1 = 0 has no law
-        mu += wb * (
-            sign * ((1.0 + w1 * length) * g * th + 2.0 * length * root * theta_dot)
-            - w2 * x
-            - w3 * x_dot
+        mu_1, d1 = balancing_law(
+            x,
+            x_dot,
+            th,
+            theta_dot,
+            w1,
+            pol.w2,
+            pol.w3,
+            sign,
+            length,
+            g,
+            pol.root,
+            inv_root,
+            pol.chapter_eligibility,
         )
-        if chapter_eligibility:
-            d1 = -length * (g * th - inv_root * theta_dot)
-        else:
-            d1 = sign * length * (g * th + inv_root * theta_dot)
+        mu += wb * mu_1
         g1 = wb * d1
         g2 = -wb * x
         g3 = -wb * x_dot
     if ws > 0.0:
         c = cos_th if have_cos else math.cos(th)
-        e_tilde = 0.5 * m * length * length * theta_dot * theta_dot + m * g * length * (c - 1.0)
-        mu += ws * (w4 * e_tilde * theta_dot * c - 0.25 * w5 * w5 * x - w5 * x_dot)
+        mu_2, e_tilde = swingup_law(x, x_dot, theta_dot, c, pol.w4, w5, m, length, g)
+        mu += ws * mu_2
         g4 = ws * e_tilde * theta_dot * c
         g5 = -ws * (0.5 * w5 * x + x_dot)
     return mu, g1, g2, g3, g4, g5
+
+
+@njit(cache=True, inline="always")
+def balancing_law(
+    x: float,
+    x_dot: float,
+    th: float,
+    theta_dot: float,
+    w1: float,
+    w2: float,
+    w3: float,
+    sign: float,
+    length: float,
+    g: float,
+    root: float,
+    inv_root: float,
+    chapter_eligibility: bool,
+) -> tuple[float, float]:
+    """(mu_1, d mu_1 / d W1) of eq 22 at the wrapped ``th`` [rad]:
+    mu_1 = sign ((1 + W1 l) g th + 2 l sqrt(W1 g) theta_dot) - W2 x - W3 x_dot, with
+    ``root`` = sqrt(W1 g) and ``inv_root`` = sqrt(g / W1); with ``chapter_eligibility``
+    the chapter's printed -l (g th - sqrt(g / W1) theta_dot) instead of the derivative."""
+    mu_1 = sign * ((1.0 + w1 * length) * g * th + 2.0 * length * root * theta_dot) - w2 * x
+    mu_1 -= w3 * x_dot
+    if chapter_eligibility:
+        return mu_1, -length * (g * th - inv_root * theta_dot)
+    return mu_1, sign * length * (g * th + inv_root * theta_dot)
+
+
+@njit(cache=True, inline="always")
+def swingup_law(
+    x: float,
+    x_dot: float,
+    theta_dot: float,
+    c: float,
+    w4: float,
+    w5: float,
+    m: float,
+    length: float,
+    g: float,
+) -> tuple[float, float]:
+    """(mu_2, E~) of eq 23 with c = cos theta: mu_2 = W4 E~ theta_dot c - W5^2/4 x - W5 x_dot,
+    E~ = m l^2 theta_dot^2 / 2 + m g l (c - 1) of eqs 15-16 (the model's m, l, g)."""
+    e_tilde = 0.5 * m * length * length * theta_dot * theta_dot + m * g * length * (c - 1.0)
+    return w4 * e_tilde * theta_dot * c - 0.25 * w5 * w5 * x - w5 * x_dot, e_tilde

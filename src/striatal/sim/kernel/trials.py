@@ -27,9 +27,9 @@ from striatal.sim.kernel.policy import (
     MODE_SWINGUP,
     ControlArgs,
     Gains,
-    balancing_roots,
+    PolicyTerms,
+    policy_of,
     policy_terms,
-    sigma_of,
 )
 from striatal.sim.kernel.traces import TraceArgs, trace_step
 
@@ -61,10 +61,19 @@ __all__ = [
     "Buffers",
     "NoiseArgs",
     "ProtocolArgs",
+    "Tally",
     "judge",
     "judge_batch",
+    "judge_start",
+    "load_trace",
+    "next_action",
     "run_trial",
     "run_trials_batch",
+    "store_trace",
+    "tally_force",
+    "tally_mode",
+    "tally_start",
+    "tally_x",
     "write_summary",
 ]
 
@@ -191,6 +200,127 @@ def judge_batch(
         )
 
 
+class Tally(NamedTuple):
+    """A trial's running statistics: min |theta| [rad] in swing-up and overall, the
+    switches between the modes, the last mode (-1 before the first step), max |x| [m]
+    and max |f| [N]. Fresh from :func:`tally_start`."""
+
+    min_swing: float
+    min_all: float
+    n_switches: int
+    prev_mode: int
+    max_abs_x: float
+    max_abs_f: float
+
+
+@njit(cache=True)
+def tally_start(x: float) -> Tally:
+    """The :class:`Tally` before a trial's first step from cart position x [m]."""
+    return Tally(math.inf, math.inf, 0, -1, abs(x), 0.0)
+
+
+@njit(cache=True)
+def tally_mode(abs_th: float, theta_c: float, tally: Tally) -> tuple[int, Tally]:
+    """(mode, tally) at a step seen at |theta| = abs_th (wrapped): the hard switch of eq 21."""
+    mode = MODE_BALANCE if abs_th < theta_c else MODE_SWINGUP
+    min_swing = tally.min_swing
+    if mode == MODE_SWINGUP and abs_th < min_swing:
+        min_swing = abs_th
+    min_all = tally.min_all
+    if abs_th < min_all:
+        min_all = abs_th
+    n_switches = tally.n_switches
+    if tally.prev_mode >= 0 and mode != tally.prev_mode:
+        n_switches += 1
+    return mode, Tally(min_swing, min_all, n_switches, mode, tally.max_abs_x, tally.max_abs_f)
+
+
+@njit(cache=True)
+def tally_force(f: float, tally: Tally) -> Tally:
+    """``tally`` with max |f| over the step's motor force f [N]."""
+    if abs(f) > tally.max_abs_f:
+        t = tally
+        return Tally(t.min_swing, t.min_all, t.n_switches, t.prev_mode, t.max_abs_x, abs(f))
+    return tally
+
+
+@njit(cache=True)
+def tally_x(x: float, status: int, tally: Tally) -> Tally:
+    """``tally`` with max |x| over the state reached (not a faulted one)."""
+    if status != STATUS_FAULT and abs(x) > tally.max_abs_x:
+        t = tally
+        return Tally(t.min_swing, t.min_all, t.n_switches, t.prev_mode, abs(x), t.max_abs_f)
+    return tally
+
+
+@njit(cache=True)
+def judge_start(
+    x: float, x_dot: float, theta: float, theta_dot: float, protocol: ProtocolArgs
+) -> tuple[int, float, int]:
+    """(status, reward, end_step) before the first step: :func:`judge` at step 0 when the
+    eq-24 check is at step 0 (an ended trial's end_step 0), else running to n_steps."""
+    if protocol.check_step == 0:
+        status, reward = judge(x, x_dot, theta, theta_dot, 0, protocol)
+        if status != STATUS_RUNNING:
+            return status, reward, 0
+        return status, reward, protocol.n_steps
+    return STATUS_RUNNING, 0.0, protocol.n_steps
+
+
+@njit(cache=True, inline="always")
+def next_action(
+    hold: int,
+    draw: int,
+    a: float,
+    d: tuple[float, float, float, float, float, float],
+    seen: tuple[float, float, float, float],
+    cos_th: float,
+    have_cos: bool,
+    pol: PolicyTerms,
+    control: ControlArgs,
+    normals: np.ndarray,
+    gamma: float,
+) -> tuple[float, tuple[float, float, float, float, float, float], int, int]:
+    """(a, D, hold, draw) after a step's policy: a new action every ``control.action_every``
+    steps (``hold`` steps left, 0: draw now), held in between.
+
+    At a draw the action is the mean of eqs 22-23 (:func:`policy_terms`) at ``seen``
+    (x, x_dot, th wrapped, theta_dot as the controller sees them; ``cos_th`` = cos th
+    when ``have_cos``) plus sigma ``normals[draw]`` (eq 5), and the trace D (6,) of
+    eq 3 takes its eligibility (:func:`trace_step`); empty ``normals``: the mean, D kept.
+    """
+    if hold == 0:
+        hold = control.action_every
+        x, x_dot, th, theta_dot = seen
+        mu, g1, g2, g3, g4, g5 = policy_terms(x, x_dot, th, theta_dot, cos_th, have_cos, pol)
+        if normals.shape[0] > 0:
+            eps = pol.sigma * normals[draw]
+            a = mu + eps
+            d0, d1, d2, d3, d4, d5 = d
+            d = trace_step(eps, pol.sigma, gamma, g1, g2, g3, g4, g5, d0, d1, d2, d3, d4, d5)
+        else:
+            a = mu
+        draw += 1
+    return a, d, hold - 1, draw
+
+
+@njit(cache=True)
+def load_trace(trace: np.ndarray) -> tuple[float, float, float, float, float, float]:
+    """The trace D (6,) of eq 3 as a tuple (held in registers over a trial)."""
+    return trace[0], trace[1], trace[2], trace[3], trace[4], trace[5]
+
+
+@njit(cache=True)
+def store_trace(trace: np.ndarray, d: tuple[float, float, float, float, float, float]) -> None:
+    """Write the tuple D back into ``trace`` (6,)."""
+    trace[0] = d[0]
+    trace[1] = d[1]
+    trace[2] = d[2]
+    trace[3] = d[3]
+    trace[4] = d[4]
+    trace[5] = d[5]
+
+
 @njit(cache=True)
 def write_summary(
     out: np.ndarray,
@@ -201,11 +331,7 @@ def write_summary(
     x_dot: float,
     theta: float,
     theta_dot: float,
-    min_swing: float,
-    min_all: float,
-    n_switches: int,
-    max_abs_x: float,
-    max_abs_f: float,
+    tally: Tally,
 ) -> None:
     """Write a trial's summary row ``out`` (N_OUT,), layout OUT_*, as :func:`run_trial` does."""
     out[OUT_REWARD] = reward
@@ -214,14 +340,35 @@ def write_summary(
     out[OUT_X_DOT] = x_dot
     out[OUT_THETA] = wrap_angle(theta)
     out[OUT_THETA_DOT] = theta_dot
-    out[OUT_MIN_ABS_THETA_SWINGUP] = min_swing
-    out[OUT_MIN_ABS_THETA] = min_all
+    out[OUT_MIN_ABS_THETA_SWINGUP] = tally.min_swing
+    out[OUT_MIN_ABS_THETA] = tally.min_all
     out[OUT_FAULT] = 1.0 if status == STATUS_FAULT else 0.0
     out[OUT_EARLY] = 1.0 if status == STATUS_EARLY else 0.0
-    out[OUT_N_SWITCHES] = n_switches
-    out[OUT_MAX_ABS_X] = max_abs_x
-    out[OUT_MAX_ABS_FORCE] = max_abs_f
+    out[OUT_N_SWITCHES] = tally.n_switches
+    out[OUT_MAX_ABS_X] = tally.max_abs_x
+    out[OUT_MAX_ABS_FORCE] = tally.max_abs_f
     out[OUT_TRACK] = 1.0 if status == STATUS_TRACK else 0.0
+
+
+@njit(cache=True)
+def _record(
+    traj: np.ndarray,
+    k: int,
+    dt: float,
+    state: tuple[float, float, float, float],
+    a: float,
+    f: float,
+    mode: int,
+) -> None:
+    """Row k of the trajectory: t, the state (theta unwrapped), u, force, mode."""
+    traj[k, 0] = k * dt
+    traj[k, 1] = state[0]
+    traj[k, 2] = state[1]
+    traj[k, 3] = state[2]
+    traj[k, 4] = state[3]
+    traj[k, 5] = a
+    traj[k, 6] = f
+    traj[k, 7] = mode
 
 
 @njit(cache=True)
@@ -257,69 +404,29 @@ def run_trial(
     start from the sampled state (the angle the controller sees) with the ``model``,
     held, and the true plant's eqs 8-9 are integrated (:func:`rk4_force_step`).
     ``plant.max_force`` (finite) clips f: with the force held, the held f; with u held,
-    the force of every RK4 stage (:func:`_rk4_limited`), so the plant gets u only while
+    the force of every RK4 stage (:func:`plant_step`), so the plant gets u only while
     the motor can deliver it (docs/paper-notes.md section 9). The recorded force and
     OUT_MAX_ABS_FORCE are the (clipped) force at the step's start.
     """
-    W = gains.W
     theta_c = gains.theta_c
-    model = plant.model
     pt = plant_terms(plant)
-    # W1..W5 read once (a store to a buffer would otherwise reload them every step)
-    w1 = W[0]
-    w2 = W[1]
-    w3 = W[2]
-    w4 = W[3]
-    w5 = W[4]
+    # the policy's constants read once (a store to a buffer would otherwise reload them)
+    pol = policy_of(gains.W, theta_c, control, pt.model_m, pt.model_length, pt.model_g)
     dt = plant.dt
-    action_every = control.action_every
-    trace = learning.trace
-    gamma = learning.gamma
     sensor_noise = noise.sensor
-    out = buffers.out
     traj = buffers.traj
-    n_steps = protocol.n_steps
-    x = state0[0]
-    x_dot = state0[1]
-    theta = state0[2]
-    theta_dot = state0[3]
+    x, x_dot, theta, theta_dot = state0[0], state0[1], state0[2], state0[3]
     stochastic = noise.action.shape[0] > 0
     noisy_sensor = sensor_noise.shape[0] > 0
     record = traj.shape[0] > 0
-    sigma = sigma_of(W[5])
-    sign = control.sign
-    soft = control.soft
-    inhibition = control.inhibition
-    chapter_eligibility = control.chapter_eligibility
-    # constant over the trial: the square roots of the balancing law (eq 22)
-    root, inv_root = balancing_roots(W[0], model[3])
-    # the trace D (eq 3) in registers, written back at the end
-    d0 = trace[0]
-    d1 = trace[1]
-    d2 = trace[2]
-    d3 = trace[3]
-    d4 = trace[4]
-    d5 = trace[5]
-    max_force = plant.max_force
-    limited = max_force < math.inf
-    min_swing = math.inf
-    min_all = math.inf
-    n_switches = 0
-    prev_mode = -1
-    max_abs_x = abs(x)
-    max_abs_f = 0.0
+    d = load_trace(learning.trace)  # the trace D (eq 3) in registers, written back at the end
+    tally = tally_start(x)
     a = 0.0
     draw = 0
     hold = 0  # steps left before the next action draw (eq 5)
-    status = STATUS_RUNNING
-    reward = 0.0
-    end_step = n_steps
-    if protocol.check_step == 0:
-        status, reward = judge(x, x_dot, theta, theta_dot, 0, protocol)
-        if status != STATUS_RUNNING:
-            end_step = 0
+    status, reward, end_step = judge_start(x, x_dot, theta, theta_dot, protocol)
     if status == STATUS_RUNNING:
-        for k in range(n_steps):
+        for k in range(protocol.n_steps):
             # sin and cos of theta once a step: the force (eq 12), RK4's first stage
             # and, without sensor noise, the swing-up law (eq 23) share them
             s = math.sin(theta)
@@ -330,104 +437,29 @@ def run_trial(
                 ox += noise.sensor_std_x * sensor_noise[k, 0]
                 otheta += noise.sensor_std_theta * sensor_noise[k, 1]
             th = wrap_angle(otheta)
-            abs_th = abs(th)
-            mode = MODE_BALANCE if abs_th < theta_c else MODE_SWINGUP
-            if mode == MODE_SWINGUP and abs_th < min_swing:
-                min_swing = abs_th
-            if abs_th < min_all:
-                min_all = abs_th
-            if prev_mode >= 0 and mode != prev_mode:
-                n_switches += 1
-            prev_mode = mode
-            if hold == 0:
-                hold = action_every
-                mu, g1, g2, g3, g4, g5 = policy_terms(
-                    ox,
-                    x_dot,
-                    th,
-                    theta_dot,
-                    w1,
-                    w2,
-                    w3,
-                    w4,
-                    w5,
-                    theta_c,
-                    sign,
-                    soft,
-                    inhibition,
-                    pt.model_m,
-                    pt.model_length,
-                    pt.model_g,
-                    chapter_eligibility,
-                    root,
-                    inv_root,
-                    c,
-                    th == theta,
-                )
-                if stochastic:
-                    eps = sigma * noise.action[draw]
-                    a = mu + eps
-                    d0, d1, d2, d3, d4, d5 = trace_step(
-                        eps, sigma, gamma, g1, g2, g3, g4, g5, d0, d1, d2, d3, d4, d5
-                    )
-                else:
-                    a = mu
-                draw += 1
-            hold -= 1
+            mode, tally = tally_mode(abs(th), theta_c, tally)
+            seen = (ox, x_dot, th, theta_dot)
+            a, d, hold, draw = next_action(
+                hold, draw, a, d, seen, c, th == theta, pol, control, noise.action, learning.gamma
+            )
             f = motor_force(s, c, otheta, theta_dot, a, noisy_sensor, pt)
-            if abs(f) > max_abs_f:
-                max_abs_f = abs(f)
             if record:
-                traj[k, 0] = k * dt
-                traj[k, 1] = x
-                traj[k, 2] = x_dot
-                traj[k, 3] = theta
-                traj[k, 4] = theta_dot
-                traj[k, 5] = a
-                traj[k, 6] = f
-                traj[k, 7] = mode
+                _record(traj, k, dt, (x, x_dot, theta, theta_dot), a, f, mode)
+            tally = tally_force(f, tally)
             x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
             status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
-            if status == STATUS_FAULT:
-                end_step = k + 1
-                break
-            if abs(x) > max_abs_x:
-                max_abs_x = abs(x)
+            tally = tally_x(x, status, tally)
             if status != STATUS_RUNNING:
                 end_step = k + 1
                 break
     if stochastic:
-        trace[0] = d0
-        trace[1] = d1
-        trace[2] = d2
-        trace[3] = d3
-        trace[4] = d4
-        trace[5] = d5
+        store_trace(learning.trace, d)
     if record:
-        traj[end_step, 0] = end_step * dt
-        traj[end_step, 1] = x
-        traj[end_step, 2] = x_dot
-        traj[end_step, 3] = theta
-        traj[end_step, 4] = theta_dot
-        traj[end_step, 5] = a
-        f_end = force(theta, theta_dot, a, model)
-        traj[end_step, 6] = clip_force(f_end, max_force) if limited else f_end
-        traj[end_step, 7] = MODE_BALANCE if abs(wrap_angle(theta)) < theta_c else MODE_SWINGUP
-    write_summary(
-        out,
-        status,
-        reward,
-        end_step,
-        x,
-        x_dot,
-        theta,
-        theta_dot,
-        min_swing,
-        min_all,
-        n_switches,
-        max_abs_x,
-        max_abs_f,
-    )
+        f_end = force(theta, theta_dot, a, plant.model)
+        f_end = clip_force(f_end, pt.max_force) if pt.limited else f_end
+        mode = MODE_BALANCE if abs(wrap_angle(theta)) < theta_c else MODE_SWINGUP
+        _record(traj, end_step, dt, (x, x_dot, theta, theta_dot), a, f_end, mode)
+    write_summary(buffers.out, status, reward, end_step, x, x_dot, theta, theta_dot, tally)
 
 
 @njit(cache=True, parallel=True)
