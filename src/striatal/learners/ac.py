@@ -34,9 +34,9 @@ from typing import Any
 
 import numpy as np
 
-from striatal.learners.chapter import finite_trace, policy_plan
+from striatal.learners.chapter import PolicyConfig, finite_trace, policy_plan
 from striatal.learners.common import theta_c_rule
-from striatal.learners.config import Eligibility, LearnerConfig, ThetaCRule, pick
+from striatal.learners.config import LearnerConfig, pick
 from striatal.learners.rule import Rule, Trial, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import Plant
@@ -55,16 +55,9 @@ __all__ = ["AC", "AcConfig", "AcRule", "initial_critic"]
 
 
 @dataclass(frozen=True)
-class AcConfig:
-    """The ac rule's options (see :class:`LearnerConfig` for each)."""
+class AcConfig(PolicyConfig):
+    """The ac rule's options: the actor's policy options and the critic's."""
 
-    alpha: float
-    gamma: float
-    reset_trace: bool
-    eligibility: Eligibility
-    theta_c_rule: ThetaCRule
-    max_step: float
-    w1_floor: float
     critic_rate: float
     td_discount: float
     critic_decay: float

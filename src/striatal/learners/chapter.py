@@ -22,21 +22,37 @@ from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Plant
 from striatal.sim.kernel import sigma_of
 
-__all__ = ["CHAPTER", "ChapterConfig", "ChapterRule", "gain_update", "policy_plan", "policy_trace"]
+__all__ = [
+    "CHAPTER",
+    "ChapterConfig",
+    "ChapterRule",
+    "PolicyConfig",
+    "PolicyRule",
+    "gain_update",
+    "policy_plan",
+    "policy_trace",
+]
 
 
 @dataclass(frozen=True)
-class ChapterConfig:
-    """The chapter rule's options (see :class:`LearnerConfig` for each)."""
+class PolicyConfig:
+    """The options of every rule that explores per step with the policy of eq 5 and
+    learns through the trace D of eq 3 (see :class:`LearnerConfig` for each)."""
 
     alpha: float
     gamma: float
-    baseline: float
     reset_trace: bool
     eligibility: Eligibility
     theta_c_rule: ThetaCRule
     max_step: float
     w1_floor: float
+
+
+@dataclass(frozen=True)
+class ChapterConfig(PolicyConfig):
+    """The chapter rule's options: the policy's and the reinforcement baseline b."""
+
+    baseline: float
 
 
 def gain_update(

@@ -15,7 +15,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from striatal.learners.chapter import PolicyRule, finite_trace
+from striatal.learners.chapter import PolicyConfig, PolicyRule, finite_trace
 from striatal.learners.common import (
     baseline_memory,
     check_decay,
@@ -23,7 +23,7 @@ from striatal.learners.common import (
     theta_c_rule,
     three_factor_update,
 )
-from striatal.learners.config import Eligibility, LearnerConfig, RewardKind, ThetaCRule, pick
+from striatal.learners.config import LearnerConfig, RewardKind, pick
 from striatal.learners.rule import Trial, Update
 from striatal.learners.state import LearnerState
 
@@ -31,16 +31,9 @@ __all__ = ["RPE", "RpeConfig", "RpeRule"]
 
 
 @dataclass(frozen=True)
-class RpeConfig:
-    """The rpe rule's options (see :class:`LearnerConfig` for each)."""
+class RpeConfig(PolicyConfig):
+    """The rpe rule's options: the policy's and those of its prediction error."""
 
-    alpha: float
-    gamma: float
-    reset_trace: bool
-    eligibility: Eligibility
-    theta_c_rule: ThetaCRule
-    max_step: float
-    w1_floor: float
     reward: RewardKind
     rpe_rate: float
     normalise: bool
