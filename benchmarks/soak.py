@@ -99,8 +99,26 @@ def in_process(argv: list[str]) -> int:
             return int(exc.code or 0)
 
 
-def _started(kind: str, out: Path) -> bool:
-    return (out / ("history.csv" if kind == "train" else "runs.csv")).exists()
+def _started(kind: str, out: Path, since: float) -> bool:
+    """Whether the run started at ``since`` (time.time()) has written its first rows: a
+    file left by an earlier, interrupted run does not count."""
+    path = out / ("history.csv" if kind == "train" else "runs.csv")
+    try:
+        return path.stat().st_mtime >= since
+    except FileNotFoundError:
+        return False
+
+
+def interpreter_start() -> float:
+    """Seconds until striatal's own code runs (``python -c "import striatal.cli"``, the
+    slowest of three): a signal before that lands while the interpreter itself starts,
+    and Python, not striatal, reports it (a KeyboardInterrupt traceback, exit -2)."""
+    times = []
+    for _ in range(3):
+        t = time.perf_counter()
+        subprocess.run([sys.executable, "-c", "import striatal.cli"], check=True)
+        times.append(time.perf_counter() - t)
+    return max(times)
 
 
 def interrupt_once(
@@ -111,7 +129,13 @@ def interrupt_once(
     run_seconds: float,
     signals: tuple[str, ...] = SIGNALS,
 ) -> dict[str, Any]:
-    """Start ``argv`` in a process, signal it at a random moment; what happened."""
+    """Start ``argv`` in a process, signal it at a random moment; what happened.
+
+    "start-up": 0-2 s after striatal's code starts (the interpreter's own start, timed
+    as :func:`interpreter_start`, excluded); "running": after this process wrote its
+    first rows."""
+    start = interpreter_start()
+    since = time.time()
     proc = subprocess.Popen(
         [sys.executable, "-m", "striatal", *argv],
         stdout=subprocess.DEVNULL,
@@ -122,12 +146,14 @@ def interrupt_once(
     how = rng.choice(signals)
     if rng.random() < 0.2:
         moment = "start-up"
-        delay = rng.uniform(0.0, 2.0)
+        delay = start + rng.uniform(0.0, 2.0)
     else:
         moment = "running"
         delay = rng.uniform(0.0, 1.2 * run_seconds)
         deadline = time.monotonic() + 120
-        while not _started(kind, out) and proc.poll() is None and time.monotonic() < deadline:
+        while (
+            not _started(kind, out, since) and proc.poll() is None and time.monotonic() < deadline
+        ):
             time.sleep(0.005)
     time.sleep(delay)
     if how == "SIGINT x2":
