@@ -235,7 +235,7 @@ def test_duplicate_runs_are_dropped_on_read_and_refused_by_the_summary(tmp_path:
         report.summarise([*rows, rows[0]], 10, {})
     path = tmp_path / "runs.csv"
     spec = _specs((1,), max_trials=2)[0]
-    line = runs_csv.row_text(runner.run_one(spec))
+    line = runs_csv.row_text({**runner.run_one(spec), "settings_id": sweeps.settings_id(spec)})
     header = ",".join(runs_csv.RUN_COLUMNS) + "\n"
     path.write_text(header + line + line)
     read, clean = runs_csv.read_runs(path)

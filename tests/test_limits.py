@@ -231,3 +231,106 @@ def test_a_byte_order_mark_is_not_part_of_the_text(tmp_path: Path) -> None:
     (tmp_path / "a.csv").write_bytes(b"\xef\xbb\xbftrial,reward\n1,10\n")
     assert read_json(tmp_path / "a.json") == {"a": 1}
     assert read_csv(tmp_path / "a.csv") == [{"trial": "1", "reward": "10"}]
+
+
+def _simulate(*argv: str) -> int:
+    from striatal.cli import main
+
+    try:
+        return main(["simulate", *argv])
+    except SystemExit as exc:
+        return int(exc.code or 0)
+
+
+def test_a_full_disk_on_the_second_file_keeps_the_old_pair(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """simulate --out replaces trajectory.csv and summary.json as one set: ENOSPC on the
+    second leaves both old files (not a new trajectory beside an old summary)."""
+    import errno
+
+    out = tmp_path / "D"
+    assert _simulate("--duration", "5", "--out", str(out)) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    real_fsync, calls = os.fsync, []
+
+    def second_fails(fd: int) -> None:
+        calls.append(fd)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real_fsync(fd)
+
+    monkeypatch.setattr(os, "fsync", second_fails)
+    capsys.readouterr()
+    assert _simulate("--duration", "6", "--out", str(out)) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "summary.json: No space left on device" in err[0], err
+    assert len(calls) == 2
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # no temp file either
+    monkeypatch.setattr(os, "fsync", real_fsync)
+    assert _simulate("--duration", "6", "--out", str(out)) == 0
+    assert (out / "trajectory.csv").read_bytes() != before["trajectory.csv"]
+    assert '"duration": 6.0' in (out / "summary.json").read_text()
+
+
+def test_sigterm_during_a_write_leaves_no_temporary_file(tmp_path: Path) -> None:
+    """SIGTERM while simulate writes a large trajectory.csv: the process ends by the
+    signal, as before, and its temporary file goes with it."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "D"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "striatal", "simulate", "--duration", "20000", "--out", str(out)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while not list(out.glob(".*.tmp")) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert list(out.glob(".*.tmp")), "the write never started"
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=60) == -signal.SIGTERM
+    finally:
+        proc.kill()
+        proc.wait()
+    assert list(out.iterdir()) == []
+
+
+def test_stale_temporary_files_are_removed_at_the_next_write(tmp_path: Path) -> None:
+    """A temp file whose writer is gone (unlocked) goes at the next write into its folder;
+    one of an older striatal's names goes once an hour old; other files stay."""
+    import fcntl
+    import time
+
+    from striatal.io.files import STALE_SECONDS
+
+    dead = tmp_path / ".striatal-ab12cd34.tmp"
+    dead.write_text("half")
+    busy = tmp_path / ".striatal-zz99yy88.tmp"
+    busy.write_text("being written")
+    old_name = tmp_path / ".trajectory.csv.k2j4h5g6.tmp"
+    old_name.write_text("old")
+    young_old_name = tmp_path / ".summary.json.a1b2c3d4.tmp"
+    young_old_name.write_text("young")
+    mine = tmp_path / "notes.tmp"
+    mine.write_text("the user's")
+    hour_ago = time.time() - STALE_SECONDS - 10
+    for p in (old_name, mine):
+        os.utime(p, (hour_ago, hour_ago))
+    with busy.open() as fh:
+        fcntl.flock(fh.fileno(), fcntl.LOCK_EX)
+        write_json(tmp_path / "a.json", {"a": 1})
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == sorted(["a.json", busy.name, young_old_name.name, mine.name])
+
+
+def test_a_254_character_file_name_is_written(tmp_path: Path) -> None:
+    """The temporary name is short: any name the file system takes can be written."""
+    name = "r" * 249 + ".json"
+    write_json(tmp_path / name, {"a": 1})
+    assert read_json(tmp_path / name) == {"a": 1}
+    assert [p.name for p in tmp_path.iterdir()] == [name]

@@ -11,6 +11,10 @@ from __future__ import annotations
 import errno
 import json
 import os
+import signal
+import subprocess
+import sys
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -23,6 +27,7 @@ from test_reliability import (
     library_error,
     outcome,
     params_of,
+    snapshot,
     usage_error,
 )
 
@@ -132,6 +137,98 @@ def full_disk(*argv: str, names: str) -> Callable[[Path], tuple[bool, str]]:
         return ok, f"exit {r.rc}, {len(lines)} line: `{line}`; temporary files left: {len(hidden)}"
 
     return run
+
+
+def _swept_then_removed(*names: str) -> Callable[[Path], None]:
+    """OUT holds the sweep of SWEEP, less the files ``names``."""
+
+    def prepare(out: Path) -> None:
+        _swept(out)
+        for name in names:
+            (out / name).unlink()
+
+    return prepare
+
+
+def enospc_second_file(tmp: Path) -> tuple[bool, str]:
+    """``simulate --out OUT`` over an earlier one, the second file's fsync failing (ENOSPC)."""
+    out = tmp / "OUT"
+    assert cli_in_process("simulate", "--duration", "5", "--out", str(out)).rc == 0
+    before = snapshot(out)
+    real_fsync, calls = os.fsync, []
+
+    def second_fails(fd: int) -> None:
+        calls.append(fd)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real_fsync(fd)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(os, "fsync", second_fails)
+        r = cli_in_process("simulate", "--duration", "6", "--out", str(out))
+    after = snapshot(out)
+    lines = r.err.strip().splitlines()
+    line = (lines[-1] if lines else "").replace(str(out), "OUT")
+    new = [n for n in before if after.get(n) != before[n]]
+    state = "both old" if after == before else f"new {', '.join(new) or 'files'} beside old"
+    ok = r.rc == 2 and len(lines) == 1 and after == before
+    return ok, f"exit {r.rc}, {len(lines)} line: `{line}`; the pair: {state}"
+
+
+def sigterm_during_write(tmp: Path) -> tuple[bool, str]:
+    """SIGTERM while ``simulate --duration 20000 --out OUT`` writes its 2,000,000 rows."""
+    out = tmp / "OUT"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "striatal", "simulate", "--duration", "20000", "--out", str(out)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while not list(out.glob(".*.tmp")) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        writing = bool(list(out.glob(".*.tmp")))
+        proc.send_signal(signal.SIGTERM)
+        rc = proc.wait(timeout=60)
+    finally:
+        proc.kill()
+        proc.wait()
+    left = list(out.glob(".*.tmp"))
+    ok = writing and rc == -signal.SIGTERM and not left
+    ended = "by SIGTERM" if rc == -signal.SIGTERM else f"with {rc}"
+    during = "yes" if writing else "no"
+    return ok, f"ended {ended} while writing: {during}; temporary files left: {len(left)}"
+
+
+def stale_temps(tmp: Path) -> tuple[bool, str]:
+    """OUT holds what killed writers left: an unlocked ``.striatal-*.tmp`` and an older
+    striatal's ``.trajectory.csv.XXXXXXXX.tmp`` of two hours ago; then ``simulate --out OUT``."""
+    out = tmp / "OUT"
+    out.mkdir(parents=True)
+    (out / ".striatal-ab12cd34.tmp").write_text("half a file")
+    old = out / ".trajectory.csv.k2j4h5g6.tmp"
+    old.write_text("half a file")
+    two_hours_ago = time.time() - 7200
+    os.utime(old, (two_hours_ago, two_hours_ago))
+    r = cli_in_process("simulate", "--duration", "5", "--out", str(out))
+    left = sorted(p.name for p in out.glob(".*.tmp"))
+    return r.rc == 0 and not left, f"exit {r.rc}; temporary files left: {left or 'none'}"
+
+
+#: A file name of 254 bytes (the most is 255): with the temporary prefix and suffix
+#: around it, the old temporary name was longer than that.
+LONG_NAME = "c" * 250 + ".png"
+
+
+def long_file_name(tmp: Path) -> tuple[bool, str]:
+    out = tmp / "OUT"
+    _trained()(out)
+    r = cli_in_process("curves", str(out / "history.csv"), "--out", str(out / LONG_NAME))
+    line = (r.err.strip().splitlines() or [""])[-1].replace(str(out), "OUT")
+    line = line.replace(LONG_NAME, "c...c.png")
+    written = (out / LONG_NAME).exists()
+    said = f", `{line}`" if line else ""
+    return r.rc == 0 and written, f"exit {r.rc}{said}; written: {'yes' if written else 'no'}"
 
 
 S = Scenario
@@ -304,6 +401,31 @@ ROUND3: tuple[Scenario, ...] = (
       "the same full disk", "exit 2, one line naming the file",
       full_disk("train", "--max-trials", "2", "--duration", "5", "--out", "OUT",
                 names="OUT/history.csv")),
+    S("sweep-rows-other-settings", "runs", "`striatal sweep --seeds 2 --max-trials 3 "
+      "--duration 5 --eval-draws 0 --out W`, `rm W/sweep.json W/summary.json`, then the same "
+      "with `--alpha 3` (was \"ran 0 runs, 4 already in --out\": the rows of alpha 5)",
+      "exit 2, one line: W holds rows of other settings; nothing written",
+      usage_error((*SWEEP, "--alpha", "3", "--out", "OUT"),
+                  prepare=_swept_then_removed("sweep.json", "summary.json"),
+                  says="holds rows of other settings")),
+    S("sweep-eval-draws-changed", "runs", "the sweep W above, then the same with "
+      "`--eval-draws 5` (the refusal named no option)", "exit 2, one line naming eval_draws",
+      usage_error((*SWEEP, "--eval-draws", "5", "--out", "OUT"), prepare=_swept,
+                  says="other settings (eval_draws)")),
+    S("enospc-file-pair", "bad file", "`striatal simulate --duration 6 --out D` over an "
+      "earlier run in D, the disk full at the second file (summary.json's fsync fails)",
+      "exit 2, one line; D keeps both old files (was a new trajectory.csv beside the old "
+      "summary.json)", enospc_second_file),
+    S("sigterm-temp-file", "runs", "SIGTERM while `striatal simulate --duration 20000 --out D` "
+      "writes trajectory.csv (left D/.trajectory.csv.XXXXXXXX.tmp for ever)",
+      "the process ends by SIGTERM, no temporary file left", sigterm_during_write),
+    S("stale-temp-files", "runs", "`striatal simulate --duration 5 --out D`, D holding the "
+      "temporary files of killed writers (an unlocked `.striatal-XXXXXXXX.tmp`, an older "
+      "striatal's `.trajectory.csv.XXXXXXXX.tmp` two hours old)", "both removed",
+      stale_temps),
+    S("file-name-254", "runs", "`striatal curves R/history.csv --out R/c...c.png`, a legal "
+      "254-character name (failed after the figure was drawn: the temporary name was too "
+      "long)", "exit 0, the figure written", long_file_name),
 )  # fmt: skip
 
 
@@ -359,3 +481,56 @@ def test_a_long_run_with_files_holds_no_history_in_memory(tmp_path: Path) -> Non
     assert len(run.history) == run.trials == 4_000
     in_memory = train(max_trials=50, sim=sim)
     assert run.history.rows[:50] == in_memory.history.rows
+
+
+def test_rows_without_a_settings_id_need_their_sweep_json(tmp_path: Path) -> None:
+    """A runs.csv from before settings_id: its rows are reused when sweep.json is there and
+    matches, refused when it is gone (nothing then proves their settings)."""
+    from striatal.experiments import runs_csv, sweeps
+    from striatal.io.files import csv_text
+
+    the_plan = sweeps.plan(seeds=2, max_trials=3, eval_draws=0, sim=_sim5())
+    out = tmp_path / "W"
+    full = sweeps.run_sweep(the_plan.specs, the_plan.settings, out=out, max_trials=3)
+    assert {r["settings_id"] for r in full.rows} == {sweeps.settings_id(s) for s in the_plan.specs}
+    old_columns = runs_csv.COLUMNS_BEFORE_SETTINGS_ID
+    cells = [[int(r[c]) if r[c] is True or r[c] is False else r[c] for c in old_columns]
+             for r in full.rows]  # fmt: skip
+    runs = out / "runs.csv"
+    runs.write_text(csv_text(old_columns, cells[:2]), encoding="utf-8")
+    again = sweeps.run_sweep(the_plan.specs, the_plan.settings, out=out, max_trials=3)
+    assert (again.skipped, again.ran) == (2, 2)
+    runs.write_text(csv_text(old_columns, cells[:2]), encoding="utf-8")
+    (out / "sweep.json").unlink()
+    before = runs.read_bytes()
+    with pytest.raises(ParameterError, match=r"rows without a settings id and no sweep\.json"):
+        sweeps.run_sweep(the_plan.specs, the_plan.settings, out=out, max_trials=3)
+    assert runs.read_bytes() == before and not (out / "sweep.json").exists()
+
+
+def _sim5() -> Any:
+    from striatal.params import Simulation
+
+    return Simulation(duration=5.0)
+
+
+def test_settings_differences_name_the_keys() -> None:
+    from striatal.experiments.sweeps import settings_differences
+
+    arm = {"method": "learn", "role": "learner", "config": {"alpha": 5.0, "gamma": 0.9}}
+    old = {"seeds": 2, "eval_draws": 0, "arms": {"learner": arm, "control": arm}}
+    new = {
+        "seeds": 2,
+        "eval_draws": 5,
+        "arms": {"learner": {**arm, "config": {"alpha": 3.0, "gamma": 0.9}}, "cmaes": arm},
+        "robust": "x",
+    }
+    assert settings_differences(old, new) == [
+        "eval_draws",
+        "arms.learner.config.alpha",
+        "arms.cmaes",
+        "arms.control",
+        "robust",
+    ]
+    assert settings_differences(old, old) == []
+    assert settings_differences([1], new) == ["sweep.json is not an object"]

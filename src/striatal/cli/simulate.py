@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 from striatal.cli import options
 from striatal.errors import ParameterError
-from striatal.io.files import array_rows, check_out_dir, dumps_json, write_csv, write_json
+from striatal.io.files import array_rows, check_out_dir, csv_stream, dumps_json, write_text_set
 from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
 
 if TYPE_CHECKING:
@@ -126,8 +126,13 @@ def run(args: argparse.Namespace) -> int:
     traj = simulate(plant, controller, sim, hardware=hardware)
     result = summary(traj, settings_of(args, traj, hardware))
     if args.out is not None:
-        write_csv(args.out / "trajectory.csv", TRAJ_COLUMNS, array_rows(traj.data))
-        write_json(args.out / "summary.json", result)
+        # one set: a full disk never leaves a new trajectory beside an old summary
+        write_text_set(
+            [
+                (args.out / "trajectory.csv", csv_stream(TRAJ_COLUMNS, array_rows(traj.data))),
+                (args.out / "summary.json", lambda fh: fh.write(dumps_json(result))),
+            ]
+        )
     if args.json:
         sys.stdout.write(dumps_json(result))
     else:

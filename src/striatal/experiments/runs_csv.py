@@ -42,9 +42,13 @@ RUN_COLUMNS: tuple[str, ...] = (
     "wall_seconds",
     "imagined_simulations",
     "imagined_seconds",
+    "settings_id",
 )
+#: The columns a runs.csv had before each row carried the id of its settings: read with
+#: an empty ``settings_id`` (a sweep checks such rows against its sweep.json alone).
+COLUMNS_BEFORE_SETTINGS_ID = RUN_COLUMNS[:-1]
 #: The columns a runs.csv had before imagined trials were recorded: read as 0 imagined.
-COLUMNS_BEFORE_IMAGINED = RUN_COLUMNS[:-2]
+COLUMNS_BEFORE_IMAGINED = RUN_COLUMNS[:-3]
 _INT_COLUMNS = ("seed", "trials", "simulations", "eval_simulations", "imagined_simulations")
 
 
@@ -55,17 +59,23 @@ _STR_COLUMNS = ("arm", "role", "method", "learner", "init")
 
 
 def row_text(row: dict[str, Any]) -> str:
-    """One CSV line (no header) of ``row`` in RUN_COLUMNS order."""
-    cells = [int(row[c]) if c in _BOOL_COLUMNS else row[c] for c in RUN_COLUMNS]
+    """One CSV line (no header) of ``row`` in RUN_COLUMNS order (``settings_id``: the
+    row's, else empty)."""
+    cells = [
+        int(row[c]) if c in _BOOL_COLUMNS else row.get(c, "") if c == "settings_id" else row[c]
+        for c in RUN_COLUMNS
+    ]
     return csv_text(RUN_COLUMNS, [cells]).split("\n", 1)[1]
 
 
 def _parse_row(cells: list[str], columns: tuple[str, ...] = RUN_COLUMNS) -> dict[str, Any]:
     if len(cells) != len(columns):
         raise ValueError(f"{len(cells)} cells, expected {len(columns)}")
-    row: dict[str, Any] = {"imagined_simulations": 0, "imagined_seconds": 0.0}
+    row: dict[str, Any] = {"imagined_simulations": 0, "imagined_seconds": 0.0, "settings_id": ""}
     for name, cell in zip(columns, cells, strict=True):
-        if name in _STR_COLUMNS:
+        if name == "settings_id":
+            row[name] = cell
+        elif name in _STR_COLUMNS:
             if not cell:
                 raise ValueError(f"empty {name}")
             row[name] = cell
@@ -85,17 +95,18 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
 
     A last line without its newline or that does not parse is what a kill during
     a write leaves; any other bad line raises DataFileError. A file written before the
-    imagined columns were recorded reads with 0 imagined trials (its clean text has
-    today's columns). A row whose (arm, init,
-    seed) an earlier row already has is dropped (the first is kept), so no run is
-    counted twice.
+    imagined columns were recorded reads with 0 imagined trials, one written before
+    ``settings_id`` with an empty id (the clean text of either has today's columns).
+    A row whose (arm, init, seed) an earlier row already has is dropped (the first is
+    kept), so no run is counted twice.
     """
     if not path.exists():
         return [], csv_text(RUN_COLUMNS, [])
     lines = read_text(path, what="runs file").splitlines(keepends=True)
     if not lines or not lines[0].endswith("\n"):
         return [], csv_text(RUN_COLUMNS, [])
-    columns = {",".join(c): c for c in (RUN_COLUMNS, COLUMNS_BEFORE_IMAGINED)}.get(lines[0].strip())
+    known = (RUN_COLUMNS, COLUMNS_BEFORE_SETTINGS_ID, COLUMNS_BEFORE_IMAGINED)
+    columns = {",".join(c): c for c in known}.get(lines[0].strip())
     if columns is None:
         if lines[0].startswith("arm,"):
             raise DataFileError(

@@ -6,7 +6,9 @@ specs and the settings recorded in sweep.json; :func:`run_sweep` runs specs.
 
 Resume: rows are appended and flushed to runs.csv as runs finish; a rerun with the
 same output folder reads the rows back (dropping a last line a kill cut short) and
-runs only the missing (arm, init, seed). The output folder is locked
+runs only the missing (arm, init, seed). Each row carries the id of the settings it
+was computed with (:func:`settings_id`): a row of other settings is never reused.
+The output folder is locked
 (:meth:`striatal.io.rundir.RunDir.lock`) while a sweep runs in it.
 """
 
@@ -247,10 +249,12 @@ def _run_sweep(
     rows: list[dict[str, Any]] = []
     stream: TextIO | None = None
     wanted = {s.key for s in specs}
+    ids = {s.arm: settings_id(s, settings.get("trial_kernel")) for s in specs}
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         spath = out / "sweep.json"
-        if spath.exists():
+        checked = spath.exists()
+        if checked:
             old = read_json(spath, what="sweep settings")
             # settings.options records how the sweep was asked for (an option left to its
             # default or given at that value), the rest what it computes: only that counts
@@ -259,14 +263,16 @@ def _run_sweep(
             if isinstance(old, dict):
                 old.pop("options", None)
             if old != new:
+                differ = settings_differences(old, new)
                 raise ParameterError(
-                    f"{out} holds a sweep with other settings; use another --out "
-                    "or the same options to resume it"
+                    f"{out} holds a sweep with other settings ({', '.join(differ)}); use "
+                    "another --out or the same options to resume it"
                 )
-        else:
-            write_json(spath, settings)
         rpath = out / "runs.csv"
         old_rows, clean = read_runs(rpath)
+        check_row_settings(old_rows, ids, checked=checked, where=rpath)
+        if not checked:
+            write_json(spath, settings)
         rows = [r for r in old_rows if (r["arm"], r["init"], r["seed"]) in wanted]
         atomic_write_text(rpath, clean)
         stream = rpath.open("a", encoding="utf-8", newline="")
@@ -287,6 +293,7 @@ def _run_sweep(
                 connect_timeout=connect_timeout,
             )
         for row in rows_in:
+            row = {**row, "settings_id": ids[row["arm"]]}
             rows.append(row)
             if stream is not None:
                 stream.write(row_text(row))
@@ -302,6 +309,96 @@ def _run_sweep(
     return SweepResult(
         rows=sort_rows(rows), ran=len(todo), skipped=len(specs) - len(todo), summary=summary
     )
+
+
+def settings_id(spec: RunSpec, trial_kernel: str | None = None) -> str:
+    """The id of the settings a run of ``spec`` computes with (runs.csv's ``settings_id``):
+    a short hash of its arm (method, role, config) and of what every arm shares (the
+    controller template, plant, trial, evaluation draws; ``trial_kernel``, the SIMD
+    kernel's note, when set). The arm's name, init and seed are the row's key, not part
+    of the id: every run of an arm has the same id."""
+    import hashlib
+    import json
+    from dataclasses import asdict
+
+    text = json.dumps(
+        json_roundtrip(
+            {
+                "method": spec.method,
+                "role": spec.role,
+                "config": spec.config.to_dict(),
+                "template": spec.template.to_dict(),
+                "plant": spec.plant.to_dict(),
+                "sim": asdict(spec.sim),
+                "eval_draws": spec.eval_draws,
+                "trial_kernel": trial_kernel,
+            }
+        ),
+        sort_keys=True,
+        separators=(",", ":"),
+    )
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
+
+
+def check_row_settings(
+    rows: Sequence[dict[str, Any]], ids: dict[str, str], *, checked: bool, where: Path
+) -> None:
+    """ParameterError unless every row of runs.csv ``where`` was computed with the settings
+    of its arm here (``ids``: arm -> :func:`settings_id`). A row without an id (a file of
+    an older striatal) is taken only when ``checked``: sweep.json is there and matches."""
+    other = [r for r in rows if r["settings_id"] and ids.get(r["arm"]) != r["settings_id"]]
+    if other:
+        arms = ", ".join(dict.fromkeys(r["arm"] for r in other))
+        raise ParameterError(
+            f"{where.parent} holds rows of other settings ({len(other)} of {len(rows)} "
+            f"rows in {where.name}, arm {arms}); use another --out"
+        )
+    if not checked and any(not r["settings_id"] for r in rows):
+        raise ParameterError(
+            f"{where.parent} holds rows without a settings id and no sweep.json to check "
+            "them against; use another --out"
+        )
+
+
+def settings_differences(old: Any, new: dict[str, Any]) -> list[str]:
+    """The settings keys in which sweep.json ``old`` differs from ``new``: top-level keys,
+    and for ``arms`` the arm (``arms.NAME``) or its fields (``arms.NAME.config.FIELD``)."""
+    if not isinstance(old, dict):
+        return ["sweep.json is not an object"]
+    keys: list[str] = []
+    for k in dict.fromkeys([*new, *old]):
+        a, b = old.get(k), new.get(k)
+        if a == b:
+            continue
+        if k == "arms" and isinstance(a, dict) and isinstance(b, dict):
+            keys.extend(_arm_differences(a, b))
+        else:
+            keys.append(k)
+    return keys
+
+
+def _arm_differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
+    keys: list[str] = []
+    for name in dict.fromkeys([*new, *old]):
+        a, b = old.get(name), new.get(name)
+        if a == b:
+            continue
+        if not (isinstance(a, dict) and isinstance(b, dict)):
+            keys.append(f"arms.{name}")
+            continue
+        for field in dict.fromkeys([*b, *a]):
+            fa, fb = a.get(field), b.get(field)
+            if fa == fb:
+                continue
+            if field == "config" and isinstance(fa, dict) and isinstance(fb, dict):
+                keys.extend(
+                    f"arms.{name}.config.{f}"
+                    for f in dict.fromkeys([*fb, *fa])
+                    if fa.get(f) != fb.get(f)
+                )
+            else:
+                keys.append(f"arms.{name}.{field}")
+    return keys
 
 
 def json_roundtrip(obj: Any) -> Any:

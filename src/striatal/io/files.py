@@ -6,13 +6,18 @@ Every writer goes through a temporary file in the destination folder and an
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
 import math
 import os
+import re
+import signal
 import stat
 import tempfile
+import threading
+import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
@@ -22,22 +27,31 @@ if TYPE_CHECKING:
 
 from striatal.errors import DataFileError
 
+try:
+    import fcntl
+except ImportError:  # not POSIX: temporary files are not locked, and age alone marks them stale
+    fcntl = None  # type: ignore[assignment]
+
 __all__ = [
     "MAX_INPUT_BYTES",
     "array_rows",
     "atomic_write_file",
+    "atomic_write_set",
     "atomic_write_stream",
     "atomic_write_text",
     "check_no_dangling_link",
     "check_out_dir",
+    "csv_stream",
     "csv_text",
     "dumps_json",
     "read_csv",
     "read_json",
     "read_text",
+    "remove_stale_temps",
     "replace_into",
     "write_csv",
     "write_json",
+    "write_text_set",
 ]
 
 
@@ -119,12 +133,21 @@ def atomic_write_stream(path: str | os.PathLike[str], write: Callable[[TextIO], 
     The text goes to the file as ``write`` produces it, so a large file never has
     to be held in memory. A folder that cannot be made or written raises DataFileError.
     """
+    write_text_set([(Path(path), write)])
 
-    def write_text(tmp: Path) -> None:
-        with tmp.open("w", encoding="utf-8", newline="") as fh:
-            write(fh)
 
-    atomic_write_file(path, write_text)
+def write_text_set(files: Sequence[tuple[Path, Callable[[TextIO], object]]]) -> None:
+    """Write text files as one set (:func:`atomic_write_set`): ``write(fh)`` for each
+    (target, ``write``), UTF-8; all of them are replaced, or none is."""
+
+    def text_file(write: Callable[[TextIO], object]) -> Callable[[Path], None]:
+        def write_text(tmp: Path) -> None:
+            with tmp.open("w", encoding="utf-8", newline="") as fh:
+                write(fh)
+
+        return write_text
+
+    atomic_write_set([(target, text_file(write)) for target, write in files])
 
 
 def atomic_write_file(path: str | os.PathLike[str], write: Callable[[Path], object]) -> None:
@@ -137,30 +160,147 @@ def atomic_write_file(path: str | os.PathLike[str], write: Callable[[Path], obje
     give it. A folder that cannot be made or written, or a write that fails (a full
     disk), raises DataFileError naming ``path``.
     """
-    target = Path(path)
+    atomic_write_set([(Path(path), write)])
+
+
+def atomic_write_set(files: Sequence[tuple[Path, Callable[[Path], object]]]) -> None:
+    """Write several files as one set: every temporary file first, then the renames.
+
+    ``files``: (target, ``write(tmp)``) pairs, as :func:`atomic_write_file` takes one.
+    If any write fails (a full disk), every temporary file is removed and the old
+    files stay as they were, all of them: a folder never holds a new file beside an
+    old one of the same set. The temporary files are named ``.striatal-XXXXXXXX.tmp``
+    (any legal target name fits beside them), locked while written, and removed on
+    KeyboardInterrupt and on SIGTERM; ones that a killed process left are removed
+    at the next write into their folder (:func:`remove_stale_temps`).
+    """
+    temps: list[tuple[str, int, Path]] = []
+    try:
+        with _removed_on_sigterm():
+            for target, write in files:
+                temps.append(_write_temp(target, write))
+            for tmp, _fd, target in temps:
+                replace_into(tmp, target)
+    finally:
+        for tmp, fd, _target in temps:
+            _LIVE_TEMPS.discard(tmp)
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
+            os.close(fd)
+
+
+#: How a temporary file of :func:`atomic_write_set` begins and ends.
+TEMP_PREFIX, TEMP_SUFFIX = ".striatal-", ".tmp"
+#: A temporary file that another writer left is removed once this old [s], if it cannot
+#: be shown unused by its lock (the names of older striatal versions: ``.NAME.XXXXXXXX.tmp``).
+STALE_SECONDS = 3600.0
+_OLD_TEMP = re.compile(r"^\..+\.[a-z0-9_]{8}\.tmp$")
+#: The temporary files this process is writing (removed by the SIGTERM handler).
+_LIVE_TEMPS: set[str] = set()
+
+
+def _write_temp(target: Path, write: Callable[[Path], object]) -> tuple[str, int, Path]:
+    """(temporary file, its locked descriptor, ``target``): ``write`` done and fsynced."""
     check_no_dangling_link(target.parent)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+        remove_stale_temps(target.parent)
+        fd, tmp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=TEMP_SUFFIX, dir=target.parent)
     except OSError as exc:
         raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
+    _LIVE_TEMPS.add(tmp)
     try:
         try:
-            try:
-                os.fchmod(fd, 0o666 & ~_umask())
-            finally:
-                os.close(fd)
+            if fcntl is not None:
+                with contextlib.suppress(OSError):  # a file system without locks
+                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            os.fchmod(fd, 0o666 & ~_umask())
             write(Path(tmp))
             with open(tmp, "rb") as fh:
                 os.fsync(fh.fileno())
         except OSError as exc:
             # a full disk (ENOSPC) or a quota: the error names no file, so name the target
             raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
-        replace_into(tmp, target)
     except BaseException:
-        if os.path.exists(tmp):
+        _LIVE_TEMPS.discard(tmp)
+        with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        os.close(fd)
         raise
+    return tmp, fd, target
+
+
+def remove_stale_temps(folder: Path, *, now: float | None = None) -> list[str]:
+    """Remove the temporary files a killed writer left in ``folder``; their names.
+
+    A ``.striatal-XXXXXXXX.tmp`` goes if no process holds its lock (its writer is
+    gone); a temporary file of an older striatal (``.NAME.XXXXXXXX.tmp``), which has
+    no lock, goes once :data:`STALE_SECONDS` old.
+    """
+    removed: list[str] = []
+    now = time.time() if now is None else now
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for entry in entries:
+        name = entry.name
+        if not name.endswith(TEMP_SUFFIX) or not entry.is_file(follow_symlinks=False):
+            continue
+        try:
+            if name.startswith(TEMP_PREFIX) and fcntl is not None:
+                if name in {os.path.basename(t) for t in _LIVE_TEMPS}:
+                    continue
+                if not _unlocked(entry.path):
+                    continue
+            elif _OLD_TEMP.match(name) or name.startswith(TEMP_PREFIX):
+                if now - entry.stat(follow_symlinks=False).st_mtime < STALE_SECONDS:
+                    continue
+            else:
+                continue
+            os.unlink(entry.path)
+            removed.append(name)
+        except OSError:
+            continue  # gone already, or not ours to remove
+    return removed
+
+
+def _unlocked(path: str) -> bool:
+    """Whether no process holds the lock of the temporary file ``path``."""
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return False
+    finally:
+        os.close(fd)
+    return True
+
+
+@contextlib.contextmanager
+def _removed_on_sigterm() -> Iterator[None]:
+    """While the block runs, SIGTERM removes the live temporary files, then ends the
+    process as SIGTERM would have. Only where SIGTERM has its default action and in the
+    main thread (a program's own handler, or a thread, is left alone)."""
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
+    ):
+        yield
+        return
+
+    def on_term(signum: int, _frame: object) -> None:
+        for tmp in list(_LIVE_TEMPS):
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    signal.signal(signal.SIGTERM, on_term)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _finite_json(obj: Any) -> Any:
@@ -283,6 +423,12 @@ def write_csv(
     ``rows`` may be a generator (see :func:`array_rows`): memory stays bounded
     whatever the number of rows.
     """
+    atomic_write_stream(path, csv_stream(header, rows))
+
+
+def csv_stream(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> Callable[[TextIO], None]:
+    """``write(fh)`` of the CSV text of ``header`` and ``rows``, row by row (for
+    :func:`write_text_set`)."""
 
     def write(fh: TextIO) -> None:
         writer = csv.writer(fh, lineterminator="\n")
@@ -290,7 +436,7 @@ def write_csv(
         for row in rows:
             writer.writerow([_csv_cell(v) for v in row])
 
-    atomic_write_stream(path, write)
+    return write
 
 
 def array_rows(data: np.ndarray, chunk: int = 4096) -> Iterator[list[float]]:
