@@ -107,7 +107,7 @@ def test_steps_after_the_end_warn_once_and_repeat_the_terminal_step(
     kw: dict, action: float, ended: str, caplog: pytest.LogCaptureFixture
 ) -> None:
     env = CartPoleSwingUpEnv(**kw)
-    obs, reward, terminated, truncated, info = _run_to_end(env, action)
+    obs, _, terminated, truncated, info = _run_to_end(env, action)
     assert (terminated, truncated) == ((ended == "terminated"), (ended == "truncated"))
     with pytest.warns(UserWarning, match=f"already returned {ended} = True; call reset") as rec:
         again = [env.step(np.array([action], dtype=np.float32)) for _ in range(3)]

@@ -274,9 +274,7 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
     def step(
         self, action: np.ndarray
     ) -> tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]:
-        u = clip_action(
-            action, self.task.u_max, 1, self.task.normalised_action, self.action_space
-        )
+        u = clip_action(action, self.task.u_max, 1, self.task.normalised_action, self.action_space)
         if self._ended is not None:
             return self._after_end(*self._ended)
         s = self._state

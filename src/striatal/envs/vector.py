@@ -62,7 +62,8 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
     ``reset(seed=s)`` seeds row b with ``s + b`` (``s`` an int or a numpy integer; a
     list, tuple or array gives one seed, or None, per row), as Gymnasium's
-    ``SyncVectorEnv`` does. ``num_envs`` is at most :data:`MAX_NUM_ENVS`. ``options`` as for the scalar env;
+    ``SyncVectorEnv`` does. ``num_envs`` is at most :data:`MAX_NUM_ENVS`. ``options``
+    as for the scalar env;
     ``options["initial_state"]`` may also be (num_envs, 4), and
     ``options["reset_mask"]`` (bool, (num_envs,)) resets only the marked rows.
     ``infos`` holds ``state`` (num_envs, 4), ``t``, ``u`` and ``fault`` with
