@@ -150,6 +150,71 @@ def test_cli_writes_the_png_and_json(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert data["profiles"][0]["label"] == "learner"
 
 
+def write_inits(folder: Path, rows: list[tuple[str, str, int, int, int]]) -> Path:
+    """runs.csv of a sweep of several inits; rows (arm, init, seed, ok, simulations)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    lines = [f"{a},{i},{s},{ok},{n},{n}\n" for a, i, s, ok, n in rows]
+    (folder / "runs.csv").write_text("arm,init,seed,success,trials,simulations\n" + "".join(lines))
+    return folder
+
+
+INIT_ROWS = [
+    ("learner", "chapter", 0, 1, 5),
+    ("learner", "chapter", 1, 1, 7),
+    ("learner", "random", 0, 0, 50),
+    ("learner", "random", 1, 0, 50),
+    ("control", "chapter", 0, 0, 50),
+    ("control", "random", 0, 0, 50),
+]
+
+
+def test_a_sweep_of_several_inits_is_profiled_per_arm_and_init(tmp_path: Path) -> None:
+    """Seeds started from the chapter's gains and from random ones are never pooled."""
+    d = write_inits(tmp_path / "s", INIT_ROWS)
+    profiles, _, _ = sweep_profiles([d])
+    assert [(p.arm, p.init, p.runs, p.successes) for p in profiles] == [
+        ("learner", "chapter", 2, 2),
+        ("learner", "random", 2, 0),
+        ("control", "chapter", 1, 0),
+        ("control", "random", 1, 0),
+    ]
+    assert profiles[0].name == "learner (chapter init)"
+    assert profiles[0].to_dict()["init"] == "chapter"
+    # one init in the sweep: one profile per arm, no init in its name
+    one = write_inits(tmp_path / "one", [r for r in INIT_ROWS if r[1] == "random"])
+    single, _, _ = sweep_profiles([one])
+    assert [(p.name, p.runs) for p in single] == [("learner", 2), ("control", 1)]
+    assert single[0].to_dict()["init"] is None
+    both, _, _ = sweep_profiles([d, one])
+    assert [p.name for p in both] == [
+        "s/learner (chapter init)",
+        "s/learner (random init)",
+        "s/control (chapter init)",
+        "s/control (random init)",
+        "one/learner",
+        "one/control",
+    ]
+
+
+def test_cli_labels_each_init(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    d = write_inits(tmp_path / "s", INIT_ROWS)
+    chapter = {"method": "learn", "role": "learner", "config": {"learner": "chapter"}}
+    write_summary(d, {"learner": chapter})
+    out = tmp_path / "f.png"
+    assert main(["profile", str(d), "--out", str(out), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [(p["arm"], p["init"], p["runs"], p["label"]) for p in data["profiles"]] == [
+        ("learner", "chapter", 2, "chapter (learner), chapter init"),
+        ("learner", "random", 2, "chapter (learner), random init"),
+        ("control", "chapter", 1, "control, chapter init"),
+        ("control", "random", 1, "control, random init"),
+    ]
+    assert main(["profile", str(d), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "learner (chapter init) = chapter (learner), chapter init: 2/2 solved" in text
+    assert "control (random init) = control, random init: 0/1 solved" in text
+
+
 @pytest.mark.parametrize(
     ("folder", "extra"),
     [

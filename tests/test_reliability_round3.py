@@ -11,14 +11,17 @@ from __future__ import annotations
 import errno
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
 import time
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from test_reliability import (
     Scenario,
@@ -231,6 +234,73 @@ def long_file_name(tmp: Path) -> tuple[bool, str]:
     return r.rc == 0 and written, f"exit {r.rc}{said}; written: {'yes' if written else 'no'}"
 
 
+def _env(**kw: Any) -> Any:
+    """A scalar swing-up env, reset with seed 0."""
+    from striatal.envs import CartPoleSwingUpEnv
+
+    env = CartPoleSwingUpEnv(**kw)
+    env.reset(seed=0)
+    return env
+
+
+def env_error(make: Callable[[Any], object]) -> Callable[[Path], tuple[bool, str]]:
+    """ParameterError naming the action space, from ``make(env)``; addresses blanked."""
+    check = library_error(lambda _: make(_env()), ParameterError)
+
+    def run(tmp: Path) -> tuple[bool, str]:
+        ok, observed = check(tmp)
+        return ok and "action space Box(" in observed, re.sub(r" at 0x[0-9a-f]+", "", observed)
+
+    return run
+
+
+def numpy_seed(tmp: Path) -> tuple[bool, str]:
+    """The vector env's reset(seed=np.int64(3)) seeds as seed=3 (and a list of numpy ints)."""
+    from striatal.envs import CartPoleSwingUpVectorEnv
+
+    vec = CartPoleSwingUpVectorEnv(num_envs=3, perturbation=0.05)
+    want, _ = vec.reset(seed=3)
+    try:
+        got, _ = vec.reset(seed=np.int64(3))
+        listed, _ = vec.reset(seed=[np.int64(3), np.int32(4), 5])
+    except Exception as exc:
+        return False, f"`{type(exc).__name__}: {exc}`"
+    same = np.array_equal(got, want) and np.array_equal(listed, want)
+    return same, "the same start states as seed=3" if same else "other start states"
+
+
+def step_after_end(tmp: Path) -> tuple[bool, str]:
+    """Steps after truncation: one warning, then the terminal step again with reward 0."""
+    env = _env(duration=0.05)
+    done = False
+    while not done:
+        obs, _, terminated, truncated, _ = env.step(np.zeros(1))
+        done = terminated or truncated
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        again = [env.step(np.zeros(1)) for _ in range(3)]
+    rewards = [float(a[1]) for a in again]
+    same = all(np.array_equal(a[0], obs) and a[3] for a in again)
+    ok = len(caught) == 1 and rewards == [0.0] * 3 and same
+    said = str(caught[0].message).split("WARN: ")[-1].split(";")[0] if caught else ""
+    return ok, (
+        f"{len(caught)} warning (`{said}`); rewards {rewards}, truncated, "
+        f"{'the same observation' if same else 'observations differ'}"
+    )
+
+
+def profile_inits(tmp: Path) -> tuple[bool, str]:
+    out = tmp / "P"
+    r = cli_in_process(*SWEEP, "--init", "chapter,random", "--out", str(out))
+    assert r.rc == 0, r.err
+    r = cli_in_process("profile", str(out), "--json", "--out", str(out / "p.png"))
+    if r.rc != 0:
+        return False, f"exit {r.rc}: `{r.err.strip()}`"
+    curves = json.loads(r.out)["profiles"]
+    seen = [f"{p['label']} ({p['runs']} runs)" for p in curves]
+    return len(curves) == 4 and all(p["runs"] == 2 for p in curves), "; ".join(seen)
+
+
 S = Scenario
 ROUND3: tuple[Scenario, ...] = (
     S("resume-at-default", "runs", "`striatal train --seed 4 --duration 5 --max-trials 3 --out "
@@ -426,6 +496,32 @@ ROUND3: tuple[Scenario, ...] = (
     S("file-name-254", "runs", "`striatal curves R/history.csv --out R/c...c.png`, a legal "
       "254-character name (failed after the figure was drawn: the temporary name was too "
       "long)", "exit 0, the figure written", long_file_name),
+    S("gym-action-text", "bad input", "`env.step(\"abc\")` on the Gymnasium env (was "
+      "numpy's \"could not convert string to float\")",
+      "ParameterError (a ValueError) naming the action and the action space",
+      env_error(lambda env: env.step("abc"))),
+    S("gym-action-object", "bad input", "`env.step(object())` (was a TypeError from float())",
+      "ParameterError naming the action and the action space",
+      env_error(lambda env: env.step(object()))),
+    S("gym-action-complex", "bad input", "`env.step(np.array([1+2j]))` (the imaginary part "
+      "was dropped with a ComplexWarning)", "ParameterError: a real number",
+      env_error(lambda env: env.step(np.array([1 + 2j])))),
+    S("gym-vec-numpy-seed", "bad input", "`CartPoleSwingUpVectorEnv(num_envs=3).reset(seed="
+      "np.int64(3))` and `seed=[np.int64(3), np.int32(4), 5]` (was \"not iterable\")",
+      "accepted, as seed=3", numpy_seed),
+    S("gym-step-after-end", "bad input", "`env.step(a)` three times after the episode "
+      "returned truncated = True, without reset (was reward -5 each step, no warning)",
+      "one gymnasium warning; the terminal step again, reward 0", step_after_end),
+    S("gym-num-envs-huge", "bad input", "`gymnasium.make_vec(\"striatal/CartPoleSwingUp-v0\", "
+      "num_envs=10**8, vectorization_mode=\"vector_entry_point\")` (was MemoryError)",
+      "ParameterError naming num_envs, nothing allocated",
+      library_error(lambda _: __import__("gymnasium").make_vec(
+          "striatal/CartPoleSwingUp-v0", num_envs=10**8,
+          vectorization_mode="vector_entry_point"), ParameterError)),
+    S("profile-inits", "runs", "`striatal sweep --seeds 2 --max-trials 3 --duration 5 "
+      "--eval-draws 0 --init chapter,random --out P`, then `striatal profile P --json` (the "
+      "two inits were pooled in one curve per arm)", "one curve per (arm, init), 2 runs each",
+      profile_inits),
 )  # fmt: skip
 
 
@@ -477,7 +573,7 @@ def test_a_long_run_with_files_holds_no_history_in_memory(tmp_path: Path) -> Non
         run = train(max_trials=4_000, sim=sim, out=tmp_path / "r", on_trial=on)
     finally:
         tracemalloc.stop()
-    assert seen[4_000] - seen[1_000] < 300_000, seen  # 3 000 trials: ~2 MB before
+    assert seen[4_000] - seen[1_000] < 600_000, seen  # 3 000 trials: ~2 MB before
     assert len(run.history) == run.trials == 4_000
     in_memory = train(max_trials=50, sim=sim)
     assert run.history.rows[:50] == in_memory.history.rows

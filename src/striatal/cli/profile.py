@@ -14,7 +14,8 @@ if TYPE_CHECKING:
     from striatal.experiments.profiles import Profile
 
 DESCRIPTION = (
-    "Performance profiles from the runs.csv of striatal sweep folders: for each arm, the "
+    "Performance profiles from the runs.csv of striatal sweep folders: for each arm (and "
+    "each init, when a sweep ran several: --init chapter,random), the "
     "fraction of its seeds solved within a budget of simulations, simulated seconds or "
     "learning trials, with a pointwise Wilson 95 % band. Unsolved seeds count in the "
     "denominator, so each line ends at the arm's success rate. Without --x: simulations "
@@ -52,7 +53,7 @@ def _arm_specs(folder: Path) -> dict[str, Any]:
 
 def _labels(folders: list[Path], profiles: list[Profile]) -> list[str]:
     """Legend labels of ``profiles`` (named ``arm`` or ``folder/arm``) from each sweep's
-    recorded settings."""
+    recorded settings, ``", chapter init"`` added to a profile of one of several inits."""
     from striatal.viz import plots
 
     triples = {}
@@ -60,9 +61,10 @@ def _labels(folders: list[Path], profiles: list[Profile]) -> list[str]:
         for arm, spec in _arm_specs(folder).items():
             name = arm if len(folders) == 1 else f"{folder.name}/{arm}"
             triples[name] = (folder.name, arm, spec)
-    return plots.arm_labels(
-        [triples.get(p.arm, (p.arm.partition("/")[0], p.arm, None)) for p in profiles]
-    )
+    arms = list(dict.fromkeys(p.arm for p in profiles))
+    named = plots.arm_labels([triples.get(arm, (arm.partition("/")[0], arm, None)) for arm in arms])
+    label = dict(zip(arms, named, strict=True))
+    return [f"{label[p.arm]}, {p.init} init" if p.init else label[p.arm] for p in profiles]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -95,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     for p, label in zip(profiles, labels, strict=True):
         lo, hi = p.low[-1], p.high[-1]
-        named = p.arm if label == p.arm else f"{p.arm} = {label}"
+        named = p.name if label == p.name else f"{p.name} = {label}"
         print(
             f"{named}: {p.successes}/{p.runs} solved = {100 * p.success_rate:.3g} % "
             f"(95 % Wilson {100 * lo:.3g}-{100 * hi:.3g} %) within {p.budget[-1]:g} {column}"

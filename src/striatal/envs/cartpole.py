@@ -14,7 +14,7 @@ from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
+from gymnasium import logger, spaces
 from gymnasium.wrappers import TimeLimit
 
 from striatal.envs.task import SwingUpTask, observe, outcome, start_state
@@ -62,16 +62,29 @@ def action_space(task: SwingUpTask) -> spaces.Box:
     return spaces.Box(-high, high, dtype=high.dtype)
 
 
-def clip_action(action: Any, u_max: float, n: int, normalised: bool = False) -> np.ndarray:
+def clip_action(
+    action: Any, u_max: float, n: int, normalised: bool = False, space: Any = None
+) -> np.ndarray:
     """(n,) float64 u, in m/s^2, from an action batch of n real scalars, clipped to +-u_max.
 
     Any real dtype is accepted (a float32 action of the action space, a float64 one of
     a controller) and used as float64. A normalised action a is clipped to [-1, 1]
-    and scaled to u = a * u_max.
+    and scaled to u = a * u_max. Anything else (text, an object, a complex number)
+    raises ParameterError naming the action and ``space``, the action space.
     """
-    a = np.asarray(action, dtype=float)
+    where = "the action space" if space is None else f"the action space {space}"
+    try:
+        raw = np.asarray(action)
+    except (TypeError, ValueError):
+        raw = np.asarray(None)
+    if raw.dtype.kind not in "biuf":
+        raise ParameterError(
+            f"action {action!r} ({type(action).__name__}) is invalid: it must be "
+            f"{'a real number' if n == 1 else f'{n} real numbers'} in {where}"
+        )
+    a = raw.astype(float)
     if a.size != n:
-        raise ParameterError(f"action must hold {n} number(s), got shape {a.shape}")
+        raise ParameterError(f"action must hold {n} number(s) of {where}, got shape {a.shape}")
     a = a.reshape(n)
     if not np.all(np.isfinite(a)):
         raise ParameterError(f"action must be finite, got {a}")
@@ -172,7 +185,10 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
     :class:`~striatal.envs.task.SwingUpTask`. ``terminated``: the cart left the
     track (|x| > ``track``, when a track is set), the eq-24 check failed at
     t = 30 s, or the state blew up (non-finite or beyond 1e8); ``truncated``: the
-    time limit ``duration`` (default 60 s) was reached.
+    time limit ``duration`` (default 60 s) was reached. A ``step`` after the episode
+    ended, without a ``reset``, warns once (``gymnasium.logger.warn``, as Gymnasium's
+    own envs do) and returns the last observation, ``info`` and flags again with
+    reward 0; the state no longer moves.
 
     Keyword arguments are the fields of :class:`~striatal.envs.task.SwingUpTask`
     (plant, dt, duration, u_max, observation, reward, protocol, initial_state,
@@ -220,6 +236,8 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
         self._state = np.array(self.task.initial_state, dtype=float)
         self._steps = 0
         self._u = 0.0
+        self._ended: tuple[bool, bool, bool] | None = None
+        self._warned = False
 
     @property
     def state(self) -> np.ndarray:
@@ -240,10 +258,15 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        # gymnasium's seeding takes only a Python int; a numpy integer is one too.
+        if isinstance(seed, np.integer):
+            seed = int(seed)
         super().reset(seed=seed)
         self._state = start_state(self.task, self.np_random, options)
         self._steps = 0
         self._u = 0.0
+        self._ended = None
+        self._warned = False
         if self._window is not None:
             self.render()
         return self._obs(), self._info()
@@ -251,7 +274,9 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
     def step(
         self, action: np.ndarray
     ) -> tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]:
-        u = clip_action(action, self.task.u_max, 1, self.task.normalised_action)
+        u = clip_action(action, self.task.u_max, 1, self.task.normalised_action, self.action_space)
+        if self._ended is not None:
+            return self._after_end(*self._ended)
         s = self._state
         x, x_dot, theta, theta_dot = kernel.rk4_step(
             s[0], s[1], s[2], s[3], float(u[0]), self.task.dt, self._plant, self._plant, False
@@ -262,6 +287,8 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
         reward, terminated, truncated, fault = outcome(
             self.task, self._state[None, :], np.array([self._steps]), u
         )
+        if terminated[0] or truncated[0]:
+            self._ended = (bool(terminated[0]), bool(truncated[0]), bool(fault[0]))
         if self._window is not None:
             self.render()
         return (
@@ -271,6 +298,20 @@ class CartPoleSwingUpEnv(gym.Env[np.ndarray, np.ndarray]):
             bool(truncated[0]),
             self._info(bool(fault[0])),
         )
+
+    def _after_end(
+        self, terminated: bool, truncated: bool, fault: bool
+    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """The terminal step again, reward 0, with one warning per episode."""
+        if not self._warned:
+            ended = "terminated" if terminated else "truncated"
+            logger.warn(
+                f"step() called after this episode already returned {ended} = True; call "
+                "reset() to start a new one (until then every step returns the last "
+                "observation with reward 0)"
+            )
+            self._warned = True
+        return self._obs(), 0.0, terminated, truncated, self._info(fault)
 
     def render(self) -> np.ndarray | None:  # type: ignore[override]
         """The current picture (:func:`env_frame`): returned (rgb_array) or shown (human).

@@ -33,8 +33,21 @@ from striatal.errors import ParameterError
 from striatal.sim import kernel
 
 __all__ = [
+    "MAX_NUM_ENVS",
     "CartPoleSwingUpVectorEnv",
 ]
+
+#: The most rows one vector env holds (its state arrays take about 100 bytes a row).
+MAX_NUM_ENVS = 65_536
+
+
+def _whole_seed(seed: Any) -> int | None:
+    """``seed`` as a Python int >= 0 (a numpy integer too), None kept; else ParameterError."""
+    if seed is None:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ParameterError(f"a seed must be a whole number >= 0 or None, got {seed!r}")
+    return int(seed)
 
 
 class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
@@ -47,8 +60,10 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     ``SyncVectorEnv`` does, and returns the new first observation with reward 0 and
     terminated = truncated = False. Options given to ``reset`` hold for that reset only.
 
-    ``reset(seed=s)`` seeds row b with ``s + b`` (a list gives one seed per row), as
-    Gymnasium's ``SyncVectorEnv`` does. ``options`` as for the scalar env;
+    ``reset(seed=s)`` seeds row b with ``s + b`` (``s`` an int or a numpy integer; a
+    list, tuple or array gives one seed, or None, per row), as Gymnasium's
+    ``SyncVectorEnv`` does. ``num_envs`` is at most :data:`MAX_NUM_ENVS`. ``options``
+    as for the scalar env;
     ``options["initial_state"]`` may also be (num_envs, 4), and
     ``options["reset_mask"]`` (bool, (num_envs,)) resets only the marked rows.
     ``infos`` holds ``state`` (num_envs, 4), ``t``, ``u`` and ``fault`` with
@@ -66,6 +81,8 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     def __init__(self, num_envs: int = 1, render_mode: str | None = None, **task_options: Any):
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ParameterError(f"num_envs must be a whole number >= 1, got {num_envs!r}")
+        if num_envs > MAX_NUM_ENVS:
+            raise ParameterError(f"num_envs must be at most {MAX_NUM_ENVS}, got {num_envs}")
         check_render_mode(render_mode, self.metadata["render_modes"])
         self.task = SwingUpTask.from_kwargs(**task_options)
         self.metadata = {**type(self).metadata, "render_fps": self.task.render_fps}
@@ -90,13 +107,22 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         """Copy of the raw kernel states (num_envs, 4)."""
         return self._states.copy()
 
-    def _seed(self, seed: int | list[int | None] | None) -> None:
+    def _seed(self, seed: Any) -> None:
         n = self.num_envs
         if seed is None:
             if self._rngs is None:
                 self._rngs = [seeding.np_random(None)[0] for _ in range(n)]
             return
-        seeds = [seed + i for i in range(n)] if isinstance(seed, int) else list(seed)
+        if isinstance(seed, int | np.integer) and not isinstance(seed, bool):
+            first = _whole_seed(seed)
+            assert first is not None
+            seeds: list[int | None] = [first + i for i in range(n)]
+        elif isinstance(seed, list | tuple | np.ndarray) and np.ndim(seed) == 1:
+            seeds = [_whole_seed(s) for s in seed]
+        else:
+            raise ParameterError(
+                f"seed must be a whole number, None or a list of {n} of them, got {seed!r}"
+            )
         if len(seeds) != n:
             raise ParameterError(f"need {n} seeds, got {len(seeds)}")
         old = self._rngs
@@ -170,7 +196,7 @@ class CartPoleSwingUpVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         if self._rngs is None:
             raise ParameterError("call reset() before step()")
         n = self.num_envs
-        u = clip_action(actions, self.task.u_max, n, self.task.normalised_action)
+        u = clip_action(actions, self.task.u_max, n, self.task.normalised_action, self.action_space)
         kernel.step_batch(
             self._states, u, self.task.dt, 1, self._plant, self._plant, False, self._next
         )

@@ -1,4 +1,4 @@
-"""Performance profiles: the fraction of seeds solved within a budget, per arm.
+"""Performance profiles: the fraction of seeds solved within a budget, per arm and init.
 
 For an arm run on n seeds, the profile at budget b is
 
@@ -13,7 +13,9 @@ band, not a simultaneous one).
 The cost is read from a sweep folder's ``runs.csv``: ``simulations`` (every
 simulated trial the arm ran) or ``simulated_seconds`` when the file has those
 columns, else ``trials`` (learning trials only, which leaves out e.g. the
-mean-policy reruns of ``--success-on mean``), with a note saying so.
+mean-policy reruns of ``--success-on mean``), with a note saying so. A sweep run
+from more than one initial condition (``--init chapter,random``) gives one profile
+per (arm, init): seeds started from different gains are never pooled.
 """
 
 from __future__ import annotations
@@ -65,13 +67,14 @@ class SweepRun:
     seed: int
     success: bool
     costs: Mapping[str, float]
+    init: str = ""
 
 
 def read_sweep_runs(folder: Path) -> list[SweepRun]:
     """The rows of ``folder/runs.csv`` (written by ``striatal sweep``).
 
     Needs the columns ``arm``, ``seed``, ``success`` (0/1) and ``trials``; keeps
-    ``simulations`` and ``simulated_seconds`` when present. A last line cut short
+    ``simulations``, ``simulated_seconds`` and ``init`` when present. A last line cut short
     (a kill during a write) is dropped; any other bad line raises DataFileError.
     """
     path = Path(folder) / "runs.csv"
@@ -100,7 +103,15 @@ def read_sweep_runs(folder: Path) -> list[SweepRun]:
             values = {c: float(row[c]) for c in costs}
             if not all(math.isfinite(v) and v >= 0 for v in values.values()):
                 raise ValueError(f"costs must be finite and >= 0, got {values}")
-            runs.append(SweepRun(row["arm"], int(row["seed"]), row["success"] == "1", values))
+            runs.append(
+                SweepRun(
+                    row["arm"],
+                    int(row["seed"]),
+                    row["success"] == "1",
+                    values,
+                    row.get("init", ""),
+                )
+            )
         except (ValueError, StopIteration, csv.Error) as exc:
             if i == len(lines):
                 break
@@ -130,8 +141,9 @@ def choose_x(available: Sequence[str], x: str | None) -> tuple[str, str]:
 
 @dataclass(frozen=True)
 class Profile:
-    """The performance profile of one arm.
+    """The performance profile of one arm (from one init, when its sweep ran several).
 
+    ``init`` is the initial condition of its seeds, "" when the sweep had only one;
     ``budget`` (k,) ascending, starting at 0 and ending at the largest cost of any
     seed; ``solved`` (k,) the fraction of the ``runs`` seeds solved within each
     budget; ``low``/``high`` (k,) its pointwise Wilson 95 % band.
@@ -144,6 +156,12 @@ class Profile:
     solved: np.ndarray
     low: np.ndarray
     high: np.ndarray
+    init: str = ""
+
+    @property
+    def name(self) -> str:
+        """``arm``, or ``arm (init init)`` when the sweep ran several inits."""
+        return f"{self.arm} ({self.init} init)" if self.init else self.arm
 
     @property
     def success_rate(self) -> float:
@@ -152,6 +170,7 @@ class Profile:
     def to_dict(self) -> dict[str, Any]:
         return {
             "arm": self.arm,
+            "init": self.init or None,
             "runs": self.runs,
             "successes": self.successes,
             "budget": self.budget.tolist(),
@@ -161,7 +180,9 @@ class Profile:
         }
 
 
-def performance_profile(arm: str, costs: Sequence[float], solved: Sequence[bool]) -> Profile:
+def performance_profile(
+    arm: str, costs: Sequence[float], solved: Sequence[bool], init: str = ""
+) -> Profile:
     """Profile of one arm from each seed's cost and whether it solved the task.
 
     Steps at every distinct cost of a solved seed; the last point is the largest
@@ -187,13 +208,16 @@ def performance_profile(arm: str, costs: Sequence[float], solved: Sequence[bool]
         solved=counts / n,
         low=np.array([b[0] for b in bands]),
         high=np.array([b[1] for b in bands]),
+        init=init,
     )
 
 
 def sweep_profiles(folders: Sequence[Path], x: str | None = None) -> tuple[list[Profile], str, str]:
     """(profiles, column, note): one profile per arm of every sweep folder.
 
-    Arms are named ``arm`` with one folder and ``folder/arm`` with several.
+    Arms are named ``arm`` with one folder and ``folder/arm`` with several. A folder
+    whose runs started from more than one init gives one profile per (arm, init),
+    its ``init`` set; otherwise ``init`` is "".
     """
     if not folders:
         raise ParameterError("give at least one sweep folder")
@@ -205,12 +229,13 @@ def sweep_profiles(folders: Sequence[Path], x: str | None = None) -> tuple[list[
     column, note = choose_x(available, x)
     profiles = []
     for folder, runs in per_folder:
-        for arm in dict.fromkeys(r.arm for r in runs):
-            mine = [r for r in runs if r.arm == arm]
+        several = len({r.init for r in runs}) > 1
+        for arm, init in dict.fromkeys((r.arm, r.init if several else "") for r in runs):
+            mine = [r for r in runs if r.arm == arm and (not several or r.init == init)]
             label = arm if len(per_folder) == 1 else f"{folder.name}/{arm}"
             profiles.append(
                 performance_profile(
-                    label, [r.costs[column] for r in mine], [r.success for r in mine]
+                    label, [r.costs[column] for r in mine], [r.success for r in mine], init
                 )
             )
     return profiles, column, note
