@@ -234,6 +234,28 @@ def long_file_name(tmp: Path) -> tuple[bool, str]:
     return r.rc == 0 and written, f"exit {r.rc}{said}; written: {'yes' if written else 'no'}"
 
 
+def small_address_space(tmp: Path) -> tuple[bool, str]:
+    """``prlimit --as=300000000 striatal train ...``: Numba's LLVM library cannot map."""
+    import shutil
+    import subprocess
+    import sys
+
+    if shutil.which("prlimit") is None:
+        return True, "prlimit not installed: not tried"
+    out = tmp / "OUT"
+    argv = [sys.executable, "-m", "striatal", "train", "--max-trials", "2", "--duration", "5"]
+    r = subprocess.run(
+        ["prlimit", "--as=300000000", *argv, "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    lines = r.stderr.strip().splitlines()
+    ok = r.returncode == 2 and len(lines) == 1 and "out of memory" in r.stderr
+    ok = ok and "Traceback" not in r.stderr and not out.exists()
+    return ok, f"exit {r.returncode}, {len(lines)} line(s): `{lines[-1] if lines else ''}`"
+
+
 def _env(**kw: Any) -> Any:
     """A scalar swing-up env, reset with seed 0."""
     from striatal.envs import CartPoleSwingUpEnv
@@ -496,6 +518,15 @@ ROUND3: tuple[Scenario, ...] = (
     S("file-name-254", "runs", "`striatal curves R/history.csv --out R/c...c.png`, a legal "
       "254-character name (failed after the figure was drawn: the temporary name was too "
       "long)", "exit 0, the figure written", long_file_name),
+    S("address-space", "resource", "`prlimit --as=300000000 striatal train --max-trials 2 "
+      "--duration 5 --out OUT` (was an 86-line double traceback from llvmlite)",
+      "exit 2, one line saying memory ran out; nothing written", small_address_space),
+    S("ray-refused-writes-nothing", "bad input", "`striatal sweep --backend ray --address "
+      "127.0.0.1:1 --connect-timeout 1 --out OUT` (sweep.json and runs.csv were written "
+      "before the refusal)", "exit 2, one line; nothing written",
+      usage_error(("sweep", "--seeds", "1", "--max-trials", "1", "--duration", "5",
+                   "--backend", "ray", "--address", "127.0.0.1:1", "--connect-timeout", "1",
+                   "--out", "OUT"), says="no Ray cluster answers")),
     S("gym-action-text", "bad input", "`env.step(\"abc\")` on the Gymnasium env (was "
       "numpy's \"could not convert string to float\")",
       "ParameterError (a ValueError) naming the action and the action space",

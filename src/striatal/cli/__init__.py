@@ -231,6 +231,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     return rc
 
 
+def _load_failure(exc: BaseException) -> str:
+    """One line for a library that could not load while the command was being set up."""
+    limit = "the process's memory limit (ulimit -v) is too small for NumPy and Numba"
+    if isinstance(exc, MemoryError):
+        return f"out of memory while loading the libraries: {limit}"
+    cause = str(exc.__context__ if exc.__context__ is not None else exc)
+    if "map segment" in cause or "Cannot allocate memory" in cause:
+        library = Path(cause.split(":")[0]).name if ".so" in cause else "a shared library"
+        return f"out of memory while loading {library}: {limit}"
+    first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    return f"a library could not load: {first[:200]}"
+
+
 def _main(argv: Sequence[str] | None) -> int:
     tolerate_any_encoding()
     # Numba's OpenMP threads then sleep between kernel calls instead of spinning, so the
@@ -243,6 +256,10 @@ def _main(argv: Sequence[str] | None) -> int:
         args._given = options_given(args.command, words)
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
+    except (MemoryError, OSError) as exc:
+        # the libraries could not load: a memory limit (ulimit -v) too small for them
+        sys.stderr.write(f"striatal: error: {_load_failure(exc)}\n")
+        return EXIT_USAGE
     except Exception:
         if interrupts.received():  # an import cut short by Ctrl-C, reported as another error
             return EXIT_INTERRUPTED
@@ -276,6 +293,12 @@ def _main(argv: Sequence[str] | None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
+    except MemoryError:
+        sys.stderr.write(
+            f"striatal {args.command}: error: out of memory (the process's memory limit, "
+            "ulimit -v, or the machine's); nothing more was written\n"
+        )
+        return EXIT_USAGE
     except OSError as exc:
         # an output folder that is a file, a read-only disk, a full disk: the user's to fix
         where = f"{exc.filename}: " if exc.filename else ""

@@ -23,7 +23,13 @@ from typing import Any, Literal, TextIO
 
 from striatal.errors import ParameterError
 from striatal.experiments import baselines as baseline_methods
-from striatal.experiments.pool import CONNECT_TIMEOUT, Backend, check_workers, execute
+from striatal.experiments.pool import (
+    CONNECT_TIMEOUT,
+    Backend,
+    check_workers,
+    execute,
+    wait_for_address,
+)
 from striatal.experiments.report import summarise
 from striatal.experiments.runner import (
     CONTROL_ARM,
@@ -205,6 +211,9 @@ def run_sweep(
         )
     if backend == "ray" and not address:
         raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
+    if backend == "ray" and address:
+        # nothing is written into out before the cluster's address answers
+        wait_for_address(address, connect_timeout)
     check_workers(workers)
     if engine != "processes":
         from striatal.experiments.lockstep_sweep import check_specs
