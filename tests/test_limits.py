@@ -273,33 +273,6 @@ def test_a_full_disk_on_the_second_file_keeps_the_old_pair(
     assert '"duration": 6.0' in (out / "summary.json").read_text()
 
 
-def test_sigterm_during_a_write_leaves_no_temporary_file(tmp_path: Path) -> None:
-    """SIGTERM while simulate writes a large trajectory.csv: the process ends by the
-    signal, as before, and its temporary file goes with it."""
-    import signal
-    import subprocess
-    import sys
-    import time
-
-    out = tmp_path / "D"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "striatal", "simulate", "--duration", "20000", "--out", str(out)],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    try:
-        deadline = time.monotonic() + 120
-        while not list(out.glob(".*.tmp")) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert list(out.glob(".*.tmp")), "the write never started"
-        proc.send_signal(signal.SIGTERM)
-        assert proc.wait(timeout=60) == -signal.SIGTERM
-    finally:
-        proc.kill()
-        proc.wait()
-    assert list(out.iterdir()) == []
-
-
 def test_stale_temporary_files_are_removed_at_the_next_write(tmp_path: Path) -> None:
     """A temp file whose writer is gone (unlocked) goes at the next write into its folder;
     one of an older striatal's names goes once an hour old; other files stay."""

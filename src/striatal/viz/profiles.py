@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from itertools import pairwise
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
 import numpy as np
 
@@ -54,17 +54,7 @@ LegendPlace = Literal[
     "center",
 ]
 #: Places inside the axes tried for the legend, in this order.
-LEGEND_PLACES: tuple[LegendPlace, ...] = (
-    "lower right",
-    "center right",
-    "upper left",
-    "upper right",
-    "lower left",
-    "center left",
-    "upper center",
-    "lower center",
-    "center",
-)
+LEGEND_PLACES: tuple[LegendPlace, ...] = get_args(LegendPlace)
 
 
 def arm_label(arm: str, spec: Mapping[str, Any] | None) -> str:
