@@ -527,6 +527,15 @@ ROUND3: tuple[Scenario, ...] = (
       usage_error(("sweep", "--seeds", "1", "--max-trials", "1", "--duration", "5",
                    "--backend", "ray", "--address", "127.0.0.1:1", "--connect-timeout", "1",
                    "--out", "OUT"), says="no Ray cluster answers")),
+    S("list-too-long", "bad input", "`striatal sweep --alpha-grid 1,1,...` with 1 001 values "
+      "(a list option took any length)", "exit 2, one line naming --alpha-grid; nothing "
+      "written", usage_error(("sweep", "--seeds", "1", "--alpha-grid", ",".join(["1"] * 1001),
+                              "--out", "OUT"), says="at most 1000 comma-separated values")),
+    S("sweep-runs-bounded", "bad input", "`striatal sweep --seeds 100000 --alpha-grid "
+      "1,...,11` (1.2 million run specs built before the first ran)", "exit 2, one line "
+      "naming the number of runs; nothing written",
+      usage_error(("sweep", "--seeds", "100000", "--alpha-grid", "1,2,3,4,5,6,7,8,9,10,11",
+                   "--out", "OUT"), says="at most 1000000")),
     S("gym-action-text", "bad input", "`env.step(\"abc\")` on the Gymnasium env (was "
       "numpy's \"could not convert string to float\")",
       "ParameterError (a ValueError) naming the action and the action space",

@@ -10,6 +10,9 @@ import argparse
 from collections.abc import Callable, Sequence
 from typing import Any
 
+#: The most values one list option takes (a grid of 1 000 alphas is already 1 000 arms).
+MAX_ITEMS = 1_000
+
 
 class CommaList(argparse.Action):
     """An option whose value is a comma-separated list; stored as a tuple of ``item``.
@@ -44,7 +47,12 @@ class CommaList(argparse.Action):
         setattr(namespace, self.dest, self.parse(str(values)))
 
     def parse(self, text: str) -> tuple[Any, ...]:
-        """The values of ``text`` (comma-separated), converted and checked."""
+        """The values of ``text`` (comma-separated), converted and checked; at most
+        :data:`MAX_ITEMS` of them."""
+        if text.count(",") >= MAX_ITEMS:
+            raise argparse.ArgumentError(
+                self, f"at most {MAX_ITEMS} comma-separated values, got {text.count(',') + 1}"
+            )
         items = []
         for part in (p.strip() for p in text.split(",")):
             if not part:

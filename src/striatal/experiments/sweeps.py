@@ -424,6 +424,8 @@ def json_roundtrip(obj: Any) -> Any:
 SEEDS = 100
 #: The most seeds a sweep takes (its run specs are built before any run starts).
 MAX_SEEDS = 100_000
+#: The most runs (arms x inits x seeds) a sweep holds.
+MAX_RUNS = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -464,6 +466,12 @@ def plan(
     if not inits or not all(isinstance(i, str) for i in inits):
         raise ParameterError(f"init must be 'chapter', 'random' or a list of them, got {init!r}")
     inits = tuple(dict.fromkeys(inits))
+    runs = seeds * len(inits) * max(1, len(alpha_grid)) * max(1, len(gamma_grid))
+    runs += seeds * len(inits) * (int(bool(control)) + len(baselines))
+    if runs > MAX_RUNS:
+        raise ParameterError(
+            f"the sweep would hold {runs} runs (arms x inits x seeds), at most {MAX_RUNS}"
+        )
     config = default_config(learner or "chapter", **options)
     plant = Plant() if plant is None else plant
     sim = Simulation() if sim is None else sim
