@@ -536,6 +536,10 @@ ROUND3: tuple[Scenario, ...] = (
       "naming the number of runs; nothing written",
       usage_error(("sweep", "--seeds", "100000", "--alpha-grid", "1,2,3,4,5,6,7,8,9,10,11",
                    "--out", "OUT"), says="at most 1000000")),
+    S("print-config-not-utf8", "bad input", "`striatal sweep --print-config --out "
+      "$'/tmp/x\\xffy'` (printed a TOML file that --config could not read back)",
+      "exit 2, one line naming --out; nothing printed",
+      usage_error(("sweep", "--print-config", "--out", "OUT" + "\udcff"), says="--out")),
     S("gym-action-text", "bad input", "`env.step(\"abc\")` on the Gymnasium env (was "
       "numpy's \"could not convert string to float\")",
       "ParameterError (a ValueError) naming the action and the action space",

@@ -271,5 +271,14 @@ def toml_text(command: str, args: argparse.Namespace) -> str:
         if value is None:
             lines.append(f"# {key}: not set, its default applies")
         else:
-            lines.append(f"{key} = {_toml_value(_plain(value))}")
+            text = _toml_value(_plain(value))
+            try:
+                text.encode("utf-8")
+            except UnicodeEncodeError:
+                # a path of bytes that are not UTF-8 (surrogate escapes): TOML cannot hold it
+                raise ParameterError(
+                    f"--{key} is not valid UTF-8 text, which a config file cannot hold; "
+                    "give it on the command line"
+                ) from None
+            lines.append(f"{key} = {text}")
     return "\n".join(lines) + "\n"
