@@ -406,7 +406,7 @@ def cmaes(
 
 #: What a baseline's search returns (success, trials, W, theta_c, simulations, ...).
 Found = dict[str, Any]
-Config = LearnerConfig
+Config = LearnerConfig  # (short, so that each search's signature fits one line)
 
 
 def _budget(config: LearnerConfig) -> dict[str, Any]:
@@ -440,7 +440,7 @@ def _cmaes(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Co
 
 #: A baseline arm's search from ``template`` (its W(0) and theta_c(0)) under ``config``'s
 #: budget and stop rule: success, trials, W, theta_c, simulations, simulated_seconds.
-Search = Callable[[Plant, Controller, Simulation, int, LearnerConfig], dict[str, Any]]
+Search = Callable[[Plant, Controller, Simulation, int, LearnerConfig], Found]
 #: The baselines by name, in the order of ``--baselines``' help.
 SEARCHES: dict[str, Search] = {"lqr": _lqr, "hand": _hand, "random": _random, "cmaes": _cmaes}
 BASELINES: tuple[str, ...] = tuple(SEARCHES)

@@ -171,18 +171,18 @@ def run_requests(
     outcomes: list[TrialOutcome | None] = [None] * len(requests)
     groups: dict[tuple[Any, ...], list[int]] = {}
     noise: dict[int, np.ndarray] = {}
-    if any(r.batch_key() is None for r in requests):
+    keys = [r.batch_key() for r in requests]
+    if any(key is None for key in keys):
         # a trial that runs alone draws as it runs: keep every draw in request order
-        for i, r in enumerate(requests):
-            key = r.batch_key()
+        for i, (r, key) in enumerate(zip(requests, keys, strict=True)):
             if key is None:
                 outcomes[i] = r.run()
                 continue
             noise[i] = noise_arrays(r.sim, r.action_every, r.rng, r.sensor, r.mean_policy)[0]
             groups.setdefault(key, []).append(i)
     else:
-        for i, r in enumerate(requests):
-            groups.setdefault(r.batch_key(), []).append(i)  # type: ignore[arg-type]
+        for i, key in enumerate(keys):
+            groups.setdefault(key, []).append(i)  # type: ignore[arg-type]
         noise = _draw_noise(requests)
     for members in groups.values():
         first = requests[members[0]]
