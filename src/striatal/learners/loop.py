@@ -196,6 +196,11 @@ def learning_steps(
     rng = np.random.default_rng()
     rng.bit_generator.state = state.rng_state
     plan = rule.plan(state, config, rng, plant)
+    if rule.judges_candidate and plan.rng is not None:
+        raise ParameterError(
+            f"learner {rule.name!r} judges its candidate, so its trials must be noise-free "
+            "(TrialPlan.rng None)"
+        )
     true_plant = plan.plant or plant
     model = plant if plan.plant is not None else None
     trial_controller = replace(template, theta_c=plan.theta_c)
@@ -231,11 +236,6 @@ def learning_steps(
     else:
         W = np.array(state.W, dtype=float)
         controller = replace(template, theta_c=state.theta_c)
-    if rule.judges_candidate and plan.rng is not None:
-        raise ParameterError(
-            f"learner {rule.name!r} judges its candidate, so its trials must be noise-free "
-            "(TrialPlan.rng None)"
-        )
     success = True
     for check in success_checks(config):
         if not success:
