@@ -7,6 +7,7 @@ from typing import Any
 
 import pytest
 
+from striatal.errors import ParameterError
 from striatal.learners import default_config, initial_state, learning_step
 from striatal.learners.loop import CHECKS, nominal_checked, success_checks
 from striatal.params import (
@@ -103,3 +104,26 @@ def test_passing_checks_all_run(monkeypatch: pytest.MonkeyPatch) -> None:
     noisy = default_config("chapter", max_trials=5)
     new, _ = learning_step(good, Plant(), Controller(), Simulation(), Protocol(), noisy)
     assert count.n == new.simulations == 1
+
+
+def test_a_rule_that_judges_its_candidate_must_plan_it_noise_free(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The success checks take such a rule's trial for the noise-free run of what it
+    judges; a plan with policy noise would be judged on a noisy trial, so it is refused
+    before the trial runs."""
+    from striatal.learners import loop
+    from striatal.learners.chapter import ChapterRule
+
+    class Noisy(ChapterRule):
+        name = "noisy-candidate"
+        judges_candidate = True
+
+    monkeypatch.setitem(loop.RULES, "noisy-candidate", Noisy())
+    config = default_config("chapter", max_trials=1, success_on="mean")
+    config = type(config)(**{**config.__dict__, "learner": "noisy-candidate"})
+    count = Count(monkeypatch)
+    state = initial_state(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C, seed=0)
+    with pytest.raises(ParameterError, match="must be noise-free"):
+        learning_step(state, Plant(), Controller(), SHORT, Protocol(), config)
+    assert count.n == 0
