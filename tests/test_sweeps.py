@@ -67,6 +67,12 @@ def test_a_folder_the_api_wrote_resumes_from_the_command(tmp_path: Path, cli: An
         ({"backend": "ray"}, "--backend ray needs --address"),
         ({"workers": 10**6}, "--workers must be <="),
         ({"no_such_option": 1}, "no_such_option"),
+        ({"learner": {"a": 1}}, "learner must be one of"),
+        ({"learner": 5}, "learner must be one of"),
+        ({"out": 5}, "out must be a folder's path"),
+        ({"alpha_grid": "1,2"}, "alpha_grid must be a list of numbers"),
+        ({"gamma_grid": [0.9, "1"]}, "gamma_grid must be a list of numbers"),
+        ({"baselines": [3]}, "baselines must be names"),
     ],
 )
 def test_bad_arguments_are_refused_before_any_run(
@@ -84,3 +90,11 @@ def test_plan_records_the_tuning_root_and_warns_in_sample() -> None:
     assert "tuned on root seed 0" in (sweeps.in_sample_note(plan.settings) or "")
     held_out = sweeps.plan("pgpe", seeds=1, seed=1, robust=True)
     assert sweeps.in_sample_note(held_out.settings) is None
+
+
+def test_one_name_is_a_list_of_one_as_on_the_command_line() -> None:
+    """``init="random"`` and ``baselines="random"`` are one value each, as
+    ``--init random`` and ``--baselines random`` are, not a string to iterate."""
+    plan = sweeps.plan(seeds=1, init="random", baselines="random", max_trials=1)
+    assert set(plan.settings["arms"]) == {"learner", "control", "random"}
+    assert plan.settings["inits"] == ["random"]

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -437,6 +438,16 @@ class Plan:
     max_trials: int
 
 
+def _numbers(name: str, values: object) -> tuple[float, ...]:
+    """``values`` as a tuple of real numbers (a grid), else ParameterError naming ``name``."""
+    items = tuple(values) if isinstance(values, Sequence) and not isinstance(values, str) else None
+    if items is None or not all(
+        isinstance(v, int | float) and not isinstance(v, bool) for v in items
+    ):
+        raise ParameterError(f"{name} must be a list of numbers, got {values!r}")
+    return tuple(float(v) for v in items)
+
+
 def plan(
     learner: str | None = None,
     *,
@@ -462,12 +473,16 @@ def plan(
         raise ParameterError(f"--seeds must be <= {MAX_SEEDS}, got {seeds}")
     root = check_seed(seed)
     require_count("eval_draws", eval_draws, 0)
+    alphas, gammas = _numbers("alpha_grid", alpha_grid), _numbers("gamma_grid", gamma_grid)
+    methods = (baselines,) if isinstance(baselines, str) else baselines
+    if not isinstance(methods, Sequence) or not all(isinstance(m, str) for m in methods):
+        raise ParameterError(f"baselines must be names of baselines, got {baselines!r}")
     inits = (init,) if isinstance(init, str) else tuple(init) if isinstance(init, Sequence) else ()
     if not inits or not all(isinstance(i, str) for i in inits):
         raise ParameterError(f"init must be 'chapter', 'random' or a list of them, got {init!r}")
     inits = tuple(dict.fromkeys(inits))
-    runs = seeds * len(inits) * max(1, len(alpha_grid)) * max(1, len(gamma_grid))
-    runs += seeds * len(inits) * (int(bool(control)) + len(baselines))
+    runs = seeds * len(inits) * max(1, len(alphas)) * max(1, len(gammas))
+    runs += seeds * len(inits) * (int(bool(control)) + len(methods))
     if runs > MAX_RUNS:
         raise ParameterError(
             f"the sweep would hold {runs} runs (arms x inits x seeds), at most {MAX_RUNS}"
@@ -495,10 +510,10 @@ def plan(
         sim=sim,
         seeds=run_seeds,
         inits=inits,  # type: ignore[arg-type]
-        alphas=tuple(alpha_grid),
-        gammas=tuple(gamma_grid),
+        alphas=alphas,
+        gammas=gammas,
         control=control,
-        methods=list(baselines),
+        methods=list(methods),
         eval_draws=eval_draws,
     )
     settings: dict[str, Any] = {
@@ -584,6 +599,8 @@ def sweep(
     >>> result = sweep(seeds=4, init="random", learner="pgpe", max_trials=50)  # doctest: +SKIP
     >>> result.summary["arms"]  # doctest: +SKIP
     """
+    if out is not None and not isinstance(out, str | os.PathLike):
+        raise ParameterError(f"out must be a folder's path, got {out!r}")
     folder = None if out is None else check_out_dir(out)
     the_plan = plan(learner, **arguments)
     return run_sweep(

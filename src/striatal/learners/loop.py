@@ -83,7 +83,7 @@ for _rule in (CHAPTER, RPE, PGPE, AC):
 
 def rule_of(config: LearnerConfig | str) -> Rule:
     """The rule named by ``config.learner`` (or by the name itself); ParameterError if none."""
-    name = config if isinstance(config, str) else config.learner
+    name = config.learner if isinstance(config, LearnerConfig) else config
     try:
         return RULES[name]
     except (KeyError, TypeError):
