@@ -40,6 +40,7 @@ from striatal.sim.rollout import (
     Protocol,
     SensorNoise,
     TrialOutcome,
+    action_draws,
     batch_args,
     noise_arrays,
     run_trial,
@@ -232,7 +233,7 @@ def _draw_noise(requests: Sequence[TrialRequest]) -> dict[int, np.ndarray]:
     for i, r in enumerate(requests):
         if r.draws_actions:
             by_rng.setdefault(id(r.rng), []).append(i)
-            noise[i] = np.empty(-(-r.sim.n_steps // r.action_every))
+            noise[i] = np.empty(action_draws(r.sim, r.action_every))
     chains = list(by_rng.values())
 
     def part(chain_ids: range) -> Callable[[], None]:

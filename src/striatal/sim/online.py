@@ -62,7 +62,7 @@ from striatal.sim.kernel import (
     wrap_angle,
     write_summary,
 )
-from striatal.sim.rollout import Protocol, TrialOutcome, trial_args
+from striatal.sim.rollout import Protocol, TrialOutcome, action_draws, trial_args
 
 __all__ = [
     "COST_WEIGHTS",
@@ -365,7 +365,7 @@ def online_trial(
         raise ParameterError(f"the critic's trace decay must be in [0, 1], got {critic_decay}")
     if critic.shape != (N_FEATURES,) or critic_trace.shape != (N_FEATURES,):
         raise ParameterError(f"the critic and its trace must have shape ({N_FEATURES},)")
-    n_draws = -(-sim.n_steps // action_every)
+    n_draws = action_draws(sim, action_every)
     noise = rng.standard_normal(n_draws) if rng is not None else None
     W = np.array(gains, dtype=float)
     args = trial_args(

@@ -32,6 +32,7 @@ __all__ = [
     "Trajectory",
     "TrialArgs",
     "TrialOutcome",
+    "action_draws",
     "batch_args",
     "control_args",
     "noise_arrays",
@@ -191,6 +192,11 @@ class Trajectory:
         return [float(t) for t in self.t[idx]]
 
 
+def action_draws(sim: Simulation, action_every: int) -> int:
+    """Normals a noisy trial draws for its actions: one per ``action_every`` steps (eq 5)."""
+    return -(-sim.n_steps // action_every)
+
+
 def noise_arrays(
     sim: Simulation,
     action_every: int,
@@ -200,7 +206,7 @@ def noise_arrays(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(action normals, sensor normals) of one trial, drawn from ``rng`` in that order:
     one normal per action step unless the mean policy runs, (n_steps, 2) with sensor noise."""
-    n_draws = -(-sim.n_steps // action_every)
+    n_draws = action_draws(sim, action_every)
     draws_actions = rng is not None and not mean_policy
     noise = rng.standard_normal(n_draws) if draws_actions and rng is not None else np.empty(0)
     if sensor.active:
