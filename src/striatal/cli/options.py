@@ -270,12 +270,8 @@ def add_worker_arguments(
 
 
 def check_worker_arguments(args: argparse.Namespace) -> None:
-    """ParameterError unless the options of :func:`add_worker_arguments` make sense."""
-    if args.workers < 1:
-        raise ParameterError(f"--workers must be >= 1, got {args.workers}")
-    if args.backend == "ray" and not args.address:
-        raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
-    if not (math.isfinite(args.connect_timeout) and args.connect_timeout > 0):
-        raise ParameterError(
-            f"--connect-timeout must be a finite number of seconds > 0, got {args.connect_timeout}"
-        )
+    """ParameterError unless the options of :func:`add_worker_arguments` make sense
+    (:func:`striatal.experiments.pool.check_backend`, checked before any work)."""
+    from striatal.experiments.pool import check_backend
+
+    check_backend(args.backend, args.workers, args.address, args.connect_timeout)

@@ -103,6 +103,23 @@ def check_workers(workers: object) -> None:
         raise ParameterError(f"--workers must be <= {MAX_WORKERS}, got {workers}")
 
 
+def check_backend(
+    backend: object, workers: object, address: str | None, connect_timeout: object
+) -> None:
+    """ParameterError unless the backend options of a sweep make sense: ``workers`` (see
+    :func:`check_workers`), an ``address`` for Ray, a finite ``connect_timeout`` > 0 [s]."""
+    if backend not in ("local", "ray"):
+        raise ParameterError(f"backend must be 'local' or 'ray', got {backend!r}")
+    check_workers(workers)
+    if backend == "ray" and not address:
+        raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
+    real = isinstance(connect_timeout, int | float) and not isinstance(connect_timeout, bool)
+    if not (real and 0 < connect_timeout < math.inf):  # type: ignore[operator]
+        raise ParameterError(
+            f"--connect-timeout must be a finite number of seconds > 0, got {connect_timeout!r}"
+        )
+
+
 def execute(
     specs: Sequence[RunSpec],
     *,

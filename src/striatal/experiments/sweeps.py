@@ -15,7 +15,6 @@ The output folder is locked
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -27,7 +26,7 @@ from striatal.experiments import baselines as baseline_methods
 from striatal.experiments.pool import (
     CONNECT_TIMEOUT,
     Backend,
-    check_workers,
+    check_backend,
     execute,
     wait_for_address,
 )
@@ -206,16 +205,10 @@ def run_sweep(
             f"--engine {engine} runs in this process on Numba's threads "
             "(NUMBA_NUM_THREADS); --workers and --backend ray are for --engine processes"
         )
-    if not (isinstance(connect_timeout, int | float) and 0 < connect_timeout < math.inf):
-        raise ParameterError(
-            f"--connect-timeout must be a finite number of seconds > 0, got {connect_timeout!r}"
-        )
-    if backend == "ray" and not address:
-        raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
+    check_backend(backend, workers, address, connect_timeout)
     if backend == "ray" and address:
         # nothing is written into out before the cluster's address answers
         wait_for_address(address, connect_timeout)
-    check_workers(workers)
     if engine != "processes":
         from striatal.experiments.lockstep_sweep import check_specs
 
