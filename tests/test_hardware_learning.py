@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from test_robust_stop import ROBUST_THETA_C, ROBUST_W  # a controller pgpe learned: robust
 
 import striatal
 from striatal.cli import main
@@ -25,17 +26,6 @@ from striatal.learners import LearnerConfig, default_config, learn
 from striatal.params import Controller, Hardware, Plant, Simulation
 from striatal.sim import batch as batch_module
 from striatal.sim import online, rollout
-
-#: A controller pgpe learned with ``--robust`` (tests/test_robust_stop.py): robust.
-ROBUST_W = (
-    2.1263782943804586,
-    -0.23835975856782232,
-    -0.7555898236586254,
-    3.8082899510490504,
-    4.5445603658432345,
-    -0.5271986094008383,
-)
-ROBUST_THETA_C = 1.0087997898263552
 
 #: Run ids of ``striatal.train(learner="pgpe", init="random", seed=0, max_trials=1)``
 #: and of the same with ``robust=True``, computed on main before the limits existed.

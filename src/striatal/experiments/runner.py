@@ -105,7 +105,7 @@ def control_note(learner: str) -> str:
 NOTE_CONTROL = control_note("chapter")
 
 
-def learning_steps(
+def learning_run_steps(
     plant: Plant, template: Controller, config: LearnerConfig, seed: int, sim: Simulation
 ) -> Steps[dict[str, Any]]:
     """success, trials, W, theta_c, simulations and simulated_seconds of one learning run
@@ -130,7 +130,7 @@ def search(spec: RunSpec, W0: tuple[float, ...]) -> Steps[dict[str, Any]]:
     template = spec.template.with_gains(W0, spec.template.theta_c)
     cfg = spec.config
     if spec.method == "learn":
-        return (yield from learning_steps(spec.plant, template, cfg, spec.seed, spec.sim))
+        return (yield from learning_run_steps(spec.plant, template, cfg, spec.seed, spec.sim))
     search = baselines.SEARCHES.get(spec.method)
     if search is not None:
         return search(spec.plant, template, spec.sim, spec.seed, cfg)
