@@ -378,9 +378,8 @@ def train(
             setup = setup_of(settings, f"checkpoint {rundir.checkpoint_path}")
             rundir.check_result_run(run)
             rundir.keep_history(state.trials_done, rule_columns(setup.config), digest)
-            past = rundir.read_history() if state.trials_done else None
             return _run(
-                run, settings, setup, state, rundir, past, checkpoint_every, on_trial, should_stop
+                run, settings, setup, state, rundir, checkpoint_every, on_trial, should_stop
             )
     settings, setup = _fresh_setup(
         learner or "chapter",
@@ -400,16 +399,12 @@ def train(
     state = initial_state(setup.template.gains, setup.template.theta_c, setup.seed)
     run = run_id(settings)
     if out is None:
-        return _run(
-            run, settings, setup, state, None, None, checkpoint_every, on_trial, should_stop
-        )
+        return _run(run, settings, setup, state, None, checkpoint_every, on_trial, should_stop)
     rundir = RunDir(check_out_dir(out, files=RUN_FILES))
     with rundir.lock():
         rundir.clear()
         rundir.start_history(rule_columns(setup.config))
-        return _run(
-            run, settings, setup, state, rundir, None, checkpoint_every, on_trial, should_stop
-        )
+        return _run(run, settings, setup, state, rundir, checkpoint_every, on_trial, should_stop)
 
 
 def _run(
@@ -418,7 +413,6 @@ def _run(
     setup: Setup,
     state: LearnerState,
     rundir: RunDir | None,
-    past: History | None,
     checkpoint_every: int,
     on_trial: Callable[[LearnerState, TrialRecord], None] | None,
     should_stop: Callable[[], bool] | None,
@@ -479,8 +473,6 @@ def _run(
             if recorded.trials_done
             else History.of(config.learner, [], config.reward)
         )
-    elif past is not None:
-        history = past.plus(records)
     else:
         history = History.of(config.learner, records, config.reward)
     if not history.columns:

@@ -234,15 +234,6 @@ class History:
         rows = tuple(tuple(_cell(v) for v in r.row()) for r in records)
         return cls(learner=learner, columns=columns, rows=rows, reward_kind=reward_kind)
 
-    def plus(self, records: Sequence[TrialRecord]) -> History:
-        """This history followed by ``records``."""
-        more = History.of(self.learner, records, self.reward_kind)
-        if not self.rows:
-            return more
-        if records and more.columns != self.columns:
-            raise ParameterError("history rows of a different learner cannot be appended")
-        return History(self.learner, self.columns, self.rows + more.rows, self.reward_kind)
-
 
 @dataclass(frozen=True)
 class TrainResult:
