@@ -32,10 +32,6 @@ def _finite_mean(values: Iterable[float]) -> float:
     return float(np.mean(x)) if x else math.nan
 
 
-def _mean(x: np.ndarray, axis: int = -1) -> np.ndarray:
-    return np.mean(x, axis=axis)
-
-
 def bootstrap_rng(arm: str, init: str) -> np.random.Generator:
     """The generator of an arm's bootstrap intervals: seeded by its name and init only."""
     return np.random.default_rng(zlib.crc32(f"{arm}|{init}".encode()))
@@ -89,7 +85,7 @@ def arm_statistics(
     )
     spent = [float(r["simulated_seconds"]) for r in rows]
     mean_all = (
-        stats.bootstrap_interval(spent, _mean, rng or np.random.default_rng(0)) if n else None
+        stats.bootstrap_interval(spent, stats.mean, rng or np.random.default_rng(0)) if n else None
     )
     out.update(
         {

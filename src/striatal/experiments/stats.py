@@ -45,6 +45,7 @@ __all__ = [
     "fisher_test",
     "iqm",
     "mcnemar_test",
+    "mean",
     "median",
     "wilson_interval",
 ]
@@ -90,6 +91,11 @@ def wilson_interval(successes: int, n: int, confidence: float = CONFIDENCE) -> I
 def iqm(values: np.ndarray, axis: int = -1) -> np.ndarray:
     """Interquartile mean: the mean of the middle 50 % (``scipy.stats.trim_mean(x, 0.25)``)."""
     return np.asarray(sps.trim_mean(values, 0.25, axis=axis))
+
+
+def mean(values: np.ndarray, axis: int = -1) -> np.ndarray:
+    """The mean along ``axis`` (vectorised for :func:`scipy.stats.bootstrap`)."""
+    return np.asarray(np.mean(values, axis=axis))
 
 
 def median(values: np.ndarray, axis: int = -1) -> np.ndarray:
