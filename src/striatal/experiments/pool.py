@@ -136,12 +136,10 @@ def execute(
     Ray cluster at ``address`` (extra [cluster]), given up after ``connect_timeout``
     seconds if the address does not accept a connection.
     """
-    check_workers(workers)
+    check_backend(backend, workers, address, connect_timeout)
     if backend == "ray":
         yield from _execute_ray(specs, address, connect_timeout)
         return
-    if backend != "local":
-        raise ParameterError(f"backend must be 'local' or 'ray', got {backend!r}")
     if workers == 1 or len(specs) <= 1:
         for spec in specs:
             yield run_one(spec)
@@ -254,7 +252,7 @@ def _probe_ray(address: str, timeout: float, shown: float) -> None:
 def _execute_ray(
     specs: Sequence[RunSpec], address: str | None, connect_timeout: float
 ) -> Iterator[dict[str, Any]]:
-    if not address:
+    if not address:  # narrowed for the type checker; check_backend refused it already
         raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
     try:
         import ray
