@@ -166,3 +166,59 @@ def test_a_sweep_row_counts_the_imagined_trials_apart() -> None:
     assert learner["imagined_simulations"] == int(run.history.column("imagined").sum())
     arms = {a["arm"]: a for a in result.summary["arms"]}
     assert arms["learner"]["imagined_simulations_total"] == learner["imagined_simulations"]
+
+
+def test_generic_imagination_runs_on_the_model_only_and_counts_apart(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With the generic model, every imagined trial runs on a learned plant (none on the
+    physical kernel: imagination never touches the simulator), every physical trial is a
+    real one and is counted, and a rerun under the same seed gives the same run."""
+    pytest.importorskip("sklearn")
+    calls = Calls(monkeypatch)
+    learned = {"n": 0}
+    run_learned = kernel.run_learned_trial
+
+    def counted_learned(*args: Any) -> Any:
+        assert calls.dreaming
+        learned["n"] += 1
+        return run_learned(*args)
+
+    monkeypatch.setattr(kernel, "run_learned_trial", counted_learned)
+    config = default_config(
+        "forward", robust=True, max_trials=2, imagine_trials=300, forward_model="generic"
+    )
+    rows: list[TrialRecord] = []
+    result = learn(Plant(), start(101), config, 101, on_trial=lambda s, r: rows.append(r))
+    assert calls.imagined == 0  # no physical trial while dreaming
+    assert learned["n"] > 0
+    assert result.state.simulations == calls.real
+    assert result.state.simulated_seconds == pytest.approx(calls.real_steps * Simulation().dt)
+    assert result.state.get("imagined")[0] == learned["n"]
+    assert sum(dict(r.extra)["imagined"] for r in rows) == learned["n"]
+    # the generic model has no pole mass or length to report
+    assert all(
+        np.isnan(dict(r.extra)["model_pole_mass"]) for r in rows if dict(r.extra)["imagined"]
+    )
+    again = learn(Plant(), start(101), config, 101)
+    assert again.W == result.W and again.state.simulations == result.state.simulations
+
+
+def test_generic_imagination_cannot_rehearse_other_plants_and_the_real_check_says_so() -> None:
+    """A generic model fitted on the nominal plant has no pole mass to vary: candidates
+    that pass every member and start in imagination pass the nominal real trial (reward
+    +10) and are still refused by the real robust check, whose plant corners imagination
+    could not rehearse."""
+    pytest.importorskip("sklearn")
+    config = default_config("forward", robust=True, max_trials=7, forward_model="generic")
+    rows: list[TrialRecord] = []
+    result = learn(Plant(), start(2), config, 2, on_trial=lambda s, r: rows.append(r))
+    assert not result.success
+    refused = [
+        i
+        for i in range(len(rows) - 1)
+        if dict(rows[i].extra)["solved_in_imagination"]
+        and rows[i + 1].reward == 10.0
+        and not rows[i + 1].success
+    ]
+    assert refused

@@ -40,7 +40,7 @@ def test_run_ids_of_existing_configs_are_unchanged(name: str) -> None:
 
 def test_a_field_beyond_schema_2_is_stored_only_when_it_differs_from_its_default() -> None:
     later = {f.name for f in fields(LearnerConfig)} - STORED_ALWAYS
-    assert later == {"symmetric", "robust", "max_force", "track", "imagine_trials"}
+    assert later == {"symmetric", "robust", "max_force", "track", "imagine_trials", "forward_model"}
     plain = LearnerConfig().to_dict()
     assert set(plain) == STORED_ALWAYS
     assert LearnerConfig(track=2.4).to_dict()["track"] == 2.4
@@ -68,7 +68,13 @@ def test_choices_are_the_literal_types_in_validation_and_options() -> None:
     add_learner_arguments(parser)
     by_dest = {a.dest: a for a in parser._actions}
     texts = [f for f in fields(LearnerConfig) if field_kind(f)[1]]
-    assert {f.name for f in texts} == {"eligibility", "success_on", "theta_c_rule", "reward"}
+    assert {f.name for f in texts} == {
+        "eligibility",
+        "success_on",
+        "theta_c_rule",
+        "reward",
+        "forward_model",
+    }
     for f in texts:
         choices = field_kind(f)[1]
         assert tuple(by_dest[f.name].choices) == choices

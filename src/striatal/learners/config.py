@@ -22,6 +22,7 @@ __all__ = [
     "STORED_ALWAYS",
     "W1_FLOOR",
     "Eligibility",
+    "ForwardModel",
     "LearnerConfig",
     "RewardKind",
     "SuccessOn",
@@ -39,6 +40,7 @@ SuccessOn = Literal["noisy", "mean"]
 ThetaCRule = Literal["swingup", "trial", "clamped", "fixed", "learned"]
 Eligibility = Literal["score", "chapter"]
 RewardKind = Literal["sparse", "shaped"]
+ForwardModel = Literal["structured", "generic"]
 
 #: The largest value of a count field: 2**31 - 1, what the compiled kernel's int32 holds.
 MAX_COUNT = 2**31 - 1
@@ -232,6 +234,14 @@ class LearnerConfig:
             "forward: imagined trials (on the forward model, not counted as simulations) allowed "
             "after each real trial; 0 fits no model and learns nothing (its control)",
             bounds=">= 0",
+        ),
+    )
+    forward_model: ForwardModel = field(
+        default="structured",
+        metadata=meta(
+            "forward: the forward model imagination runs on: 'structured' (the cart-pole's "
+            "equations, pole mass, length, cart mass and friction fitted) or 'generic' (no "
+            "cart-pole equations: a scikit-learn ensemble of polynomial ridge regressions)"
         ),
     )
     max_force: float | None = field(

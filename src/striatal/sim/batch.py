@@ -35,6 +35,7 @@ import numpy as np
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Plant, Simulation
 from striatal.sim import kernel
+from striatal.sim.learned import LearnedPlant
 from striatal.sim.noise import row_parts, run_parts
 from striatal.sim.rollout import (
     Protocol,
@@ -117,8 +118,8 @@ class TrialRequest:
 
     def batch_key(self) -> tuple[Any, ...] | None:
         """What a batched kernel call shares with this trial; None if it runs alone
-        (sensor noise: the batch kernel has none)."""
-        if self.sensor.active:
+        (sensor noise: the batch kernel has none; a learned plant: it takes none)."""
+        if self.sensor.active or isinstance(self.plant, LearnedPlant):
             return None
         c = self.controller
         return (

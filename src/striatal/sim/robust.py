@@ -45,6 +45,7 @@ __all__ = [
     "RobustReport",
     "StopCheck",
     "check_robust",
+    "family_check",
     "nominal_is_the_case",
     "robust_hardware",
     "run_case",
@@ -284,4 +285,34 @@ def stop_check(
         seconds += outcome.ended_at
         if not outcome.success:
             return StopCheck(False, runs, seconds, case.name)
+    return StopCheck(True, runs, seconds)
+
+
+def family_check(
+    controller: Controller,
+    plants: tuple[Plant, ...],
+    model: Plant,
+    dt: float,
+    *,
+    gains: np.ndarray | None = None,
+    hardware: Hardware = ROBUST_HARDWARE,
+) -> StopCheck:
+    """The robust stop rule with the four plant corners replaced by ``plants``: each
+    start of :data:`ROBUST_CASES` (the nominal start and the four others, the cases
+    with the plant unscaled) on each plant of ``plants`` (a family a model cannot rule
+    out, learned plants included), mean policy, 60 s, ``hardware``, the controller
+    keeping ``model`` as its model; stops at the first failure, every run counted."""
+    W = np.asarray(controller.gains if gains is None else gains, dtype=float)
+    starts = [c for c in ROBUST_CASES if c.pole_mass == 1.0 and c.length == 1.0]
+    runs, seconds = 0, 0.0
+    for k, plant in enumerate(plants):
+        for case in starts:
+            sim = Simulation(theta0=case.theta0, x0=case.x0, duration=ROBUST_DURATION, dt=dt)
+            outcome = TrialRequest(
+                plant, controller, sim, NO_PROTOCOL, gains=W, model=model, hardware=hardware
+            ).run()
+            runs += 1
+            seconds += outcome.ended_at
+            if not outcome.success:
+                return StopCheck(False, runs, seconds, f"plant {k}, {case.name}")
     return StopCheck(True, runs, seconds)

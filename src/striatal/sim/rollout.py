@@ -8,7 +8,9 @@ learner and returns its outcome without recording.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any, ParamSpec
 
 import numpy as np
 
@@ -23,6 +25,7 @@ from striatal.params import (
     require_finite_positive,
 )
 from striatal.sim import kernel
+from striatal.sim.learned import LearnedPlant
 
 __all__ = [
     "NO_PROTOCOL",
@@ -39,10 +42,14 @@ __all__ = [
     "plant_args",
     "protocol_args",
     "recorded_trial",
+    "run_kernel",
     "run_trial",
     "simulate",
+    "trial",
     "trial_args",
 ]
+
+P = ParamSpec("P")
 
 
 @dataclass(frozen=True)
@@ -257,7 +264,7 @@ def plant_args(
         model=model_plant.as_array(),
         mismatch=model_plant != plant,
         dt=dt,
-        hold_force=hardware.hold == "force",
+        hold_force=hardware.hold == "force" or isinstance(plant, LearnedPlant),
         max_force=math.inf if hardware.max_force is None else hardware.max_force,
     )
 
@@ -374,6 +381,8 @@ def batch_args(
     ``hardware`` as in :func:`trial_args` (run_trials_lockstep refuses all but the
     default). The kernel writes ``args[-1]`` (B, N_OUT).
     """
+    if isinstance(plant, LearnedPlant):
+        raise ParameterError("the batch kernels run physical plants only, not a learned plant")
     W = np.ascontiguousarray(gains, dtype=float)
     B = W.shape[0]
     if W.shape != (B, 6):
@@ -429,7 +438,7 @@ def simulate(
         record=True,
         hardware=hardware,
     )
-    kernel.run_trial(*args)
+    run_kernel(plant, args)
     out, traj = args[-1]
     outcome = TrialOutcome.from_row(out, sim)
     end = int(out[kernel.OUT_END_STEP])
@@ -442,7 +451,7 @@ def simulate(
     )
 
 
-def run_trial(
+def trial(
     plant: Plant,
     controller: Controller,
     sim: Simulation,
@@ -458,89 +467,17 @@ def run_trial(
     sensor: SensorNoise = SensorNoise(),
     mean_policy: bool = False,
     hardware: Hardware = CHAPTER_HARDWARE,
-) -> TrialOutcome:
-    """One trial of the protocol; the eligibility trace ``trace`` (6,) is updated in place.
+    record: bool = False,
+) -> tuple[TrialOutcome, np.ndarray]:
+    """One trial of the protocol and its recorded rows (n, 8), columns
+    kernel.TRAJ_COLUMNS (none unless ``record``); the eligibility trace ``trace`` (6,)
+    is updated in place.
 
     ``gains`` may override ``controller.gains`` without validation (the learner's
     guarded W); ``rng`` None runs the mean policy. ``mean_policy`` runs the mean
-    policy even with a generator, which then draws only the sensor noise.
+    policy even with a generator, which then draws only the sensor noise. The noise
+    draws from ``rng`` do not depend on ``record``.
     """
-    outcome, _ = _trial(
-        plant,
-        controller,
-        sim,
-        protocol=protocol,
-        trace=trace,
-        gamma=gamma,
-        rng=rng,
-        gains=gains,
-        action_every=action_every,
-        chapter_eligibility=chapter_eligibility,
-        model=model,
-        sensor=sensor,
-        mean_policy=mean_policy,
-        record=False,
-        hardware=hardware,
-    )
-    return outcome
-
-
-def recorded_trial(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    *,
-    protocol: Protocol,
-    gains: np.ndarray | None,
-    rng: np.random.Generator | None,
-    trace: np.ndarray,
-    gamma: float,
-    action_every: int = 1,
-    chapter_eligibility: bool = False,
-    model: Plant | None = None,
-    hardware: Hardware = CHAPTER_HARDWARE,
-) -> tuple[TrialOutcome, np.ndarray]:
-    """:func:`run_trial` that also returns the recorded rows (n, 8), columns kernel.TRAJ_COLUMNS.
-
-    Same noise draws from ``rng`` as :func:`run_trial`; ``trace`` updated in place.
-    """
-    return _trial(
-        plant,
-        controller,
-        sim,
-        protocol=protocol,
-        trace=trace,
-        gamma=gamma,
-        rng=rng,
-        gains=gains,
-        action_every=action_every,
-        chapter_eligibility=chapter_eligibility,
-        model=model,
-        sensor=SensorNoise(),
-        mean_policy=False,
-        record=True,
-        hardware=hardware,
-    )
-
-
-def _trial(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    *,
-    protocol: Protocol,
-    trace: np.ndarray,
-    gamma: float,
-    rng: np.random.Generator | None,
-    gains: np.ndarray | None,
-    action_every: int,
-    chapter_eligibility: bool,
-    model: Plant | None,
-    sensor: SensorNoise,
-    mean_policy: bool,
-    record: bool,
-    hardware: Hardware = CHAPTER_HARDWARE,
-) -> tuple[TrialOutcome, np.ndarray]:
     noise, sensor_noise = noise_arrays(sim, action_every, rng, sensor, mean_policy)
     args = trial_args(
         plant,
@@ -559,7 +496,39 @@ def _trial(
         record=record,
         hardware=hardware,
     )
-    kernel.run_trial(*args)
+    run_kernel(plant, args)
     out, traj = args[-1]
     end = int(out[kernel.OUT_END_STEP])
     return TrialOutcome.from_row(out, sim), traj[: end + 1]
+
+
+def _outcome_of(run: Callable[P, tuple[TrialOutcome, np.ndarray]]) -> Callable[P, TrialOutcome]:
+    def outcome(*args: P.args, **kwargs: P.kwargs) -> TrialOutcome:
+        return run(*args, **kwargs)[0]
+
+    return outcome
+
+
+#: One trial of the protocol without its rows: :func:`trial`'s outcome.
+run_trial = _outcome_of(trial)
+run_trial.__name__ = run_trial.__qualname__ = "run_trial"
+run_trial.__doc__ = """One trial of the protocol, its outcome: :func:`trial` (same arguments),
+nothing recorded unless ``record``; the eligibility trace ``trace`` (6,) is updated in place."""
+
+
+def recorded_trial(
+    plant: Plant, controller: Controller, sim: Simulation, **options: Any
+) -> tuple[TrialOutcome, np.ndarray]:
+    """:func:`trial` with its rows recorded (the same keyword options; same noise draws)."""
+    return trial(plant, controller, sim, record=True, **options)
+
+
+def run_kernel(plant: Plant, args: TrialArgs) -> None:
+    """Run the kernel trial of :func:`trial_args`' ``args`` on ``plant``:
+    :func:`striatal.sim.kernel.run_trial`, or on a :class:`~striatal.sim.learned.LearnedPlant`
+    :func:`striatal.sim.kernel.run_learned_trial` with its dynamics."""
+    if isinstance(plant, LearnedPlant):
+        assert plant.dynamics is not None
+        kernel.run_learned_trial(*args, plant.dynamics.args)
+    else:
+        kernel.run_trial(*args)

@@ -10,10 +10,11 @@ declared by their prior knowledge:
   known. It fits them by nonlinear least squares on the one-step RK4 map
   (``scipy.optimize.least_squares``). Its uncertainty is the Gauss-Newton covariance of
   the fit, and :meth:`StructuredFit.family` gives the plants it cannot rule out.
-- :func:`fit_generic` knows nothing of the cart-pole: a bootstrap ensemble of
-  scikit-learn regressors (random Fourier features and ridge regression) from
-  (x_dot, sin theta, cos theta, theta_dot, f) to the step's mean accelerations. Its
-  uncertainty is the ensemble's spread.
+- :func:`fit_generic` knows nothing of the cart-pole's equations: a bootstrap
+  ensemble of scikit-learn regressors (ridge regression on the monomials of degree
+  <= 3) from (x_dot, sin theta, cos theta, theta_dot, f) to the step's mean
+  accelerations, a smooth function of these inputs. Its uncertainty is the
+  ensemble's spread, and :meth:`GenericModel.plant` runs trials on it.
 
 Both are pure: the same transitions give the same model.
 """
@@ -29,9 +30,13 @@ from scipy.optimize import least_squares
 from striatal.errors import ParameterError
 from striatal.params import Plant
 from striatal.sim.dynamics import rk4_force_step
+from striatal.sim.kernel.learned import LearnedArgs
+from striatal.sim.learned import LearnedDynamics, LearnedPlant
 from striatal.sim.rollout import Trajectory
 
 __all__ = [
+    "DEGREE",
+    "RIDGE",
     "GenericModel",
     "StructuredFit",
     "Transitions",
@@ -180,7 +185,8 @@ def _features(states: np.ndarray, forces: np.ndarray) -> np.ndarray:
 class GenericModel:
     """A bootstrap ensemble of regressors from :func:`_features` to the step's mean
     accelerations ((x_dot' - x_dot) / dt, (theta_dot' - theta_dot) / dt); the position
-    and angle advance by the mean of the old and new velocities (a trapezoid)."""
+    and angle advance by the mean of the old and new velocities (a trapezoid). The
+    members share their standardisation and monomials and differ in their readout."""
 
     members: tuple[object, ...]
     dt: float
@@ -207,41 +213,69 @@ class GenericModel:
         """(n, 2) ensemble standard deviation of the accelerations: the model's doubt."""
         return self.accelerations(states, forces).std(axis=0)
 
+    def dynamics(self) -> LearnedDynamics:
+        """The ensemble as the compiled kernel's learned plant step
+        (:mod:`striatal.sim.kernel.learned`), whose step is :meth:`predict`'s (the
+        members' mean, the trapezoid)."""
+        scaler, poly, _ = (step for _, step in self.members[0].steps)  # type: ignore[attr-defined]
+        ridges = [member.steps[-1][1] for member in self.members]  # type: ignore[attr-defined]
+        return LearnedDynamics(
+            LearnedArgs(
+                mean=np.array(scaler.mean_, dtype=float),
+                scale=np.array(scaler.scale_, dtype=float),
+                powers=np.ascontiguousarray(poly.powers_, dtype=np.int64),
+                coef=np.ascontiguousarray(np.stack([r.coef_ for r in ridges]), dtype=float),
+                intercept=np.ascontiguousarray(
+                    np.stack([r.intercept_ for r in ridges]), dtype=float
+                ),
+            )
+        )
+
+    def plant(self, believed: Plant = NOMINAL) -> LearnedPlant:
+        """The ensemble as a plant to run trials on, the controller believing ``believed``."""
+        return LearnedPlant.of(self.dynamics(), believed)
+
+
+#: The degree of the generic model's monomials.
+DEGREE = 3
+#: The ridge penalty of its readout: the monomials of standardised inputs are collinear
+#: (sin^2 + cos^2 = 1), so the penalty keeps the normal equations well posed.
+RIDGE = 1e-3
+
 
 def fit_generic(
     data: Transitions,
     rng: np.random.Generator,
     *,
     members: int = 5,
-    components: int = 300,
-    gamma: float = 0.5,
-    ridge: float = 1e-6,
+    degree: int = DEGREE,
+    ridge: float = RIDGE,
 ) -> GenericModel:
-    """A bootstrap ensemble of ``members`` regressors: scikit-learn's ``StandardScaler``,
-    ``RBFSampler`` (``components`` random Fourier features of an RBF kernel of width
-    ``gamma``) and ``Ridge`` (penalty ``ridge``), each on a bootstrap resample of
-    ``data``. Needs scikit-learn (the ``model`` extra)."""
+    """A bootstrap ensemble of ``members`` regressors: scikit-learn's ``StandardScaler``
+    and ``PolynomialFeatures`` (every monomial of degree <= ``degree`` of the five
+    standardised inputs), fitted once on ``data``, then a ``Ridge`` readout (penalty
+    ``ridge``) per member, each on a bootstrap resample of ``data``. Needs scikit-learn
+    (the ``model`` extra)."""
     try:
-        from sklearn.kernel_approximation import RBFSampler
         from sklearn.linear_model import Ridge
         from sklearn.pipeline import make_pipeline
-        from sklearn.preprocessing import StandardScaler
+        from sklearn.preprocessing import PolynomialFeatures, StandardScaler
     except ImportError as exc:  # pragma: no cover - depends on the install
         raise ParameterError(
             "the generic forward model needs scikit-learn: pip install 'striatal[model]'"
         ) from exc
     if members < 1:
         raise ParameterError(f"members must be >= 1, got {members}")
+    if not 1 <= degree <= 6:
+        raise ParameterError(f"degree must be in [1, 6], got {degree}")
     X = _features(data.states, data.forces)
     y = (data.next_states[:, [1, 3]] - data.states[:, [1, 3]]) / data.dt
+    scaler = StandardScaler().fit(X)
+    poly = PolynomialFeatures(degree).fit(scaler.transform(X))
+    Phi = poly.transform(scaler.transform(X))
     fitted = []
     for _ in range(members):
         rows = rng.integers(0, len(data), len(data))
-        seed = int(rng.integers(2**31 - 1))
-        pipe = make_pipeline(
-            StandardScaler(),
-            RBFSampler(gamma=gamma, n_components=components, random_state=seed),
-            Ridge(alpha=ridge),
-        )
-        fitted.append(pipe.fit(X[rows], y[rows]))
+        readout = Ridge(alpha=ridge).fit(Phi[rows], y[rows])
+        fitted.append(make_pipeline(scaler, poly, readout))
     return GenericModel(tuple(fitted), data.dt)

@@ -8,24 +8,31 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    of that controller (``success_on`` "mean"); with ``robust`` the robustness set
    decides, every run counted by the loop.
 2. **model fit** (the cerebellum, supervised): the transitions of the real trials so far
-   (state, held motor force, next state) fit the structured forward model,
-   :func:`striatal.learners.forward.model.fit_structured`: the cart-pole's equations
-   with cart mass, pole mass, length and cart friction unknown, started from the
-   nominal :class:`~striatal.params.Plant`, and gravity known to be its 9.81 m/s^2.
+   (state, held motor force, next state) fit the forward model ``forward_model``:
+   "structured", :func:`striatal.learners.forward.model.fit_structured` (the cart-pole's
+   equations with cart mass, pole mass, length and cart friction unknown, started from
+   the nominal :class:`~striatal.params.Plant`, gravity known), or "generic",
+   :func:`~striatal.learners.forward.model.fit_generic` (no cart-pole equations: an
+   ensemble of polynomial ridge regressions, run as a
+   :class:`~striatal.sim.learned.LearnedPlant`).
 3. **imagined learning** (the basal ganglia, reinforcement): pgpe, the project's rule
    (:mod:`striatal.learners.pgpe`, its own code through :func:`striatal.learners.loop.learn`),
-   learns from W on the fitted plant with its tuned preset (its robust preset with
-   ``robust``: jittered plants and the robustness set around the fitted plant) for at most
-   ``imagine_trials`` trials. A candidate it finds must also pass the robustness set on
-   each plant the fit cannot rule out (:meth:`StructuredFit.family`), else imagination goes
+   learns from W on the model's :class:`World` for at most ``imagine_trials`` trials, with
+   its tuned preset. Structured: on the fitted plant, with ``robust`` its robust preset
+   (jittered plants) and the robustness set around the fitted plant; a candidate must
+   also pass the set on each plant the fit cannot rule out (:meth:`StructuredFit.family`).
+   Generic: on the ensemble's mean, with ``robust`` pgpe's plain preset (a learned plant
+   has no pole mass to jitter); a candidate must also pass every start of the robustness
+   set on each member (:func:`striatal.sim.robust.family_check`). Else imagination goes
    on. The candidate, found or not, is the next real trial's controller.
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
 imagined simulations and simulated seconds; history column ``imagined``), never in
 ``simulations``. In imagination the controller's partial feedback linearisation (eq 12)
-believes the fitted plant; on the real plant it believes the nominal one, as every
-controller here. Friction is fitted but not imagined (the kernel's plant has none): a
-plant with friction is outside what imagination can represent.
+believes the fitted plant (generic: the plant the real trials' controller believes); on
+the real plant it believes the nominal one, as every controller here. Friction is
+fitted but not imagined (the kernel's plant has none): a plant with friction is outside
+what the structured imagination can represent.
 
 The no-learning control (``imagine_trials`` 0) runs the same real-trial schedule with no
 model and no update: W(0) is tried again each trial.
@@ -33,6 +40,7 @@ model and no update: W(0) is tried again each trial.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
@@ -40,16 +48,33 @@ from typing import Any
 
 import numpy as np
 
-from striatal.learners.config import LearnerConfig, pick
-from striatal.learners.forward.model import StructuredFit, Transitions, fit_structured
+from striatal.learners.config import ForwardModel, LearnerConfig, pick
+from striatal.learners.forward.model import (
+    GenericModel,
+    StructuredFit,
+    Transitions,
+    fit_generic,
+    fit_structured,
+)
 from striatal.learners.loop import default_config, learn
 from striatal.learners.rule import Rule, Trial, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Controller, Plant, Simulation
-from striatal.sim.robust import stop_check
+from striatal.sim.learned import LearnedPlant
+from striatal.sim.robust import StopCheck, family_check, stop_check
 from striatal.sim.rollout import Protocol, TrialOutcome, recorded_trial
 
-__all__ = ["FORWARD", "MAX_TRANSITIONS", "ForwardConfig", "ForwardRule", "imagine"]
+__all__ = [
+    "FORWARD",
+    "MAX_TRANSITIONS",
+    "ForwardConfig",
+    "ForwardRule",
+    "World",
+    "generic_world",
+    "imagine",
+    "passes_family",
+    "structured_world",
+]
 
 #: Transitions kept from the real trials (the most recent); each trial adds at most
 #: :data:`PER_TRIAL` of them, evenly spaced.
@@ -66,6 +91,7 @@ class ForwardConfig:
     """The forward rule's options (see :class:`LearnerConfig` for each)."""
 
     imagine_trials: int
+    forward_model: ForwardModel
 
 
 @dataclass(frozen=True)
@@ -98,22 +124,68 @@ def kept_data(state: LearnerState) -> np.ndarray:
     return flat.reshape(-1, _WIDTH)
 
 
+@dataclass(frozen=True)
+class World:
+    """What imagination runs on: the ``plant`` the inner learner learns on, whether it
+    may learn there with its robust preset (``jitter``: pgpe's jittered plants need a
+    plant with a pole mass to scale), and the ``family`` of plants a candidate must also
+    pass the robustness set on (``family_model``: what the controller believes there;
+    None: each plant itself)."""
+
+    plant: Plant
+    family: tuple[Plant, ...]
+    jitter: bool
+    family_model: Plant | None
+
+
+def structured_world(fit: StructuredFit) -> World:
+    """The fitted cart-pole: learn on it (robust preset and all), check on the four plants
+    the fit cannot rule out (:meth:`StructuredFit.family`), each believed exactly."""
+    return World(fit.plant, fit.family(), jitter=True, family_model=None)
+
+
+def generic_world(model: GenericModel, believed: Plant) -> World:
+    """The generic ensemble: learn on its mean (one evaluation a step), check on each
+    member (the ensemble's doubt), the controller believing ``believed`` throughout."""
+    dynamics = model.dynamics()
+    members = tuple(LearnedPlant.of(dynamics.member(k), believed) for k in range(dynamics.members))
+    return World(LearnedPlant.of(dynamics.mean(), believed), members, False, believed)
+
+
+def passes_family(
+    world: World, controller: Controller, config: LearnerConfig, dt: float
+) -> StopCheck:
+    """Does ``controller`` pass the robustness set on every plant of ``world.family``?"""
+    hardware = config.hardware
+    if world.family_model is not None:
+        return family_check(controller, world.family, world.family_model, dt, hardware=hardware)
+    runs, seconds = 0, 0.0
+    for plant in world.family:
+        verdict = stop_check(controller, plant, dt, hardware=hardware)
+        runs += verdict.simulations
+        seconds += verdict.simulated_seconds
+        if not verdict.robust:
+            return StopCheck(False, runs, seconds, verdict.failed)
+    return StopCheck(True, runs, seconds)
+
+
 def imagine(
-    fit: StructuredFit,
+    world: World,
     controller: Controller,
     config: LearnerConfig,
     sim: Simulation,
     protocol: Protocol,
     seed: int,
 ) -> Imagined:
-    """Learn with :data:`INNER` on ``fit``'s plant from ``controller`` (gains, theta_c)
+    """Learn with :data:`INNER` on ``world.plant`` from ``controller`` (gains, theta_c)
     for at most ``config.imagine_trials`` imagined trials (eqs 22-25 with the inner
-    rule's preset; its robust preset and stop rule with ``config.robust``). A solution
-    must also be robust on each plant of ``fit.family()`` (with ``robust``), else the
-    inner learner goes on from it with a new seed."""
+    rule's preset; with ``config.robust`` its stop rule, and its robust preset where
+    ``world.jitter``). A solution must also be robust on each plant of
+    ``world.family`` (with ``robust``), else the inner learner goes on from it with a
+    new seed."""
     inner = default_config(
         INNER,
-        robust=config.robust,
+        robust=config.robust and world.jitter,
         max_force=config.max_force,
         track=config.track,
         action_every=config.action_every,
@@ -124,7 +196,7 @@ def imagine(
     solved = False
     while budget > 0 and not solved:
         result = learn(
-            fit.plant,
+            world.plant,
             template,
             replace(inner, max_trials=budget),
             round_seed,
@@ -137,13 +209,10 @@ def imagine(
         template = replace(template, gains=tuple(result.W), theta_c=result.theta_c)
         solved = result.success
         if solved and config.robust:
-            for plant in fit.family():
-                verdict = stop_check(template, plant, sim.dt, hardware=config.hardware)
-                simulations += verdict.simulations
-                seconds += verdict.simulated_seconds
-                if not verdict.robust:
-                    solved = False
-                    break
+            verdict = passes_family(world, template, config, sim.dt)
+            simulations += verdict.simulations
+            seconds += verdict.simulated_seconds
+            solved = verdict.robust
         round_seed += 1
     return Imagined(
         W=tuple(float(w) for w in template.gains),
@@ -217,13 +286,22 @@ class ForwardRule(Rule):
         if not success and c.imagine_trials > 0 and len(data) > 0:
             context: Mapping[str, Any] = plan.scratch["context"].item()
             sim: Simulation = context["sim"]
-            fit = fit_structured(Transitions(data[:, :4], data[:, 4], data[:, 5:], sim.dt))
+            transitions = Transitions(data[:, :4], data[:, 4], data[:, 5:], sim.dt)
             template = replace(context["controller"], gains=W, theta_c=theta_c)
             seed = int(plan.scratch["seed"][0])
-            dream = imagine(fit, template, config, sim, context["protocol"], seed)
+            if c.forward_model == "generic":
+                believed = context.get("model") or context["plant"]
+                model = fit_generic(transitions, np.random.default_rng(seed))
+                world = generic_world(model, believed)
+                fitted = (math.nan, math.nan)
+            else:
+                fit = fit_structured(transitions)
+                world = structured_world(fit)
+                fitted = (fit.plant.pole_mass, fit.plant.length)
+            dream = imagine(world, template, config, sim, context["protocol"], seed)
             W, theta_c = dream.W, dream.theta_c
             done = (done[0] + dream.simulations, done[1] + dream.simulated_seconds)
-            report[:] = (dream.simulations, fit.plant.pole_mass, fit.plant.length, dream.solved)
+            report[:] = (dream.simulations, *fitted, dream.solved)
         return Update(
             W=W,
             theta_c=float(theta_c),

@@ -14,7 +14,8 @@ clockwise (pole tip at x + l sin theta).
 The modules, by concern: :mod:`~striatal.sim.kernel.libm` (angle wrap, libm ufuncs,
 polynomial sin/cos), :mod:`~striatal.sim.kernel.plant` (eqs 7-14, RK4, the motor),
 :mod:`~striatal.sim.kernel.policy` (eqs 15-23, the switch, eq 5's sigma),
-:mod:`~striatal.sim.kernel.traces` (eqs 2-3), :mod:`~striatal.sim.kernel.trials`
+:mod:`~striatal.sim.kernel.traces` (eqs 2-3), :mod:`~striatal.sim.kernel.learned`
+(a learned plant's step), :mod:`~striatal.sim.kernel.trials`
 (the judge of eqs 24-25, the summary, the trial loop and its batch) and
 :mod:`~striatal.sim.kernel.lockstep` (the vectorised batch). This package exposes
 their names.
@@ -22,7 +23,8 @@ their names.
 
 from __future__ import annotations
 
-from striatal.sim.kernel import libm, lockstep, plant, policy, traces, trials
+from striatal.sim.kernel import learned, libm, lockstep, plant, policy, traces, trials
+from striatal.sim.kernel.learned import *  # noqa: F403
 from striatal.sim.kernel.libm import *  # noqa: F403
 from striatal.sim.kernel.lockstep import *  # noqa: F403
 from striatal.sim.kernel.plant import *  # noqa: F403
@@ -31,6 +33,7 @@ from striatal.sim.kernel.traces import *  # noqa: F403
 from striatal.sim.kernel.trials import *  # noqa: F403
 
 __all__ = []
+__all__ += learned.__all__
 __all__ += libm.__all__
 __all__ += lockstep.__all__
 __all__ += plant.__all__

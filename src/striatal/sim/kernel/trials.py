@@ -8,14 +8,16 @@ Build the arguments with :func:`striatal.sim.rollout.trial_args` and
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
+from striatal.sim.kernel.learned import LearnedArgs, learned_step
 from striatal.sim.kernel.libm import wrap_angle
 from striatal.sim.kernel.plant import (
     PlantArgs,
+    PlantTerms,
     clip_force,
     force,
     motor_force,
@@ -67,6 +69,7 @@ __all__ = [
     "judge_start",
     "load_trace",
     "next_action",
+    "run_learned_trial",
     "run_trial",
     "run_trials_batch",
     "store_trace",
@@ -74,6 +77,7 @@ __all__ = [
     "tally_mode",
     "tally_start",
     "tally_x",
+    "trial_loop",
     "write_summary",
 ]
 
@@ -372,6 +376,23 @@ def _record(
 
 
 @njit(cache=True)
+def _physical_step(
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    s: float,
+    c: float,
+    a: float,
+    f: float,
+    pt: PlantTerms,
+    dynamics: int,
+) -> tuple[float, float, float, float]:
+    """:func:`plant_step`, the step of eqs 8-9 or 13-14, as :func:`trial_loop` calls a step."""
+    return plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
+
+
+@njit(cache=True)
 def run_trial(
     state0: np.ndarray,
     gains: Gains,
@@ -408,6 +429,46 @@ def run_trial(
     the motor can deliver it (docs/paper-notes.md section 9). The recorded force and
     OUT_MAX_ABS_FORCE are the (clipped) force at the step's start.
     """
+    trial_loop(_physical_step, 0, state0, gains, plant, control, protocol, noise, learning, buffers)
+
+
+@njit(cache=True)
+def run_learned_trial(
+    state0: np.ndarray,
+    gains: Gains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
+    noise: NoiseArgs,
+    learning: TraceArgs,
+    buffers: Buffers,
+    model: LearnedArgs,
+) -> None:
+    """:func:`run_trial` on a learned plant: each step is :func:`learned_step` of ``model``
+    under the held motor force (eq 12 with ``plant.model``, clipped to ``plant.max_force``);
+    ``plant.plant`` is not used."""
+    trial_loop(
+        learned_step, model, state0, gains, plant, control, protocol, noise, learning, buffers
+    )
+
+
+@njit(cache=True, inline="always")
+def trial_loop(
+    step: Any,
+    dynamics: Any,
+    state0: np.ndarray,
+    gains: Gains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
+    noise: NoiseArgs,
+    learning: TraceArgs,
+    buffers: Buffers,
+) -> None:
+    """The trial loop of :func:`run_trial` with the plant's step ``step(x, x_dot, theta,
+    theta_dot, s, c, a, f, pt, dynamics)``: the one loop of a scalar trial, whatever
+    integrates the plant. Inlined where it is called, so that each caller compiles it
+    with its step function resolved (a step passed at run time cannot be cached)."""
     theta_c = gains.theta_c
     pt = plant_terms(plant)
     # the policy's constants read once (a store to a buffer would otherwise reload them)
@@ -446,7 +507,7 @@ def run_trial(
             if record:
                 _record(traj, k, dt, (x, x_dot, theta, theta_dot), a, f, mode)
             tally = tally_force(f, tally)
-            x, x_dot, theta, theta_dot = plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
+            x, x_dot, theta, theta_dot = step(x, x_dot, theta, theta_dot, s, c, a, f, pt, dynamics)
             status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
             tally = tally_x(x, status, tally)
             if status != STATUS_RUNNING:

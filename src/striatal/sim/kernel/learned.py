@@ -1,0 +1,100 @@
+"""A learned plant step: a polynomial regression of the accelerations.
+
+The step of a plant whose equations of motion are not eqs 8-9 but a fitted regression
+(a cerebellar forward model with no cart-pole structure). Inputs: the features
+q = (x_dot, sin theta, cos theta, theta_dot, f), f the motor force held over the step
+[N], standardised, z = (q - mean) / scale. Outputs: the step's mean accelerations
+(x_ddot, theta_ddot). Each of the K members is linear in the F monomials of z,
+
+    a_k(z) = C_k phi(z) + c_k,    phi_j(z) = prod_i z_i ** P[j, i],
+
+and the step takes the members' mean. Velocities advance by dt a, positions and
+angles by the trapezoid of the old and new velocities.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from striatal.sim.kernel.plant import PlantTerms
+
+__all__ = ["N_FEATURES", "LearnedArgs", "learned_accelerations", "learned_step"]
+
+#: Inputs of the learned model: x_dot, sin theta, cos theta, theta_dot, f.
+N_FEATURES = 5
+
+
+class LearnedArgs(NamedTuple):
+    """A learned model's arrays: the inputs' ``mean`` and ``scale`` (5,), the monomials'
+    exponents ``powers`` (F, 5) (int64), the readout ``coef`` (K, 2, F) and
+    ``intercept`` (K, 2) of K members."""
+
+    mean: np.ndarray
+    scale: np.ndarray
+    powers: np.ndarray
+    coef: np.ndarray
+    intercept: np.ndarray
+
+
+@njit(cache=True)
+def learned_accelerations(
+    x_dot: float, s: float, c: float, theta_dot: float, f: float, model: LearnedArgs
+) -> tuple[float, float]:
+    """(x_ddot, theta_ddot): the members' mean of ``model`` at (x_dot, s = sin theta,
+    c = cos theta, theta_dot, f) [m/s^2, rad/s^2]."""
+    m = model.mean
+    sc = model.scale
+    z0 = (x_dot - m[0]) / sc[0]
+    z1 = (s - m[1]) / sc[1]
+    z2 = (c - m[2]) / sc[2]
+    z3 = (theta_dot - m[3]) / sc[3]
+    z4 = (f - m[4]) / sc[4]
+    P = model.powers
+    C = model.coef
+    K = C.shape[0]
+    ax = 0.0
+    ath = 0.0
+    for j in range(P.shape[0]):
+        phi = 1.0
+        for _ in range(P[j, 0]):
+            phi *= z0
+        for _ in range(P[j, 1]):
+            phi *= z1
+        for _ in range(P[j, 2]):
+            phi *= z2
+        for _ in range(P[j, 3]):
+            phi *= z3
+        for _ in range(P[j, 4]):
+            phi *= z4
+        for k in range(K):
+            ax += C[k, 0, j] * phi
+            ath += C[k, 1, j] * phi
+    for k in range(K):
+        ax += model.intercept[k, 0]
+        ath += model.intercept[k, 1]
+    return ax / K, ath / K
+
+
+@njit(cache=True)
+def learned_step(
+    x: float,
+    x_dot: float,
+    theta: float,
+    theta_dot: float,
+    s: float,
+    c: float,
+    a: float,
+    f: float,
+    pt: PlantTerms,
+    model: LearnedArgs,
+) -> tuple[float, float, float, float]:
+    """One control step pt.dt of the learned plant under the motor force f held (the
+    action a enters only through f). ``s``, ``c``: sin and cos of theta."""
+    dt = pt.dt
+    ax, ath = learned_accelerations(x_dot, s, c, theta_dot, f, model)
+    v = x_dot + dt * ax
+    w = theta_dot + dt * ath
+    return x + 0.5 * dt * (x_dot + v), v, theta + 0.5 * dt * (theta_dot + w), w

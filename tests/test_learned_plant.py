@@ -1,0 +1,204 @@
+"""A plant whose motion is a learned model (striatal.sim.learned, striatal.sim.kernel.learned):
+the compiled step against hand-computed steps and scikit-learn's predictions, the trial loop
+on it, and what it refuses."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from striatal.errors import ParameterError
+from striatal.params import (
+    CHAPTER_FINAL_THETA_C,
+    CHAPTER_FINAL_W,
+    CHAPTER_INITIAL_THETA_C,
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+)
+from striatal.sim import kernel
+from striatal.sim.batch import TrialRequest
+from striatal.sim.kernel.plant import _array_terms
+from striatal.sim.learned import LearnedDynamics, LearnedPlant
+from striatal.sim.robust import ROBUST_HARDWARE
+from striatal.sim.rollout import NO_PROTOCOL, Protocol, batch_args, run_trial, simulate
+
+FINAL = Controller(gains=CHAPTER_FINAL_W, theta_c=CHAPTER_FINAL_THETA_C)
+INITIAL = Controller(gains=CHAPTER_INITIAL_W, theta_c=CHAPTER_INITIAL_THETA_C)
+DT = 0.01
+PT = _array_terms(Plant().as_array(), Plant().as_array(), False, DT, True)
+
+
+def hand_model(
+    powers: list[list[int]], coef: list[list[float]], members: int = 1
+) -> LearnedDynamics:
+    """A model with unit standardisation: a_x = coef[0] . phi, a_theta = coef[1] . phi."""
+    c = np.array(coef, dtype=float)
+    return LearnedDynamics(
+        kernel.LearnedArgs(
+            mean=np.zeros(5),
+            scale=np.ones(5),
+            powers=np.array(powers, dtype=np.int64),
+            coef=np.ascontiguousarray(np.stack([c] * members)),
+            intercept=np.zeros((members, 2)),
+        )
+    )
+
+
+def test_a_force_only_model_is_a_trapezoid_step_of_f_over_m() -> None:
+    """x_ddot = f / M (M = 2 kg), theta_ddot = -3 theta_dot: one step by hand."""
+    model = hand_model([[0, 0, 0, 0, 1], [0, 0, 0, 1, 0]], [[0.5, 0.0], [0.0, -3.0]])
+    x, xd, th, thd, f = 0.2, -0.4, 1.0, 0.7, 3.0
+    out = kernel.learned_step(x, xd, th, thd, math.sin(th), math.cos(th), 99.0, f, PT, model.args)
+    v = xd + DT * f / 2.0
+    w = thd + DT * (-3.0 * thd)
+    assert out == pytest.approx((x + DT * (xd + v) / 2, v, th + DT * (thd + w) / 2, w), abs=1e-15)
+
+
+def test_monomials_and_standardisation_are_as_written() -> None:
+    """a_x = z0^2 z3 + 2 z1 z2 z4, a_theta = z4^3 - 1 (intercept), z = (q - mean) / scale."""
+    args = kernel.LearnedArgs(
+        mean=np.array([0.1, 0.0, 0.5, -0.2, 1.0]),
+        scale=np.array([2.0, 1.0, 0.5, 1.5, 4.0]),
+        powers=np.array([[2, 0, 0, 1, 0], [0, 1, 1, 0, 1], [0, 0, 0, 0, 3]], dtype=np.int64),
+        coef=np.array([[[1.0, 2.0, 0.0], [0.0, 0.0, 1.0]]]),
+        intercept=np.array([[0.0, -1.0]]),
+    )
+    q = np.array([0.7, math.sin(0.4), math.cos(0.4), 1.3, -2.0])
+    z = (q - args.mean) / args.scale
+    got = kernel.learned_accelerations(q[0], q[1], q[2], q[3], q[4], args)
+    assert got == pytest.approx((z[0] ** 2 * z[3] + 2 * z[1] * z[2] * z[4], z[4] ** 3 - 1.0))
+
+
+def test_members_mean_and_member_views() -> None:
+    rng = np.random.default_rng(0)
+    K, F = 3, 4
+    powers = np.array([[0, 0, 0, 0, 0], [1, 0, 0, 0, 0], [0, 0, 0, 1, 1], [0, 2, 0, 0, 0]])
+    args = kernel.LearnedArgs(
+        mean=np.zeros(5),
+        scale=np.ones(5),
+        powers=powers.astype(np.int64),
+        coef=rng.standard_normal((K, 2, F)),
+        intercept=rng.standard_normal((K, 2)),
+    )
+    model = LearnedDynamics(args)
+    q = (0.3, 0.2, 0.9, -0.5, 1.5)
+    each = [kernel.learned_accelerations(*q, model.member(k).args) for k in range(K)]
+    assert kernel.learned_accelerations(*q, args) == pytest.approx(np.mean(each, axis=0))
+    assert kernel.learned_accelerations(*q, model.mean().args) == pytest.approx(
+        np.mean(each, axis=0), abs=1e-14
+    )
+    with pytest.raises(ParameterError, match="member must be in"):
+        model.member(K)
+
+
+def test_the_trial_loop_on_a_learned_plant_steps_by_the_model_with_the_recorded_force() -> None:
+    """Every recorded row k + 1 is learned_step of row k under row k's (held) force: the
+    one trial loop, its force and its bookkeeping, drive the learned step."""
+    model = hand_model(
+        [[0, 0, 0, 0, 1], [0, 1, 0, 0, 0], [0, 0, 1, 0, 1]],
+        [[1.0 / 1.1, 0.0, 0.0], [0.0, 9.8, -1.0 / 1.1]],
+    )
+    plant = LearnedPlant.of(model, Plant())
+    tr = simulate(plant, FINAL, Simulation(duration=5.0), hardware=ROBUST_HARDWARE)
+    rows = tr.data
+    assert len(rows) == 501
+    for k in range(0, 500, 37):
+        x, xd, th, thd = rows[k, 1:5]
+        nxt = kernel.learned_step(
+            x, xd, th, thd, math.sin(th), math.cos(th), rows[k, 5], rows[k, 6], PT, model.args
+        )
+        assert nxt == pytest.approx(tuple(rows[k + 1, 1:5]), abs=1e-12)
+    # the physical plant moves differently from the same start
+    real = simulate(Plant(), FINAL, Simulation(duration=5.0), hardware=ROBUST_HARDWARE)
+    assert np.abs(real.data[-1, 1:5] - rows[-1, 1:5]).max() > 1e-3
+
+
+def test_a_generic_model_runs_in_the_kernel_as_scikit_learn_predicts() -> None:
+    pytest.importorskip("sklearn")
+    from striatal.learners.forward.model import Transitions, fit_generic
+
+    true = Plant(pole_mass=0.12, length=0.9)
+    sim = Simulation(duration=20.0)
+    data = Transitions.of(
+        [simulate(true, c, sim, model=Plant(), hardware=ROBUST_HARDWARE) for c in (FINAL, INITIAL)]
+    )
+    model = fit_generic(data, np.random.default_rng(3))
+    args = model.dynamics().args
+    assert model.dynamics().members == 5
+    held = data.split(9)[1]
+    pred = model.predict(held.states, held.forces)
+    got = np.array(
+        [
+            kernel.learned_step(*s, math.sin(s[2]), math.cos(s[2]), 0.0, f, PT, args)
+            for s, f in zip(held.states, held.forces, strict=True)
+        ]
+    )
+    assert np.abs(got - pred).max() < 1e-12
+    # a short imagined run from the chapter's start tracks the real one (2 s, swing-up)
+    short = Simulation(duration=2.0)
+    imagined = simulate(model.plant(), FINAL, short, hardware=ROBUST_HARDWARE)
+    real = simulate(true, FINAL, short, model=Plant(), hardware=ROBUST_HARDWARE)
+    err = np.abs(imagined.data[:, 1:5] - real.data[:, 1:5]).max(axis=0)
+    assert err[0] < 0.01 and err[2] < 0.01  # metres, radians
+
+
+def test_a_learned_plant_refuses_what_it_cannot_be() -> None:
+    model = hand_model([[0, 0, 0, 0, 1]], [[1.0], [0.0]])
+    plant = LearnedPlant.of(model, Plant(pole_mass=0.2))
+    assert plant.believed == Plant(pole_mass=0.2)
+    assert plant != Plant(pole_mass=0.2) and plant == plant
+    assert plant != LearnedPlant.of(hand_model([[0, 0, 0, 0, 1]], [[1.0], [0.0]]), Plant())
+    hash(plant)
+    with pytest.raises(ParameterError, match="cannot be scaled"):
+        plant.scaled(pole_mass=0.8)
+    with pytest.raises(ParameterError, match="physical plants only"):
+        batch_args(
+            plant,
+            FINAL,
+            Simulation(),
+            protocol=Protocol(),
+            gains=np.zeros((2, 6)),
+            theta_c=np.zeros(2),
+        )
+    request = TrialRequest(plant, FINAL, Simulation(duration=1.0), NO_PROTOCOL)
+    assert request.batch_key() is None
+    assert request.run() == run_trial(
+        plant,
+        FINAL,
+        Simulation(duration=1.0),
+        protocol=NO_PROTOCOL,
+        trace=np.zeros(6),
+        gamma=0.0,
+        rng=None,
+    )
+    with pytest.raises(ParameterError, match="needs LearnedDynamics"):
+        LearnedPlant()
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"powers": np.zeros((2, 4), dtype=np.int64)}, "powers must be int64"),
+        ({"powers": np.zeros((2, 5))}, "powers must be int64"),
+        ({"powers": -np.ones((2, 5), dtype=np.int64)}, "powers must be >= 0"),
+        ({"scale": np.zeros(5)}, "scales > 0"),
+        ({"mean": np.full(5, np.nan)}, "mean must be finite"),
+        ({"coef": np.zeros((1, 2, 3))}, r"coef must be \(1, 2, 2\)"),
+        ({"intercept": np.zeros((2, 2))}, r"intercept must be \(1, 2\)"),
+        ({"coef": np.zeros((0, 2, 2))}, "K >= 1"),
+    ],
+)
+def test_bad_learned_arrays_are_refused(change: dict, message: str) -> None:
+    good = kernel.LearnedArgs(
+        mean=np.zeros(5),
+        scale=np.ones(5),
+        powers=np.zeros((2, 5), dtype=np.int64),
+        coef=np.zeros((1, 2, 2)),
+        intercept=np.zeros((1, 2)),
+    )
+    with pytest.raises(ParameterError, match=message):
+        LearnedDynamics(good._replace(**change))
