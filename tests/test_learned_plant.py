@@ -184,7 +184,8 @@ def test_a_learned_plant_refuses_what_it_cannot_be() -> None:
     [
         ({"powers": np.zeros((2, 4), dtype=np.int64)}, "powers must be int64"),
         ({"powers": np.zeros((2, 5))}, "powers must be int64"),
-        ({"powers": -np.ones((2, 5), dtype=np.int64)}, "powers must be >= 0"),
+        ({"powers": -np.ones((2, 5), dtype=np.int64)}, r"powers must be in \[0, 6\]"),
+        ({"powers": np.full((2, 5), 7, dtype=np.int64)}, r"powers must be in \[0, 6\]"),
         ({"scale": np.zeros(5)}, "scales > 0"),
         ({"mean": np.full(5, np.nan)}, "mean must be finite"),
         ({"coef": np.zeros((1, 2, 3))}, r"coef must be \(1, 2, 2\)"),

@@ -18,7 +18,7 @@ import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.params import Plant
-from striatal.sim.kernel.learned import N_FEATURES, LearnedArgs
+from striatal.sim.kernel.learned import MAX_POWER, N_FEATURES, LearnedArgs
 
 __all__ = ["LearnedDynamics", "LearnedPlant"]
 
@@ -51,8 +51,8 @@ class LearnedDynamics:
                 raise ParameterError(f"learned {name} must be {shape}, got {value.shape}")
             if value.dtype != np.float64 or not np.isfinite(value).all():
                 raise ParameterError(f"learned {name} must be finite float64")
-        if (a.powers < 0).any() or not (a.scale > 0).all():
-            raise ParameterError("learned powers must be >= 0 and scales > 0")
+        if (a.powers < 0).any() or (a.powers > MAX_POWER).any() or not (a.scale > 0).all():
+            raise ParameterError(f"learned powers must be in [0, {MAX_POWER}] and scales > 0")
         if not all(v.flags.c_contiguous for v in a):
             raise ParameterError("learned model arrays must be C-contiguous")
 

@@ -21,7 +21,7 @@ from numba import njit
 
 from striatal.sim.kernel.plant import PlantTerms
 
-__all__ = ["N_FEATURES", "LearnedArgs", "learned_accelerations", "learned_step"]
+__all__ = ["MAX_POWER", "N_FEATURES", "LearnedArgs", "learned_accelerations", "learned_step"]
 
 #: Inputs of the learned model: x_dot, sin theta, cos theta, theta_dot, f.
 N_FEATURES = 5
@@ -29,7 +29,7 @@ N_FEATURES = 5
 
 class LearnedArgs(NamedTuple):
     """A learned model's arrays: the inputs' ``mean`` and ``scale`` (5,), the monomials'
-    exponents ``powers`` (F, 5) (int64), the readout ``coef`` (K, 2, F) and
+    exponents ``powers`` (F, 5) (int64, each in [0, MAX_POWER]), the readout ``coef`` (K, 2, F) and
     ``intercept`` (K, 2) of K members."""
 
     mean: np.ndarray
@@ -37,6 +37,18 @@ class LearnedArgs(NamedTuple):
     powers: np.ndarray
     coef: np.ndarray
     intercept: np.ndarray
+
+
+#: The highest power of one input in a monomial.
+MAX_POWER = 6
+
+
+@njit(cache=True, inline="always")
+def _powers(z: float) -> tuple[float, float, float, float, float, float, float]:
+    """(1, z, z^2, ..., z^MAX_POWER)."""
+    z2 = z * z
+    z3 = z2 * z
+    return (1.0, z, z2, z3, z2 * z2, z3 * z2, z3 * z3)
 
 
 @njit(cache=True)
@@ -52,23 +64,18 @@ def learned_accelerations(
     z2 = (c - m[2]) / sc[2]
     z3 = (theta_dot - m[3]) / sc[3]
     z4 = (f - m[4]) / sc[4]
+    t0 = _powers(z0)
+    t1 = _powers(z1)
+    t2 = _powers(z2)
+    t3 = _powers(z3)
+    t4 = _powers(z4)
     P = model.powers
     C = model.coef
     K = C.shape[0]
     ax = 0.0
     ath = 0.0
     for j in range(P.shape[0]):
-        phi = 1.0
-        for _ in range(P[j, 0]):
-            phi *= z0
-        for _ in range(P[j, 1]):
-            phi *= z1
-        for _ in range(P[j, 2]):
-            phi *= z2
-        for _ in range(P[j, 3]):
-            phi *= z3
-        for _ in range(P[j, 4]):
-            phi *= z4
+        phi = t0[P[j, 0]] * t1[P[j, 1]] * t2[P[j, 2]] * t3[P[j, 3]] * t4[P[j, 4]]
         for k in range(K):
             ax += C[k, 0, j] * phi
             ath += C[k, 1, j] * phi
