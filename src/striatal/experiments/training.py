@@ -110,18 +110,9 @@ class Run:
         return Plant(**self.settings["plant"])
 
     def to_dict(self) -> dict[str, Any]:
-        payload = TrainResult(
-            success=self.success,
-            trials=self.trials,
-            W=self.W,
-            theta_c=self.theta_c,
-            seed=self.seed,
-            wall_seconds=self.wall_seconds,
-            state=self.state,
-            learner=self.learner,
-            interrupted=self.interrupted,
-            settings=self.settings,
-        ).to_dict()
+        # result.json: this run's TrainResult (the learning loop's record), then train's own
+        loop = TrainResult(**{f.name: getattr(self, f.name) for f in fields(TrainResult)})
+        payload = loop.to_dict()
         payload["mean_policy_success"] = self.mean_policy_success
         payload["mean_policy_final_state"] = list(self.mean_policy_final_state)
         payload["positive_rewards"] = self.state.n_positive
