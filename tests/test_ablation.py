@@ -69,7 +69,9 @@ def test_search_rows_are_seeded_count_trials_and_resimulate(name: str) -> None:
 def test_random_search_row_is_the_sweep_baseline() -> None:
     W0 = random_initial_gains(np.random.default_rng([5, 1]))
     row = run_seed("random-search", 5, 20)
-    direct = baselines.random_search(Plant(), Controller(W0, 0.6), Simulation(), 5, 20, "mean")
+    direct = baselines.random_search(
+        Plant(), Controller(W0, 0.6), Simulation(), 5, baselines.Budget(20, "mean")
+    )
     assert (row["success"], row["trials"], row["theta_c"]) == (
         direct["success"],
         direct["trials"],

@@ -6,12 +6,16 @@ import numpy as np
 import pytest
 
 from striatal.experiments import baselines
+from striatal.experiments.baselines import Budget
+from striatal.learners import LearnerConfig
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
+    CHAPTER_HARDWARE,
     CHAPTER_INITIAL_THETA_C,
     CHAPTER_INITIAL_W,
     Controller,
+    Hardware,
     Plant,
     Simulation,
 )
@@ -59,21 +63,21 @@ def test_lqr_fit_matches_the_cart_terms_and_stabilises(plant: Plant) -> None:
 
 def test_chapter_final_gains_pass_on_the_mean_policy(plant: Plant, sim60: Simulation) -> None:
     out = baselines.fixed_controller(
-        plant, TEMPLATE, sim60, CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C, 0, 50, "mean"
+        plant, TEMPLATE, sim60, CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C, 0, Budget(50, "mean")
     )
     assert out["success"] and out["trials"] == 1
 
 
 def test_searches_are_deterministic_and_within_budget(plant: Plant) -> None:
     sim = Simulation(duration=20.0)
-    a = baselines.random_search(plant, TEMPLATE, sim, 4, 12, "noisy")
-    assert a == baselines.random_search(plant, TEMPLATE, sim, 4, 12, "noisy")
+    a = baselines.random_search(plant, TEMPLATE, sim, 4, Budget(12, "noisy"))
+    assert a == baselines.random_search(plant, TEMPLATE, sim, 4, Budget(12, "noisy"))
     assert 1 <= a["trials"] <= 12
     low, high = baselines.RANDOM_BOX
     p = np.array([*a["W"], a["theta_c"]])
     assert np.all(p >= low) and np.all(p <= high)
-    b = baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 4, 15, "mean")
-    assert b == baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 4, 15, "mean")
+    b = baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 4, Budget(15, "mean"))
+    assert b == baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 4, Budget(15, "mean"))
     assert 1 <= b["trials"] <= 15 and b["W"][0] > 0
     assert low[6] <= b["theta_c"] <= high[6]
 
@@ -86,7 +90,7 @@ def test_cmaes_restarts_with_twice_the_population_when_cma_stops(
     import cma
 
     sim = Simulation(duration=5.0)  # too short to pass: the budget is spent
-    plain = baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 2, 20, "mean")
+    plain = baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 2, Budget(20, "mean"))
     assert plain["restarts"] == 0 and plain["popsize"] == 4 + int(3 * np.log(7))
     assert plain["simulations"] == plain["trials"] == 20
     real_stop = cma.CMAEvolutionStrategy.stop
@@ -95,8 +99,16 @@ def test_cmaes_restarts_with_twice_the_population_when_cma_stops(
         return {"test": 1} if self.countiter >= 1 else real_stop(self, *a, **k)
 
     monkeypatch.setattr(cma.CMAEvolutionStrategy, "stop", stop_after_one_generation)
-    out = baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 2, 60, "mean")
+    out = baselines.cmaes(plant, TEMPLATE, sim, CHAPTER_INITIAL_W, 0.6, 2, Budget(60, "mean"))
     # runs of 9, 18 and (33 of) 36 candidates: two restarts
     assert out["restarts"] == 2 and out["popsize"] == 36
     assert out["simulations"] == out["trials"] == 60 and not out["success"]
     assert 0 < out["simulated_seconds"] <= 60 * 5.0
+
+
+def test_budget_of_an_arm_takes_its_config_budget_and_stop_rule() -> None:
+    config = LearnerConfig(max_trials=7, success_on="mean", robust=True, max_force=20.0)
+    budget = Budget.of(config)
+    assert budget == Budget(7, "mean", robust=True, hardware=config.hardware)
+    assert budget.hardware == Hardware(hold="force", max_force=20.0)
+    assert Budget.of(LearnerConfig()) == Budget(2000, "noisy", False, CHAPTER_HARDWARE)

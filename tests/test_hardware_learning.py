@@ -169,10 +169,9 @@ def test_resume_keeps_the_limits(tmp_path: Path) -> None:
 def test_the_searches_run_under_the_given_hardware(hardwares: list[Hardware]) -> None:
     hw = Hardware(hold="force", max_force=20.0, track=2.4)
     template = Controller(gains=(0.6, -0.4, -0.9, 0.9, 0.1, -1.2), theta_c=0.6)
-    baselines.random_search(Plant(), template, Simulation(), 7, 5, "mean", robust=True, hardware=hw)
-    baselines.cmaes(
-        Plant(), template, Simulation(), template.gains, 0.6, 7, 5, "mean", robust=True, hardware=hw
-    )
+    budget = baselines.Budget(5, "mean", robust=True, hardware=hw)
+    baselines.random_search(Plant(), template, Simulation(), 7, budget)
+    baselines.cmaes(Plant(), template, Simulation(), template.gains, 0.6, 7, budget)
     assert len(hardwares) >= 10 and set(hardwares) == {hw}
 
 

@@ -203,3 +203,18 @@ def test_interpret_cli_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert err.count("\n") == 3 and "none.csv" in err
     assert main(["interpret", "--chapter-final", "--theta-c", "4"]) == 2
     assert "theta_c" in capsys.readouterr().err
+
+
+def test_swingup_terms_are_the_kernels_eq23_coefficients() -> None:
+    """interpret reads mu_2's coefficients from the law the compiled kernel runs."""
+    from striatal.sim.kernel import swingup_coefficients, swingup_law
+
+    W = (0.7, -0.2, 0.4, 1.3, -0.8, 0.1)
+    c = _coefs(interpret.swingup_terms(W))
+    assert (c["energy_pump"], c["x"], c["x_dot"]) == swingup_coefficients(W[3], W[4])
+    assert (c["x"], c["x_dot"]) == pytest.approx((-0.16, 0.8))
+    # the compiled law is that linear form on (E~ theta_dot cos theta, x, x_dot)
+    x, x_dot, theta_dot, cos_th, m, length, g = 0.3, -0.5, 2.0, 0.6, 0.1, 1.0, 9.8
+    mu_2, e_tilde = swingup_law(x, x_dot, theta_dot, cos_th, W[3], W[4], m, length, g)
+    pump = e_tilde * theta_dot * cos_th
+    assert mu_2 == pytest.approx(c["energy_pump"] * pump + c["x"] * x + c["x_dot"] * x_dot)

@@ -233,12 +233,11 @@ def test_the_searches_count_every_run_of_the_robust_stop_rule(
     method: str, counted: KernelCounter
 ) -> None:
     template = Controller(gains=(0.6, -0.4, -0.9, 0.9, 0.1, -1.2), theta_c=0.6)
+    budget = baselines.Budget(60, "mean", robust=True)
     if method == "random":
-        out = baselines.random_search(Plant(), template, Simulation(), 7, 60, "mean", robust=True)
+        out = baselines.random_search(Plant(), template, Simulation(), 7, budget)
     else:
-        out = baselines.cmaes(
-            Plant(), template, Simulation(), template.gains, 0.6, 7, 60, "mean", robust=True
-        )
+        out = baselines.cmaes(Plant(), template, Simulation(), template.gains, 0.6, 7, budget)
     assert out["simulations"] == counted.calls
     assert out["simulated_seconds"] == pytest.approx(counted.seconds())
     assert out["trials"] <= out["simulations"]
@@ -256,13 +255,17 @@ def test_a_fixed_controller_that_is_not_robust_is_unsolved_after_one_check() -> 
         CHAPTER_FINAL_W,
         CHAPTER_FINAL_THETA_C,
         0,
-        50,
-        "mean",
-        robust=True,
+        baselines.Budget(50, "mean", robust=True),
     )
     assert not out["success"] and out["trials"] == 50 and out["simulations"] == 2
     plain = baselines.fixed_controller(
-        Plant(), template, Simulation(), CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C, 0, 50, "mean"
+        Plant(),
+        template,
+        Simulation(),
+        CHAPTER_FINAL_W,
+        CHAPTER_FINAL_THETA_C,
+        0,
+        baselines.Budget(50, "mean"),
     )
     assert plain["success"] and plain["simulations"] == 1
 

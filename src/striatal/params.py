@@ -8,8 +8,8 @@ message a user can act on.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
-from typing import Literal
+from dataclasses import asdict, dataclass, field, fields
+from typing import Any, Literal
 
 import numpy as np
 
@@ -126,6 +126,14 @@ def check_theta_c(theta_c: float) -> float:
     return v
 
 
+def _require_positive_fields(record: Any, what: str = "") -> None:
+    """Every field of the frozen dataclass ``record`` set to its value as float;
+    ParameterError (naming ``what`` and the field) unless it is finite and > 0."""
+    for f in fields(record):
+        value = require_finite_positive(f"{what}{f.name}", getattr(record, f.name))
+        object.__setattr__(record, f.name, value)
+
+
 def check_dt(dt: float) -> float:
     """Validate a control/integration step: finite and in (0, 0.1] seconds."""
     v = as_float("dt", dt)
@@ -152,8 +160,7 @@ class Plant:
     gravity: float = 9.8
 
     def __post_init__(self) -> None:
-        for name in ("cart_mass", "pole_mass", "length", "gravity"):
-            object.__setattr__(self, name, require_finite_positive(name, getattr(self, name)))
+        _require_positive_fields(self)
 
     @property
     def target_energy(self) -> float:
@@ -253,9 +260,7 @@ class SuccessTest:
     x_dot: float = 0.005
 
     def __post_init__(self) -> None:
-        for name in ("theta", "x", "theta_dot", "x_dot"):
-            bound = require_finite_positive(f"success bound {name}", getattr(self, name))
-            object.__setattr__(self, name, bound)
+        _require_positive_fields(self, "success bound ")
 
     def passed(self, state: np.ndarray) -> bool:
         """True if ``state`` = [x, x_dot, theta, theta_dot] (theta wrapped) passes every bound."""

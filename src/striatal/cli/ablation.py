@@ -114,10 +114,7 @@ def run(args: argparse.Namespace) -> int:
             settings,
             out=args.out,
             max_trials=args.max_trials,
-            backend=args.backend,
-            workers=args.workers,
-            address=args.address,
-            connect_timeout=args.connect_timeout,
+            **options.worker_options(args),
             progress=talk and sys.stderr.isatty(),
             locked=args.out is not None,
         )

@@ -274,4 +274,15 @@ def check_worker_arguments(args: argparse.Namespace) -> None:
     (:func:`striatal.experiments.pool.check_backend`, checked before any work)."""
     from striatal.experiments.pool import check_backend
 
-    check_backend(args.backend, args.workers, args.address, args.connect_timeout)
+    check_backend(**worker_options(args))
+
+
+def worker_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The options of :func:`add_worker_arguments` as the keywords of
+    :func:`striatal.experiments.sweeps.run_sweep` and ``pool.check_backend`` take them."""
+    return {
+        "backend": args.backend,
+        "workers": args.workers,
+        "address": args.address,
+        "connect_timeout": args.connect_timeout,
+    }

@@ -122,10 +122,7 @@ def run(args: argparse.Namespace) -> int:
         settings,
         out=out,
         max_trials=the_plan.max_trials,
-        backend=args.backend,
-        workers=args.workers,
-        address=args.address,
-        connect_timeout=args.connect_timeout,
+        **options.worker_options(args),
         progress=not (args.no_progress or args.json) and sys.stderr.isatty(),
         engine=args.engine,
     )

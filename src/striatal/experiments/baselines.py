@@ -38,18 +38,22 @@ cmaes
     candidate is one counted trial (BIPOP is not used: cma draws its population
     sizes from NumPy's global generator, which the seed does not govern).
 
-Robust (``robust=True``, ``sweep --baselines random,cmaes --robust``): the protocol of
+Every search takes a :class:`Budget` (its arm's config gives it: :meth:`Budget.of`): at
+most ``max_trials`` candidates, the reading ``success_on`` and the stop rule.
+
+Robust (``Budget.robust``, ``sweep --baselines random,cmaes --robust``): the protocol of
 the learner's robust stop rule. Every trial holds the motor force of eq 12
-(``striatal.sim.robust.ROBUST_HARDWARE``; ``hardware=``: with a force limit or a track, as
-``LearnerConfig.hardware`` gives them), and a candidate whose trial passes the success
-test is run through the robustness set (:func:`striatal.sim.robust.stop_check`, up to the
-first failing case; the nominal case is the trial itself for a noise-free 60-s trial
-from the chapter's start); only a robust candidate ends the search. Each of those runs
-is counted in ``simulations`` and ``simulated_seconds``; ``trials`` counts candidates.
+(``striatal.sim.robust.ROBUST_HARDWARE``; ``Budget.hardware``: with a force limit or a
+track, as ``LearnerConfig.hardware`` gives them), and a candidate whose trial passes the
+success test is run through the robustness set (:func:`striatal.sim.robust.stop_check`,
+up to the first failing case; the nominal case is the trial itself for a noise-free
+60-s trial from the chapter's start); only a robust candidate ends the search. Each of
+those runs is counted in ``simulations`` and ``simulated_seconds``; ``trials`` counts
+candidates.
 CMA-ES still minimises minus the shaped reward of the candidate's own trial: the search
 sees what the learner sees.
 
-Budget: every baseline reports ``simulations`` (every trial it ran, one per
+Spent: every baseline reports ``simulations`` (every trial it ran, one per
 candidate; a fixed controller's mean-policy verdict is one) and
 ``simulated_seconds`` (their simulated time, each trial ending at T_f or when it
 fails early).
@@ -93,6 +97,7 @@ __all__ = [
     "LQR_R",
     "RANDOM_BOX",
     "SEARCHES",
+    "Budget",
     "LqrFit",
     "cmaes",
     "fixed_controller",
@@ -185,22 +190,38 @@ def lqr_controller(plant: Plant) -> tuple[tuple[float, ...], float]:
     return (*fit.W123, *CHAPTER_FINAL_W[3:]), CHAPTER_FINAL_THETA_C
 
 
+@dataclass(frozen=True)
+class Budget:
+    """What a baseline's search may spend and when it stops: at most ``max_trials``
+    candidates, each trial judged by ``success_on`` ("noisy" or "mean", module
+    docstring), with ``robust`` the robust stop rule. ``hardware``: the motor and track
+    of every trial and of the stop rule's runs (None: the force held with ``robust``,
+    the chapter's idealisation otherwise; no limit, no track)."""
+
+    max_trials: int
+    success_on: SuccessOn
+    robust: bool = False
+    hardware: Hardware | None = None
+
+    @classmethod
+    def of(cls, config: LearnerConfig) -> Budget:
+        """The budget and stop rule of an arm's config."""
+        return cls(config.max_trials, config.success_on, config.robust, config.hardware)
+
+
 def _trial(
     plant: Plant,
     template: Controller,
     sim: Simulation,
     p: np.ndarray,
-    success_on: SuccessOn,
+    budget: Budget,
     rng: np.random.Generator,
     shaped: bool = False,
-    robust: bool = False,
-    hardware: Hardware | None = None,
 ) -> tuple[bool, float, float, int]:
     """(success, shaped score or nan, simulated seconds, simulations) of one 60-s trial
-    of p; with ``robust`` the force held and, when the trial passes, the robust stop
-    rule's runs (module docstring) added to the seconds and simulations. ``hardware``:
-    the motor and track of the trial and of the stop rule's runs (None: the force held
-    with ``robust``, the chapter's idealisation otherwise; no limit, no track)."""
+    of p; with ``budget.robust`` the force held and, when the trial passes, the robust
+    stop rule's runs (module docstring) added to the seconds and simulations."""
+    success_on, robust, hardware = budget.success_on, budget.robust, budget.hardware
     if hardware is None:
         hardware = robust_hardware() if robust else CHAPTER_HARDWARE
     ok, score, seconds = _one_trial(plant, template, sim, p, success_on, rng, shaped, hardware)
@@ -280,27 +301,22 @@ def fixed_controller(
     W: tuple[float, ...],
     theta_c: float,
     seed: int,
-    max_trials: int,
-    success_on: SuccessOn,
-    robust: bool = False,
-    hardware: Hardware | None = None,
+    budget: Budget,
 ) -> dict[str, Any]:
     """Trials of a fixed (W, theta_c) until one passes (lqr, hand)."""
     p = np.array([*W, theta_c])
     rng = np.random.default_rng(seed)
-    budget = max_trials if success_on == "noisy" else 1
+    tries = budget.max_trials if budget.success_on == "noisy" else 1
     seconds, runs = 0.0, 0
-    for trial in range(1, budget + 1):
-        ok, _, t, n = _trial(
-            plant, template, sim, p, success_on, rng, robust=robust, hardware=hardware
-        )
+    for trial in range(1, tries + 1):
+        ok, _, t, n = _trial(plant, template, sim, p, budget, rng)
         seconds, runs = seconds + t, runs + n
         if ok:
             return _result(True, trial, p, seconds, runs)
         if n > 1:
             break  # the robust check of the fixed mean policy failed: it always will
     # "mean": the one noise-free trial decided (unsolved at max_trials)
-    return _result(False, max_trials, p, seconds, runs)
+    return _result(False, budget.max_trials, p, seconds, runs)
 
 
 def random_search(
@@ -308,10 +324,7 @@ def random_search(
     template: Controller,
     sim: Simulation,
     seed: int,
-    max_trials: int,
-    success_on: SuccessOn,
-    robust: bool = False,
-    hardware: Hardware | None = None,
+    budget: Budget,
 ) -> dict[str, Any]:
     """Uniform draws of (W1..W6, theta_c) from RANDOM_BOX, one trial each."""
     draw = np.random.default_rng([seed, 3])
@@ -319,16 +332,14 @@ def random_search(
     low, high = RANDOM_BOX
     p = draw.uniform(low, high)
     seconds, runs = 0.0, 0
-    for trial in range(1, max_trials + 1):
+    for trial in range(1, budget.max_trials + 1):
         if trial > 1:
             p = draw.uniform(low, high)
-        ok, _, t, n = _trial(
-            plant, template, sim, p, success_on, rng, robust=robust, hardware=hardware
-        )
+        ok, _, t, n = _trial(plant, template, sim, p, budget, rng)
         seconds, runs = seconds + t, runs + n
         if ok:
             return _result(True, trial, p, seconds, runs)
-    return _result(False, max_trials, p, seconds, runs)
+    return _result(False, budget.max_trials, p, seconds, runs)
 
 
 def cmaes(
@@ -338,11 +349,8 @@ def cmaes(
     W0: tuple[float, ...],
     theta_c0: float,
     seed: int,
-    max_trials: int,
-    success_on: SuccessOn,
+    budget: Budget,
     sigma0: float = 1.0,
-    robust: bool = False,
-    hardware: Hardware | None = None,
 ) -> dict[str, Any]:
     """IPOP-CMA-ES over (W1..W6, theta_c) from (W0, theta_c0) on minus the shaped reward.
 
@@ -361,6 +369,7 @@ def cmaes(
         "verbose": -9,
     }
     rng = np.random.default_rng(seed)
+    max_trials = budget.max_trials
     trials, seconds, restarts, runs = 0, 0.0, 0, 0
     p = x0
     popsize = 0
@@ -376,17 +385,7 @@ def cmaes(
             for x in candidates:
                 trials += 1
                 p = np.clip(np.array(x), lower, upper)
-                ok, score, t, n = _trial(
-                    plant,
-                    template,
-                    sim,
-                    p,
-                    success_on,
-                    rng,
-                    shaped=True,
-                    robust=robust,
-                    hardware=hardware,
-                )
+                ok, score, t, n = _trial(plant, template, sim, p, budget, rng, shaped=True)
                 seconds, runs = seconds + t, runs + n
                 if ok:
                     return _result(
@@ -409,33 +408,23 @@ Found = dict[str, Any]
 Config = LearnerConfig  # (short, so that each search's signature fits one line)
 
 
-def _budget(config: LearnerConfig) -> dict[str, Any]:
-    """What every baseline takes from the arm's config: its budget and its stop rule."""
-    return {
-        "max_trials": config.max_trials,
-        "success_on": config.success_on,
-        "robust": config.robust,
-        "hardware": config.hardware,
-    }
-
-
 def _lqr(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
     W, theta_c = lqr_controller(plant)
-    return fixed_controller(plant, template, sim, W, theta_c, seed, **_budget(c))
+    return fixed_controller(plant, template, sim, W, theta_c, seed, Budget.of(c))
 
 
 def _hand(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
     W, theta_c = CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C
-    return fixed_controller(plant, template, sim, W, theta_c, seed, **_budget(c))
+    return fixed_controller(plant, template, sim, W, theta_c, seed, Budget.of(c))
 
 
 def _random(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
-    return random_search(plant, template, sim, seed, **_budget(c))
+    return random_search(plant, template, sim, seed, Budget.of(c))
 
 
 def _cmaes(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
     W0, theta_c0 = template.gains, template.theta_c
-    return cmaes(plant, template, sim, W0, theta_c0, seed, **_budget(c))
+    return cmaes(plant, template, sim, W0, theta_c0, seed, Budget.of(c))
 
 
 #: A baseline arm's search from ``template`` (its W(0) and theta_c(0)) under ``config``'s

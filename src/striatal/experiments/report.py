@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import zlib
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -230,6 +230,37 @@ def _mcnemar_cell(c: dict[str, Any]) -> str:
     return f"{_num(mc.get('p_value'), '.3g')} ({mc.get('only_a', '-')} / {mc.get('only_b', '-')}) |"
 
 
+def _fisher_cell(c: dict[str, Any]) -> str:
+    return _num(c["fisher"]["p_value"], ".3g")
+
+
+def _seconds_cell(c: dict[str, Any]) -> str:
+    return (
+        f"{_num(c['simulated_seconds_restricted_mean'], '.0f')} / "
+        f"{_num(c['baseline_simulated_seconds_restricted_mean'], '.0f')}"
+    )
+
+
+def _pair_table(
+    pairs: list[dict[str, Any]] | None,
+    other: str,
+    column: str,
+    cell: Callable[[dict[str, Any]], str],
+) -> list[str]:
+    """The lines of a table of learner arms against their ``other`` arm ("control",
+    "baseline"), after a blank line: the arms, the init, both success rates, the column
+    ``column`` (each row's ``cell``) and McNemar's test; none without pairs."""
+    if not pairs:
+        return []
+    lines = [
+        "",
+        f"| learner arm | {other} | init | success | {other} success | {column} | "
+        f"McNemar p (only learner / only {other}) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    return lines + [f"{_pair_cells(c, other)} {cell(c)} | {_mcnemar_cell(c)}" for c in pairs]
+
+
 def markdown_table(summary: dict[str, Any]) -> str:
     """The comparison table of a summary, one line per (arm, init), then each learner
     against its control. Intervals are 95 %: Wilson for rates, bootstrap for the median
@@ -253,33 +284,11 @@ def markdown_table(summary: dict[str, Any]) -> str:
             f"{_num(a.get('pass_rate_mean'), '.2f')} | "
             f"{_num(a.get('simulations_total'))} | {_num(a.get('wall_seconds_total'), '.1f')} |"
         )
-    pairs = summary.get("learner_vs_control") or []
-    if pairs:
-        lines += [
-            "",
-            "| learner arm | control | init | success | control success | "
-            "Fisher p | McNemar p (only learner / only control) |",
-            "|---|---|---|---|---|---|---|",
-        ]
-        for c in pairs:
-            lines.append(
-                f"{_pair_cells(c, 'control')} {_num(c['fisher']['p_value'], '.3g')} | "
-                f"{_mcnemar_cell(c)}"
-            )
-    against = summary.get("learner_vs_baselines") or []
-    if against:
-        lines += [
-            "",
-            "| learner arm | baseline | init | success | baseline success | "
-            "mean simulated s, all seeds (learner / baseline) | "
-            "McNemar p (only learner / only baseline) |",
-            "|---|---|---|---|---|---|---|",
-        ]
-        for c in against:
-            lines.append(
-                f"{_pair_cells(c, 'baseline')} "
-                f"{_num(c['simulated_seconds_restricted_mean'], '.0f')} / "
-                f"{_num(c['baseline_simulated_seconds_restricted_mean'], '.0f')} | "
-                f"{_mcnemar_cell(c)}"
-            )
+    lines += _pair_table(summary.get("learner_vs_control"), "control", "Fisher p", _fisher_cell)
+    lines += _pair_table(
+        summary.get("learner_vs_baselines"),
+        "baseline",
+        "mean simulated s, all seeds (learner / baseline)",
+        _seconds_cell,
+    )
     return "\n".join(lines) + "\n"

@@ -12,7 +12,7 @@ import numbers
 import os
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -110,18 +110,9 @@ class Run:
         return Plant(**self.settings["plant"])
 
     def to_dict(self) -> dict[str, Any]:
-        payload = TrainResult(
-            success=self.success,
-            trials=self.trials,
-            W=self.W,
-            theta_c=self.theta_c,
-            seed=self.seed,
-            wall_seconds=self.wall_seconds,
-            state=self.state,
-            learner=self.learner,
-            interrupted=self.interrupted,
-            settings=self.settings,
-        ).to_dict()
+        # result.json: this run's TrainResult (the learning loop's record), then train's own
+        loop = TrainResult(**{f.name: getattr(self, f.name) for f in fields(TrainResult)})
+        payload = loop.to_dict()
         payload["mean_policy_success"] = self.mean_policy_success
         payload["mean_policy_final_state"] = list(self.mean_policy_final_state)
         payload["positive_rewards"] = self.state.n_positive
@@ -452,17 +443,10 @@ def _run(
             state=state,
             on_trial=record,
         )
-        if result.interrupted and result.state is not recorded:
-            # stopped between a trial's update and its history row: that trial is not kept
-            result = replace(
-                result,
-                success=recorded.success,
-                trials=recorded.trials_done,
-                W=recorded.W,
-                theta_c=recorded.theta_c,
-                state=recorded,
-            )
-        checkpoint(result.state)
+        # the state the run ends at (its success, trials, W, theta_c): when interrupted,
+        # the last one with a history row (a trial updated but not yet written is not kept)
+        final = recorded if result.interrupted else result.state
+        checkpoint(final)
     finally:
         if rundir is not None:
             rundir.close_history()
@@ -477,7 +461,7 @@ def _run(
         history = History.of(config.learner, records, config.reward)
     if not history.columns:
         history = History(config.learner, columns, (), config.reward)
-    learned = setup.template.with_gains(result.W, result.theta_c)
+    learned = setup.template.with_gains(final.W, final.theta_c)
     hardware = config.hardware
     check = _simulate(setup.plant, learned, setup.sim, hardware=hardware).outcome
     report = (
@@ -488,15 +472,15 @@ def _run(
         else None
     )
     out = Run(
-        success=result.success,
-        trials=result.trials,
-        W=result.W,
-        theta_c=result.theta_c,
+        success=final.success,
+        trials=final.trials_done,
+        W=final.W,
+        theta_c=final.theta_c,
         seed=setup.seed,
         learner=config.learner,
         interrupted=result.interrupted,
         wall_seconds=time.perf_counter() - t0,
-        state=result.state,
+        state=final,
         history=history,
         settings=settings,
         mean_policy_success=check.success,

@@ -28,6 +28,7 @@ __all__ = [
     "ChapterRule",
     "PolicyConfig",
     "PolicyRule",
+    "chapter_gain_update",
     "gain_update",
     "policy_plan",
     "policy_trace",
@@ -79,6 +80,22 @@ def gain_update(
     if not np.all(np.isfinite(new)):
         return W.copy()
     return new
+
+
+def chapter_gain_update(
+    W: np.ndarray, trace: np.ndarray, reward: float, c: ChapterConfig
+) -> np.ndarray:
+    """:func:`gain_update` (eqs 3-4) with the chapter rule's options ``c``."""
+    return gain_update(
+        W,
+        trace,
+        reward,
+        alpha=c.alpha,
+        gamma=c.gamma,
+        baseline=c.baseline,
+        max_step=c.max_step,
+        w1_floor=c.w1_floor,
+    )
 
 
 def policy_trace(state: LearnerState, reset: bool) -> np.ndarray:
@@ -145,16 +162,7 @@ class ChapterRule(PolicyRule):
         c = pick(ChapterConfig, config)
         W, theta_c = plan.W, state.theta_c
         if not success:
-            W = gain_update(
-                plan.W,
-                plan.trace,
-                reward,
-                alpha=c.alpha,
-                gamma=c.gamma,
-                baseline=c.baseline,
-                max_step=c.max_step,
-                w1_floor=c.w1_floor,
-            )
+            W = chapter_gain_update(plan.W, plan.trace, reward, c)
             theta_c = theta_c_rule(outcome, state.theta_c, c.theta_c_rule)
         return Update(
             W=tuple(float(w) for w in W),

@@ -32,6 +32,7 @@ __all__ = [
     "check_field",
     "field_kind",
     "meta",
+    "option",
     "pick",
     "require_count",
 ]
@@ -73,6 +74,12 @@ def meta(help: str, *, bounds: str = "", **more: Any) -> dict[str, Any]:
     return {"help": help, "bounds": bounds, **more}
 
 
+def option(default: Any, help: str, **more: Any) -> Any:
+    """A :class:`LearnerConfig` field: its default and its option's :func:`meta`
+    (``help``, ``bounds`` and the rest, stated once)."""
+    return field(default=default, metadata=meta(help, **more))
+
+
 @dataclass(frozen=True)
 class LearnerConfig:
     """Every option of a learning run (the chapter leaves most open: docs/paper-notes.md, 7).
@@ -81,186 +88,134 @@ class LearnerConfig:
     preset, then your changes): ``LearnerConfig(learner="pgpe")`` alone keeps the
     chapter's values of the other fields. Which rule reads which field:
     ``striatal.learners.RULES[name].options``. Each field states its meaning, its
-    bounds and its choices once, in its metadata (:func:`meta`): validation here and
+    bounds and its choices once, in its metadata (:func:`option`, :func:`meta`): validation here and
     the options of ``striatal train`` and ``striatal sweep`` read them.
     """
 
-    alpha: float = field(default=5.0, metadata=meta("learning rate (eqs 1, 4)", bounds=">= 0"))
-    gamma: float = field(
-        default=0.999,
-        metadata=meta(
-            "discount per draw of the eligibility trace D(t) = e(t) + gamma D(t-1) (eq 3)",
-            bounds="[0, 1)",
-        ),
+    alpha: float = option(5.0, "learning rate (eqs 1, 4)", bounds=">= 0")
+    gamma: float = option(
+        0.999,
+        "discount per draw of the eligibility trace D(t) = e(t) + gamma D(t-1) (eq 3)",
+        bounds="[0, 1)",
     )
-    baseline: float = field(
-        default=0.0,
-        metadata=meta("reinforcement baseline b of eq 1 (chapter learner)", flag="reward-baseline"),
+    baseline: float = option(
+        0.0, "reinforcement baseline b of eq 1 (chapter learner)", flag="reward-baseline"
     )
-    action_every: int = field(
-        default=1, metadata=meta("draw a new action every N control steps and hold it")
+    action_every: int = option(1, "draw a new action every N control steps and hold it")
+    reset_trace: bool = option(
+        True, "do not reset the trace D between trials", flag="carry-trace", sets=False
     )
-    reset_trace: bool = field(
-        default=True,
-        metadata=meta("do not reset the trace D between trials", flag="carry-trace", sets=False),
+    eligibility: Eligibility = option(
+        "score",
+        "score: the Gaussian score (docs/paper-notes.md, section 2); chapter: the printed e1",
     )
-    eligibility: Eligibility = field(
-        default="score",
-        metadata=meta(
-            "score: the Gaussian score (docs/paper-notes.md, section 2); chapter: the printed e1",
-        ),
+    success_on: SuccessOn = option(
+        "noisy", "judge the success test on the noisy trial (chapter) or a mean-policy rerun"
     )
-    success_on: SuccessOn = field(
-        default="noisy",
-        metadata=meta("judge the success test on the noisy trial (chapter) or a mean-policy rerun"),
+    theta_c_rule: ThetaCRule = option(
+        "swingup",
+        "eq 21's min|theta| under the swing-up (a ratchet), over the whole trial (falls "
+        "to its floor), over the whole trial but at least 0.6 (clamped), keep theta_c, "
+        "or learn it with the gains (pgpe)",
     )
-    theta_c_rule: ThetaCRule = field(
-        default="swingup",
-        metadata=meta(
-            "eq 21's min|theta| under the swing-up (a ratchet), over the whole trial (falls "
-            "to its floor), over the whole trial but at least 0.6 (clamped), keep theta_c, "
-            "or learn it with the gains (pgpe)",
-        ),
+    max_trials: int = option(2000, "stop after this many trials if the success test never holds")
+    max_step: float = option(
+        1.0, "bound on each gain's update per trial (inf: none)", bounds="> 0", finite=False
     )
-    max_trials: int = field(
-        default=2000, metadata=meta("stop after this many trials if the success test never holds")
+    w1_floor: float = option(
+        W1_FLOOR,
+        "W1 is kept >= this after every update (sqrt(W1 g) of eq 22)",
+        bounds="> 0",
+        cli=False,
     )
-    max_step: float = field(
-        default=1.0,
-        metadata=meta(
-            "bound on each gain's update per trial (inf: none)", bounds="> 0", finite=False
-        ),
+    learner: str = option(
+        "chapter", "the learning rule, a key of striatal.learners.RULES", cli=False
     )
-    w1_floor: float = field(
-        default=W1_FLOOR,
-        metadata=meta(
-            "W1 is kept >= this after every update (sqrt(W1 g) of eq 22)",
-            bounds="> 0",
-            cli=False,
-        ),
+    reward: RewardKind = option(
+        "sparse", "sparse +10/-5 (eqs 24-25) or a dense score of the trial (shaped_reward)"
     )
-    learner: str = field(
-        default="chapter",
-        metadata=meta("the learning rule, a key of striatal.learners.RULES", cli=False),
+    rpe_rate: float = option(
+        0.1,
+        "rate beta of the expected-reward baseline b += beta (r - b) and of the prediction "
+        "error's running mean square (rpe, pgpe: per trial; ac: per step, of delta)",
+        bounds="(0, 1]",
     )
-    reward: RewardKind = field(
-        default="sparse",
-        metadata=meta("sparse +10/-5 (eqs 24-25) or a dense score of the trial (shaped_reward)"),
+    normalise: bool = option(
+        False,
+        "divide the prediction error r - b (ac: the TD error, for the actor) by its running rms",
+        negatable=True,
     )
-    rpe_rate: float = field(
-        default=0.1,
-        metadata=meta(
-            "rate beta of the expected-reward baseline b += beta (r - b) and of the prediction "
-            "error's running mean square (rpe, pgpe: per trial; ac: per step, of delta)",
-            bounds="(0, 1]",
-        ),
+    explore: float = option(
+        0.3,
+        "parameter-exploration std of W1..W5 (pgpe); theta_c's is 0.3 times it [rad]",
+        bounds="(0, 100]",
     )
-    normalise: bool = field(
-        default=False,
-        metadata=meta(
-            "divide the prediction error r - b (ac: the TD error, for the actor) by its running "
-            "rms",
-            negatable=True,
-        ),
+    sigma_rate: float = option(
+        0.0, "adaptation rate of the exploration's log-std (pgpe; 0: fixed)", bounds=">= 0"
     )
-    explore: float = field(
-        default=0.3,
-        metadata=meta(
-            "parameter-exploration std of W1..W5 (pgpe); theta_c's is 0.3 times it [rad]",
-            bounds="(0, 100]",
-        ),
+    decay: float = option(
+        0.0,
+        "synaptic decay lambda: the update adds -rate*lambda*W1..5 (rpe, pgpe; rate: alpha "
+        "for pgpe, alpha (1 - gamma) for rpe)",
+        bounds=">= 0",
     )
-    sigma_rate: float = field(
-        default=0.0,
-        metadata=meta(
-            "adaptation rate of the exploration's log-std (pgpe; 0: fixed)", bounds=">= 0"
-        ),
+    plant_jitter: float = option(
+        0.0,
+        "pgpe: each trial's pole mass and length scaled by U[1-J, 1+J], the controller "
+        "believing the nominal plant (learning for robustness)",
+        bounds="[0, 0.5]",
     )
-    decay: float = field(
-        default=0.0,
-        metadata=meta(
-            "synaptic decay lambda: the update adds -rate*lambda*W1..5 (rpe, pgpe; rate: alpha "
-            "for pgpe, alpha (1 - gamma) for rpe)",
-            bounds=">= 0",
-        ),
+    symmetric: bool = option(
+        False,
+        "pgpe: symmetric sampling (Sehnke et al. 2010), trials in pairs p + eps, p - eps on "
+        "the same plant, one update per pair from the reward difference (r+ - r-) / 2",
     )
-    plant_jitter: float = field(
-        default=0.0,
-        metadata=meta(
-            "pgpe: each trial's pole mass and length scaled by U[1-J, 1+J], the controller "
-            "believing the nominal plant (learning for robustness)",
-            bounds="[0, 0.5]",
-        ),
+    robust: bool = option(
+        False,
+        "the robust stop rule (any learner): trials hold the motor force of eq 12 (ac's "
+        "online trial still holds u), and a controller that passes the success test must "
+        "also pass the robustness set (striatal simulate --robust: 9 mean-policy runs of "
+        "60 s) for the run to stop; every run counted (docs/paper-notes.md section 12). It "
+        "also applies the learner's robust preset before the options given (pgpe: "
+        "--plant-jitter 0.2 --alpha 0.5)",
     )
-    symmetric: bool = field(
-        default=False,
-        metadata=meta(
-            "pgpe: symmetric sampling (Sehnke et al. 2010), trials in pairs p + eps, p - eps on "
-            "the same plant, one update per pair from the reward difference (r+ - r-) / 2",
-        ),
+    critic_rate: float = option(
+        0.01, "ac: rate beta of the critic's weights, v += beta delta z", bounds="[0, 1]"
     )
-    robust: bool = field(
-        default=False,
-        metadata=meta(
-            "the robust stop rule (any learner): trials hold the motor force of eq 12 (ac's "
-            "online trial still holds u), and a controller that passes the success test must "
-            "also pass the robustness set (striatal simulate --robust: 9 mean-policy runs of "
-            "60 s) for the run to stop; every run counted (docs/paper-notes.md section 12). It "
-            "also applies the learner's robust preset before the options given (pgpe: "
-            "--plant-jitter 0.2 --alpha 0.5)",
-        ),
+    td_discount: float = option(
+        0.99,
+        "ac: discount gamma_v per control step of the TD error delta = r + gamma_v V(s') - "
+        "V(s); 1 - dt / tau for a value horizon tau",
+        bounds="[0, 1)",
     )
-    critic_rate: float = field(
-        default=0.01,
-        metadata=meta("ac: rate beta of the critic's weights, v += beta delta z", bounds="[0, 1]"),
+    critic_decay: float = option(
+        0.9, "ac: lambda of the critic's trace z <- gamma_v lambda z + phi(s)", bounds="[0, 1]"
     )
-    td_discount: float = field(
-        default=0.99,
-        metadata=meta(
-            "ac: discount gamma_v per control step of the TD error delta = r + gamma_v V(s') - "
-            "V(s); 1 - dt / tau for a value horizon tau",
-            bounds="[0, 1)",
-        ),
+    imagine_trials: int = option(
+        2000,
+        "forward: imagined trials (on the forward model, not counted as simulations) allowed "
+        "after each real trial; 0 fits no model and learns nothing (its control)",
+        bounds=">= 0",
     )
-    critic_decay: float = field(
-        default=0.9,
-        metadata=meta(
-            "ac: lambda of the critic's trace z <- gamma_v lambda z + phi(s)", bounds="[0, 1]"
-        ),
+    forward_model: ForwardModel = option(
+        "structured",
+        "forward: the forward model imagination runs on: 'structured' (the cart-pole's "
+        "equations, pole mass, length, cart mass and friction fitted) or 'generic' (no "
+        "cart-pole equations: a scikit-learn ensemble of polynomial ridge regressions)",
     )
-    imagine_trials: int = field(
-        default=2000,
-        metadata=meta(
-            "forward: imagined trials (on the forward model, not counted as simulations) allowed "
-            "after each real trial; 0 fits no model and learns nothing (its control)",
-            bounds=">= 0",
-        ),
+    max_force: float | None = option(
+        None,
+        "motor limit [N] of every trial and check, the robustness set's included: the force "
+        "is clipped to [-F, F] (none: unlimited)",
+        bounds="> 0",
+        metavar="NEWTONS",
     )
-    forward_model: ForwardModel = field(
-        default="structured",
-        metadata=meta(
-            "forward: the forward model imagination runs on: 'structured' (the cart-pole's "
-            "equations, pole mass, length, cart mass and friction fitted) or 'generic' (no "
-            "cart-pole equations: a scikit-learn ensemble of polynomial ridge regressions)"
-        ),
-    )
-    max_force: float | None = field(
-        default=None,
-        metadata=meta(
-            "motor limit [N] of every trial and check, the robustness set's included: the force "
-            "is clipped to [-F, F] (none: unlimited)",
-            bounds="> 0",
-            metavar="NEWTONS",
-        ),
-    )
-    track: float | None = field(
-        default=None,
-        metadata=meta(
-            "track half-length [m] of every trial and check: |x| beyond it ends the trial as a "
-            "failure (none: endless)",
-            bounds="> 0",
-            metavar="METRES",
-        ),
+    track: float | None = option(
+        None,
+        "track half-length [m] of every trial and check: |x| beyond it ends the trial as a "
+        "failure (none: endless)",
+        bounds="> 0",
+        metavar="METRES",
     )
 
     def __post_init__(self) -> None:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
@@ -69,17 +69,8 @@ class LearnerState:
         return dict(self.memory).get(name, ())
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "trials_done": self.trials_done,
-            "W": list(self.W),
-            "theta_c": self.theta_c,
-            "rng_state": self.rng_state,
-            "success": self.success,
-            "n_positive": self.n_positive,
-            "memory": {k: list(v) for k, v in self.memory},
-            "simulations": self.simulations,
-            "simulated_seconds": self.simulated_seconds,
-        }
+        """The fields in their order, W as a list and the memory as name -> list."""
+        return {**asdict(self), "W": list(self.W), "memory": {k: list(v) for k, v in self.memory}}
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> LearnerState:

@@ -19,6 +19,7 @@ import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.params import Plant, check_gains, check_theta_c
+from striatal.sim.kernel.policy import swingup_coefficients
 
 __all__ = [
     "CHAPTER_PRINTED_MU1",
@@ -100,12 +101,15 @@ def balancing_terms(W: Sequence[float], plant: Plant, sign: float = 1.0) -> tupl
 
 
 def swingup_terms(W: Sequence[float]) -> tuple[Term, ...]:
-    """mu_2 of eq 23 as W4 (E~ theta_dot cos theta) - (W5^2 / 4) x - W5 x_dot."""
+    """mu_2 of eq 23 as W4 (E~ theta_dot cos theta) - (W5^2 / 4) x - W5 x_dot, the
+    coefficients of the kernel's law (:func:`striatal.sim.kernel.swingup_coefficients`)."""
     w = check_gains(W, need_positive_w1=False)
+    # the kernel's own definition, run as plain Python: a reading compiles nothing
+    pump, on_x, on_x_dot = swingup_coefficients.py_func(w[3], w[4])
     return (
-        _term("energy_pump", w[3], "W4"),
-        _term("x", -0.25 * w[4] ** 2, "-W5^2/4"),
-        _term("x_dot", -w[4], "-W5"),
+        _term("energy_pump", pump, "W4"),
+        _term("x", on_x, "-W5^2/4"),
+        _term("x_dot", on_x_dot, "-W5"),
     )
 
 

@@ -48,9 +48,9 @@ import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.learners import default_config
-from striatal.learners.chapter import gain_update
+from striatal.learners.chapter import ChapterConfig, chapter_gain_update
 from striatal.learners.common import theta_c_rule
-from striatal.learners.config import LearnerConfig
+from striatal.learners.config import LearnerConfig, pick
 from striatal.neural.interpret import balancing_terms, swingup_terms
 from striatal.neural.network import NetworkConfig
 from striatal.neural.run import NeuralRun, run_network
@@ -333,6 +333,7 @@ def learn_network(
             f"(the eq-24 check is not applied to it), got {sim.duration:g}"
         )
     lc = default_config("chapter") if alpha is None else default_config("chapter", alpha=alpha)
+    chapter = pick(ChapterConfig, lc)
     every = max(1, int(round(sim.dt / net_dt)))
     rng = np.random.default_rng(seed)
     W = np.array(controller.gains, dtype=float)
@@ -344,7 +345,7 @@ def learn_network(
     for k in range(1, trials + 1):
         ctrl = controller.with_gains(W, theta_c)
         sigma = kernel.sigma_of(W[5])
-        elig = Eligibility(sigma, rng.standard_normal(sim.n_steps), lc.gamma, every)
+        elig = Eligibility(sigma, rng.standard_normal(sim.n_steps), chapter.gamma, every)
         t0 = time.perf_counter()
         run = run_network(
             ctrl, plant, sim, config, seed, net_dt=net_dt, record_rates=False, exploration=elig
@@ -377,17 +378,8 @@ def learn_network(
         if run.success:
             solved = True
             break
-        W = gain_update(
-            W,
-            D,
-            reward,
-            alpha=lc.alpha,
-            gamma=lc.gamma,
-            baseline=lc.baseline,
-            max_step=lc.max_step,
-            w1_floor=lc.w1_floor,
-        )
-        theta_c = theta_c_rule(_outcome(run, reward, theta_c), theta_c, lc.theta_c_rule)
+        W = chapter_gain_update(W, D, reward, chapter)
+        theta_c = theta_c_rule(_outcome(run, reward, theta_c), theta_c, chapter.theta_c_rule)
     return NeuralLearning(
         trials=tuple(history),
         W=tuple(float(w) for w in W),

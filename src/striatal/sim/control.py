@@ -2,7 +2,9 @@
 (eqs 18-20, 22), hard and soft (cerebellar, section 4) switching.
 
 Vectorised over leading axes of ``state`` (..., 4). The compiled twin is
-:func:`striatal.sim.kernel.policy_mean`.
+:func:`striatal.sim.kernel.policy_mean`. These laws are written apart from the kernel's
+on purpose: they are the independent plain-NumPy reference the kernel is tested against
+(tests/test_control.py, :mod:`striatal.sim.reference`), so they never call it.
 """
 
 from __future__ import annotations
@@ -39,7 +41,8 @@ def balancing_mean(state: np.ndarray, W: np.ndarray, plant: Plant, sign: float =
 def swingup_mean(state: np.ndarray, W: np.ndarray, plant: Plant) -> np.ndarray:
     """mu_2, eq 23: W4 E~ theta_dot cos theta - W5^2/4 x - W5 x_dot.
 
-    This is eq 17 with k_s / (m l) = W4 and k_c = W5.
+    This is eq 17 with k_s / (m l) = W4 and k_c = W5; the reference of the kernel's
+    :func:`striatal.sim.kernel.swingup_law`.
     """
     s = np.asarray(state, dtype=float)
     th = wrap_angle(s[..., 2])

@@ -25,7 +25,7 @@ counting every run.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -83,7 +83,8 @@ ROBUST_CASES: tuple[RobustCase, ...] = (
 
 @dataclass(frozen=True)
 class CaseResult:
-    """The mean-policy run of one case: success test at T_f, how it ended, its extremes."""
+    """The mean-policy run of one case: success test at T_f, how it ended, its extremes
+    (each field but ``case`` is the run's :class:`~striatal.sim.rollout.TrialOutcome`'s)."""
 
     case: RobustCase
     success: bool
@@ -170,16 +171,8 @@ def run_case(
     true_plant = nominal.scaled(pole_mass=case.pole_mass, length=case.length)
     sim = Simulation(theta0=case.theta0, x0=case.x0, duration=duration, dt=dt)
     o = simulate(true_plant, controller, sim, protocol=NO_PROTOCOL, model=nominal, hardware=hw)
-    outcome = o.outcome
-    return CaseResult(
-        case=case,
-        success=outcome.success,
-        end_reason=outcome.end_reason,
-        ended_at=outcome.ended_at,
-        final_state=outcome.final_state,
-        max_abs_x=outcome.max_abs_x,
-        max_abs_force=outcome.max_abs_force,
-    )
+    kept = {f.name: getattr(o.outcome, f.name) for f in fields(CaseResult) if f.name != "case"}
+    return CaseResult(case=case, **kept)
 
 
 def check_robust(

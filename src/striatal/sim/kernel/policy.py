@@ -26,6 +26,7 @@ __all__ = [
     "policy_of",
     "policy_terms",
     "sigma_of",
+    "swingup_coefficients",
     "swingup_law",
     "switch_weights",
 ]
@@ -278,4 +279,12 @@ def swingup_law(
     """(mu_2, E~) of eq 23 with c = cos theta: mu_2 = W4 E~ theta_dot c - W5^2/4 x - W5 x_dot,
     E~ = m l^2 theta_dot^2 / 2 + m g l (c - 1) of eqs 15-16 (the model's m, l, g)."""
     e_tilde = 0.5 * m * length * length * theta_dot * theta_dot + m * g * length * (c - 1.0)
-    return w4 * e_tilde * theta_dot * c - 0.25 * w5 * w5 * x - w5 * x_dot, e_tilde
+    k_pump, k_x, k_x_dot = swingup_coefficients(w4, w5)
+    return k_pump * e_tilde * theta_dot * c + k_x * x + k_x_dot * x_dot, e_tilde
+
+
+@njit(cache=True, inline="always")
+def swingup_coefficients(w4: float, w5: float) -> tuple[float, float, float]:
+    """The coefficients of mu_2 (eq 23) on its signals E~ theta_dot cos theta, x and
+    x_dot: (W4, -W5^2/4, -W5), eq 17 with k_s / (m l) = W4 and k_c = W5."""
+    return w4, -0.25 * w5 * w5, -w5
