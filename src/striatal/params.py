@@ -126,10 +126,11 @@ def check_theta_c(theta_c: float) -> float:
     return v
 
 
-def _require_positive_fields(record: Any, what: str = "") -> None:
-    """Every field of the frozen dataclass ``record`` set to its value as float;
+def _require_positive_fields(record: Any, what: str = "", of: type | None = None) -> None:
+    """Every field of the frozen dataclass ``record`` (those of the dataclass ``of``, when
+    given: a subclass's own fields are its own to check) set to its value as float;
     ParameterError (naming ``what`` and the field) unless it is finite and > 0."""
-    for f in fields(record):
+    for f in fields(of or record):
         value = require_finite_positive(f"{what}{f.name}", getattr(record, f.name))
         object.__setattr__(record, f.name, value)
 
@@ -160,7 +161,7 @@ class Plant:
     gravity: float = 9.8
 
     def __post_init__(self) -> None:
-        _require_positive_fields(self)
+        _require_positive_fields(self, of=Plant)
 
     @property
     def target_energy(self) -> float:
