@@ -52,7 +52,9 @@ def test_a_force_only_model_is_a_trapezoid_step_of_f_over_m() -> None:
     """x_ddot = f / M (M = 2 kg), theta_ddot = -3 theta_dot: one step by hand."""
     model = hand_model([[0, 0, 0, 0, 1], [0, 0, 0, 1, 0]], [[0.5, 0.0], [0.0, -3.0]])
     x, xd, th, thd, f = 0.2, -0.4, 1.0, 0.7, 3.0
-    out = kernel.learned_step(x, xd, th, thd, math.sin(th), math.cos(th), 99.0, f, PT, model.args)
+    out = kernel.learned_step(
+        (x, xd, th, thd), (math.sin(th), math.cos(th), 99.0, f), PT, model.args
+    )
     v = xd + DT * f / 2.0
     w = thd + DT * (-3.0 * thd)
     assert out == pytest.approx((x + DT * (xd + v) / 2, v, th + DT * (thd + w) / 2, w), abs=1e-15)
@@ -108,9 +110,8 @@ def test_the_trial_loop_on_a_learned_plant_steps_by_the_model_with_the_recorded_
     assert len(rows) == 501
     for k in range(0, 500, 37):
         x, xd, th, thd = rows[k, 1:5]
-        nxt = kernel.learned_step(
-            x, xd, th, thd, math.sin(th), math.cos(th), rows[k, 5], rows[k, 6], PT, model.args
-        )
+        inputs = (math.sin(th), math.cos(th), rows[k, 5], rows[k, 6])
+        nxt = kernel.learned_step((x, xd, th, thd), inputs, PT, model.args)
         assert nxt == pytest.approx(tuple(rows[k + 1, 1:5]), abs=1e-12)
     # the physical plant moves differently from the same start
     real = simulate(Plant(), FINAL, Simulation(duration=5.0), hardware=ROBUST_HARDWARE)
@@ -133,7 +134,9 @@ def test_a_generic_model_runs_in_the_kernel_as_scikit_learn_predicts() -> None:
     pred = model.predict(held.states, held.forces)
     got = np.array(
         [
-            kernel.learned_step(*s, math.sin(s[2]), math.cos(s[2]), 0.0, f, PT, args)
+            kernel.learned_step(
+                (s[0], s[1], s[2], s[3]), (math.sin(s[2]), math.cos(s[2]), 0.0, f), PT, args
+            )
             for s, f in zip(held.states, held.forces, strict=True)
         ]
     )

@@ -25,6 +25,7 @@ counting every run.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -246,6 +247,35 @@ def nominal_is_the_case(sim: Simulation, action_every: int = 1) -> bool:
     return sim == Simulation(dt=sim.dt) and action_every == 1
 
 
+def _case_request(
+    controller: Controller,
+    W: np.ndarray,
+    case: RobustCase,
+    plant: Plant,
+    model: Plant,
+    dt: float,
+    hardware: Hardware,
+) -> TrialRequest:
+    """The mean-policy run of ``case``'s start, 60 s, on ``plant``, believing ``model``."""
+    sim = Simulation(theta0=case.theta0, x0=case.x0, duration=ROBUST_DURATION, dt=dt)
+    return TrialRequest(
+        plant, controller, sim, NO_PROTOCOL, gains=W, model=model, hardware=hardware
+    )
+
+
+def _until_failure(requests: Iterable[tuple[str, TrialRequest]]) -> StopCheck:
+    """Run the named requests in order up to the first that fails its success test at
+    T_f, every run and its simulated seconds counted."""
+    runs, seconds = 0, 0.0
+    for name, request in requests:
+        outcome = request.run()
+        runs += 1
+        seconds += outcome.ended_at
+        if not outcome.success:
+            return StopCheck(False, runs, seconds, name)
+    return StopCheck(True, runs, seconds)
+
+
 def stop_check(
     controller: Controller,
     plant: Plant,
@@ -264,48 +294,53 @@ def stop_check(
     The verdict equals :func:`check_robust`'s ``robust``.
     """
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
-    runs, seconds = 0, 0.0
-    for i in STOP_ORDER:
-        case = ROBUST_CASES[i]
-        if nominal_passed and case == ROBUST_CASES[0]:
-            continue
-        sim = Simulation(theta0=case.theta0, x0=case.x0, duration=ROBUST_DURATION, dt=dt)
-        true_plant = plant.scaled(pole_mass=case.pole_mass, length=case.length)
-        outcome = TrialRequest(
-            true_plant, controller, sim, NO_PROTOCOL, gains=W, model=plant, hardware=hardware
-        ).run()
-        runs += 1
-        seconds += outcome.ended_at
-        if not outcome.success:
-            return StopCheck(False, runs, seconds, case.name)
-    return StopCheck(True, runs, seconds)
+    cases = [ROBUST_CASES[i] for i in STOP_ORDER]
+    return _until_failure(
+        (
+            case.name,
+            _case_request(
+                controller,
+                W,
+                case,
+                plant.scaled(pole_mass=case.pole_mass, length=case.length),
+                plant,
+                dt,
+                hardware,
+            ),
+        )
+        for case in cases
+        if not (nominal_passed and case == ROBUST_CASES[0])
+    )
 
 
 def family_check(
     controller: Controller,
     plants: tuple[Plant, ...],
-    model: Plant,
     dt: float,
     *,
+    model: Plant | None = None,
     gains: np.ndarray | None = None,
     hardware: Hardware = ROBUST_HARDWARE,
 ) -> StopCheck:
-    """The robust stop rule with the four plant corners replaced by ``plants``: each
-    start of :data:`ROBUST_CASES` (the nominal start and the four others, the cases
-    with the plant unscaled) on each plant of ``plants`` (a family a model cannot rule
-    out, learned plants included), mean policy, 60 s, ``hardware``, the controller
-    keeping ``model`` as its model; stops at the first failure, every run counted."""
+    """The robust stop rule on each plant of ``plants`` (a family a model cannot rule
+    out), stopping at the first failure, every run counted. ``model`` None: each plant
+    is believed exactly and :func:`stop_check`'s cases run around it (its corners
+    scaled from it). Else the controller believes ``model`` and the plants replace the
+    corners: each start of :data:`ROBUST_CASES` (the nominal start and the four others)
+    on each plant, learned plants included."""
+    if model is None:
+        runs, seconds = 0, 0.0
+        for plant in plants:
+            verdict = stop_check(controller, plant, dt, gains=gains, hardware=hardware)
+            runs += verdict.simulations
+            seconds += verdict.simulated_seconds
+            if not verdict.robust:
+                return StopCheck(False, runs, seconds, verdict.failed)
+        return StopCheck(True, runs, seconds)
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
     starts = [c for c in ROBUST_CASES if c.pole_mass == 1.0 and c.length == 1.0]
-    runs, seconds = 0, 0.0
-    for k, plant in enumerate(plants):
-        for case in starts:
-            sim = Simulation(theta0=case.theta0, x0=case.x0, duration=ROBUST_DURATION, dt=dt)
-            outcome = TrialRequest(
-                plant, controller, sim, NO_PROTOCOL, gains=W, model=model, hardware=hardware
-            ).run()
-            runs += 1
-            seconds += outcome.ended_at
-            if not outcome.success:
-                return StopCheck(False, runs, seconds, f"plant {k}, {case.name}")
-    return StopCheck(True, runs, seconds)
+    return _until_failure(
+        (f"plant {k}, {case.name}", _case_request(controller, W, case, plant, model, dt, hardware))
+        for k, plant in enumerate(plants)
+        for case in starts
+    )

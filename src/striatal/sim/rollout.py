@@ -424,26 +424,22 @@ def simulate(
     controller believes in (default: the true ``plant``); ``hardware``: the motor's hold
     and limit and the track (default: the chapter's idealisation).
     """
-    noise, sensor_noise = noise_arrays(sim, action_every, rng, sensor)
-    args = trial_args(
+    outcome, data = trial(
         plant,
         controller,
         sim,
         protocol=protocol,
-        noise=noise,
-        sensor_noise=sensor_noise,
-        sensor=sensor,
+        trace=np.zeros(6),
+        gamma=0.0,
+        rng=rng,
         model=model,
+        sensor=sensor,
         action_every=action_every,
-        record=True,
         hardware=hardware,
+        record=True,
     )
-    run_kernel(plant, args)
-    out, traj = args[-1]
-    outcome = TrialOutcome.from_row(out, sim)
-    end = int(out[kernel.OUT_END_STEP])
     return Trajectory(
-        data=traj[: end + 1],
+        data=data,
         outcome=outcome,
         plant=plant,
         controller=controller,
@@ -529,6 +525,6 @@ def run_kernel(plant: Plant, args: TrialArgs) -> None:
     :func:`striatal.sim.kernel.run_learned_trial` with its dynamics."""
     if isinstance(plant, LearnedPlant):
         assert plant.dynamics is not None
-        kernel.run_learned_trial(*args, plant.dynamics.args)
+        kernel.run_learned_trial(plant.dynamics.args, args)
     else:
         kernel.run_trial(*args)

@@ -61,7 +61,7 @@ from striatal.learners.rule import Rule, Trial, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Controller, Plant, Simulation
 from striatal.sim.learned import LearnedPlant
-from striatal.sim.robust import StopCheck, family_check, stop_check
+from striatal.sim.robust import family_check
 from striatal.sim.rollout import Protocol, TrialOutcome, recorded_trial
 
 __all__ = [
@@ -72,7 +72,6 @@ __all__ = [
     "World",
     "generic_world",
     "imagine",
-    "passes_family",
     "structured_world",
 ]
 
@@ -152,23 +151,6 @@ def generic_world(model: GenericModel, believed: Plant) -> World:
     return World(LearnedPlant.of(dynamics.mean(), believed), members, False, believed)
 
 
-def passes_family(
-    world: World, controller: Controller, config: LearnerConfig, dt: float
-) -> StopCheck:
-    """Does ``controller`` pass the robustness set on every plant of ``world.family``?"""
-    hardware = config.hardware
-    if world.family_model is not None:
-        return family_check(controller, world.family, world.family_model, dt, hardware=hardware)
-    runs, seconds = 0, 0.0
-    for plant in world.family:
-        verdict = stop_check(controller, plant, dt, hardware=hardware)
-        runs += verdict.simulations
-        seconds += verdict.simulated_seconds
-        if not verdict.robust:
-            return StopCheck(False, runs, seconds, verdict.failed)
-    return StopCheck(True, runs, seconds)
-
-
 def imagine(
     world: World,
     controller: Controller,
@@ -209,7 +191,9 @@ def imagine(
         template = replace(template, gains=tuple(result.W), theta_c=result.theta_c)
         solved = result.success
         if solved and config.robust:
-            verdict = passes_family(world, template, config, sim.dt)
+            verdict = family_check(
+                template, world.family, sim.dt, model=world.family_model, hardware=config.hardware
+            )
             simulations += verdict.simulations
             seconds += verdict.simulated_seconds
             solved = verdict.robust

@@ -19,7 +19,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from striatal.sim.kernel.plant import PlantTerms
+from striatal.sim.kernel.plant import PlantTerms, State, StepInputs
 
 __all__ = ["MAX_POWER", "N_FEATURES", "LearnedArgs", "learned_accelerations", "learned_step"]
 
@@ -86,20 +86,12 @@ def learned_accelerations(
 
 
 @njit(cache=True)
-def learned_step(
-    x: float,
-    x_dot: float,
-    theta: float,
-    theta_dot: float,
-    s: float,
-    c: float,
-    a: float,
-    f: float,
-    pt: PlantTerms,
-    model: LearnedArgs,
-) -> tuple[float, float, float, float]:
-    """One control step pt.dt of the learned plant under the motor force f held (the
-    action a enters only through f). ``s``, ``c``: sin and cos of theta."""
+def learned_step(state: State, inputs: StepInputs, pt: PlantTerms, model: LearnedArgs) -> State:
+    """One control step pt.dt of the learned plant from ``state`` (x, x_dot, theta,
+    theta_dot) under the motor force f held; ``inputs`` (sin theta, cos theta, the action
+    a, f): a enters only through f."""
+    x, x_dot, theta, theta_dot = state
+    s, c, _, f = inputs
     dt = pt.dt
     ax, ath = learned_accelerations(x_dot, s, c, theta_dot, f, model)
     v = x_dot + dt * ax

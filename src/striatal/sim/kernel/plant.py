@@ -16,6 +16,8 @@ from numba import njit
 __all__ = [
     "PlantArgs",
     "PlantTerms",
+    "State",
+    "StepInputs",
     "accelerations",
     "accelerations_terms",
     "clip_force",
@@ -31,6 +33,13 @@ __all__ = [
     "rk4_step",
     "step_batch",
 ]
+
+
+#: A state (x, x_dot, theta, theta_dot) [m, m/s, rad, rad/s].
+State = tuple[float, float, float, float]
+#: What a plant step takes besides the state: (sin theta, cos theta, the action a, the
+#: motor force f [N]).
+StepInputs = tuple[float, float, float, float]
 
 
 class PlantArgs(NamedTuple):

@@ -18,6 +18,8 @@ from striatal.sim.kernel.libm import wrap_angle
 from striatal.sim.kernel.plant import (
     PlantArgs,
     PlantTerms,
+    State,
+    StepInputs,
     clip_force,
     force,
     motor_force,
@@ -376,19 +378,10 @@ def _record(
 
 
 @njit(cache=True)
-def _physical_step(
-    x: float,
-    x_dot: float,
-    theta: float,
-    theta_dot: float,
-    s: float,
-    c: float,
-    a: float,
-    f: float,
-    pt: PlantTerms,
-    dynamics: int,
-) -> tuple[float, float, float, float]:
-    """:func:`plant_step`, the step of eqs 8-9 or 13-14, as :func:`trial_loop` calls a step."""
+def _physical_step(state: State, inputs: StepInputs, pt: PlantTerms, dynamics: int) -> State:
+    """:func:`plant_step` (eqs 8-9 or 13-14) as :func:`trial_loop` calls a plant's step."""
+    x, x_dot, theta, theta_dot = state
+    s, c, a, f = inputs
     return plant_step(x, x_dot, theta, theta_dot, s, c, a, f, pt)
 
 
@@ -429,46 +422,27 @@ def run_trial(
     the motor can deliver it (docs/paper-notes.md section 9). The recorded force and
     OUT_MAX_ABS_FORCE are the (clipped) force at the step's start.
     """
-    trial_loop(_physical_step, 0, state0, gains, plant, control, protocol, noise, learning, buffers)
-
-
-@njit(cache=True)
-def run_learned_trial(
-    state0: np.ndarray,
-    gains: Gains,
-    plant: PlantArgs,
-    control: ControlArgs,
-    protocol: ProtocolArgs,
-    noise: NoiseArgs,
-    learning: TraceArgs,
-    buffers: Buffers,
-    model: LearnedArgs,
-) -> None:
-    """:func:`run_trial` on a learned plant: each step is :func:`learned_step` of ``model``
-    under the held motor force (eq 12 with ``plant.model``, clipped to ``plant.max_force``);
-    ``plant.plant`` is not used."""
     trial_loop(
-        learned_step, model, state0, gains, plant, control, protocol, noise, learning, buffers
+        _physical_step, 0, (state0, gains, plant, control, protocol, noise, learning, buffers)
     )
 
 
+@njit(cache=True)
+def run_learned_trial(model: LearnedArgs, args: Any) -> None:
+    """:func:`run_trial` on a learned plant, ``args`` the tuple of its arguments: each step
+    is :func:`learned_step` of ``model`` under the held motor force (eq 12 with
+    ``plant.model``, clipped to ``plant.max_force``); ``plant.plant`` is not used."""
+    trial_loop(learned_step, model, args)
+
+
 @njit(cache=True, inline="always")
-def trial_loop(
-    step: Any,
-    dynamics: Any,
-    state0: np.ndarray,
-    gains: Gains,
-    plant: PlantArgs,
-    control: ControlArgs,
-    protocol: ProtocolArgs,
-    noise: NoiseArgs,
-    learning: TraceArgs,
-    buffers: Buffers,
-) -> None:
-    """The trial loop of :func:`run_trial` with the plant's step ``step(x, x_dot, theta,
-    theta_dot, s, c, a, f, pt, dynamics)``: the one loop of a scalar trial, whatever
+def trial_loop(step: Any, dynamics: Any, args: Any) -> None:
+    """The trial loop of :func:`run_trial` with the plant's step ``step(state, inputs, pt,
+    dynamics)`` (:data:`State`, :data:`StepInputs`): the one loop of a scalar trial, whatever
     integrates the plant. Inlined where it is called, so that each caller compiles it
-    with its step function resolved (a step passed at run time cannot be cached)."""
+    with its step function resolved (a step passed at run time cannot be cached).
+    ``args``: the tuple of :func:`run_trial`'s arguments."""
+    state0, gains, plant, control, protocol, noise, learning, buffers = args
     theta_c = gains.theta_c
     pt = plant_terms(plant)
     # the policy's constants read once (a store to a buffer would otherwise reload them)
@@ -507,7 +481,9 @@ def trial_loop(
             if record:
                 _record(traj, k, dt, (x, x_dot, theta, theta_dot), a, f, mode)
             tally = tally_force(f, tally)
-            x, x_dot, theta, theta_dot = step(x, x_dot, theta, theta_dot, s, c, a, f, pt, dynamics)
+            x, x_dot, theta, theta_dot = step(
+                (x, x_dot, theta, theta_dot), (s, c, a, f), pt, dynamics
+            )
             status, reward = judge(x, x_dot, theta, theta_dot, k + 1, protocol)
             tally = tally_x(x, status, tally)
             if status != STATUS_RUNNING:
