@@ -122,7 +122,7 @@ def test_the_control_repeats_w0_and_never_imagines(monkeypatch: pytest.MonkeyPat
 
 
 def test_a_plant_outside_the_family_shows_in_the_fit_and_the_real_checks() -> None:
-    """Gravity is what the model takes as known (9.81 m/s^2): on a plant with g = 20 the
+    """Gravity is what the model takes as known (9.8 m/s^2): on a plant with g = 20 the
     fit cannot explain the data, and a controller found in imagination is refused by the
     real trial until one passes there (then it passes the robust check for real)."""
     far = Plant(gravity=20.0)
@@ -222,3 +222,24 @@ def test_generic_imagination_cannot_rehearse_other_plants_and_the_real_check_say
         and not rows[i + 1].success
     ]
     assert refused
+
+
+def test_the_generic_model_without_scikit_learn_is_refused_before_any_trial(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import importlib.util
+
+    find_spec = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util,
+        "find_spec",
+        lambda name, *a: None if name == "sklearn" else find_spec(name, *a),
+    )
+    with pytest.raises(
+        ParameterError, match=r"needs scikit-learn: pip install 'striatal\[model\]'"
+    ):
+        default_config("forward", forward_model="generic")
+    with pytest.raises(ParameterError, match="forward_model must be 'structured' or 'generic', got 'neural'"):
+        default_config("forward", forward_model="neural")
+    with pytest.raises(ParameterError, match="does not use forward_model"):
+        default_config("pgpe", forward_model="generic")

@@ -40,6 +40,7 @@ model and no update: W(0) is tried again each trial.
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
@@ -48,6 +49,7 @@ from typing import Any
 
 import numpy as np
 
+from striatal.errors import ParameterError
 from striatal.learners.config import ForwardModel, LearnerConfig, pick
 from striatal.learners.forward.model import (
     GenericModel,
@@ -231,6 +233,14 @@ class ForwardRule(Rule):
     judges_candidate = True
     runs_trial = True
     mean_policy_only = "runs its real trials with the mean policy"
+
+    def check(self, config: LearnerConfig) -> None:
+        """Also: the generic model needs scikit-learn (refused before the first trial)."""
+        super().check(config)
+        if config.forward_model == "generic" and importlib.util.find_spec("sklearn") is None:
+            raise ParameterError(
+                "--forward-model generic needs scikit-learn: pip install 'striatal[model]'"
+            )
 
     def plan(
         self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
