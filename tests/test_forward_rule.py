@@ -239,7 +239,9 @@ def test_the_generic_model_without_scikit_learn_is_refused_before_any_trial(
         ParameterError, match=r"needs scikit-learn: pip install 'striatal\[model\]'"
     ):
         default_config("forward", forward_model="generic")
-    with pytest.raises(ParameterError, match="forward_model must be 'structured' or 'generic', got 'neural'"):
+    with pytest.raises(
+        ParameterError, match="forward_model must be 'structured' or 'generic', got 'neural'"
+    ):
         default_config("forward", forward_model="neural")
     with pytest.raises(ParameterError, match="does not use forward_model"):
         default_config("pgpe", forward_model="generic")
