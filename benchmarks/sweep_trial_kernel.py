@@ -4,7 +4,7 @@
 
 Runs the sweep that ``striatal sweep SWEEP OPTIONS --engine simd`` runs (every trial on
 :func:`striatal.sim.kernel.run_trials_lockstep`:
-``lockstep_sweep.execute_batch(..., trial_kernel="lockstep")``), prints its wall time
+``lockstep_sweep.execute_batch(..., engine="simd")``), prints its wall time
 and, against RUNS_CSV (the runs.csv of the same sweep from an exact engine, processes
 or batch), how many rows differ and each arm's successes.
 """
@@ -26,7 +26,7 @@ def main(argv: list[str]) -> int:
     ref_path, rest = Path(argv[0]), argv[argv.index("--") + 1 :]
     specs, _, _ = prepare(build_parser().parse_args(["sweep", *rest]))
     t0 = time.perf_counter()
-    rows = runs_csv.sort_rows(execute_batch(specs, trial_kernel="lockstep"))
+    rows = runs_csv.sort_rows(execute_batch(specs, engine="simd"))
     wall = time.perf_counter() - t0
     ref = runs_csv.sort_rows(runs_csv.read_runs(ref_path)[0])
     cols = [c for c in runs_csv.RUN_COLUMNS if c != "wall_seconds"]

@@ -129,9 +129,9 @@ def test_resume_from_state_equals_uninterrupted_run() -> None:
     cfg = LearnerConfig(max_trials=40)
     full = train(Plant(), START, cfg, seed=5)
     half = train(Plant(), START, replace(cfg, max_trials=17), seed=5)
-    resumed = train(Plant(), START, cfg, seed=5, state=half.state)
+    resumed = train(Plant(), START, cfg, seed=5, state=half)
     assert resumed.W == full.W and resumed.theta_c == full.theta_c
-    assert resumed.trials == full.trials
+    assert resumed.trials_done == full.trials_done
 
 
 def test_invalid_configs_raise() -> None:
@@ -255,11 +255,19 @@ def test_python_api_resumes_a_stopped_run_to_the_uninterrupted_result(tmp_path: 
     ).read_bytes()
 
 
-def test_low_level_result_names_its_learner() -> None:
-    from striatal.learners import default_config, learn
+def test_learn_returns_its_last_state_and_lets_an_interrupt_through() -> None:
+    from striatal.learners import LearnerState, default_config, learn
 
-    r = learn(Plant(), START, default_config("pgpe", max_trials=2), seed=0)
-    assert r.to_dict()["learner"] == "pgpe" == r.settings["learner"]
+    seen: list[LearnerState] = []
+    config = default_config("pgpe", max_trials=3)
+    r = learn(Plant(), START, config, seed=0, on_trial=lambda s, rec: seen.append(s))
+    assert isinstance(r, LearnerState) and r == seen[-1] and r.trials_done == len(seen) == 3
+
+    def stop(s: LearnerState, rec: object) -> None:
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        learn(Plant(), START, config, seed=0, on_trial=stop)
 
 
 def test_simulate_defaults_are_the_cli_defaults() -> None:

@@ -74,7 +74,7 @@ def test_row_is_the_train_run_of_its_seed() -> None:
     row = runner.run_one(spec)
     W0 = random_initial_gains(np.random.default_rng([12345, 1]))
     result = train(Plant(), Controller(W0, CHAPTER_INITIAL_THETA_C), spec.config, 12345, sim=SHORT)
-    assert row["trials"] == result.trials and row["success"] == result.success
+    assert row["trials"] == result.trials_done and row["success"] == result.success
     assert [row[f"W{i}"] for i in range(1, 7)] == list(result.W)
     assert row["theta_c"] == result.theta_c
     assert [row[f"W0_{i}"] for i in range(1, 7)] == list(W0)

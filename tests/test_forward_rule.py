@@ -14,7 +14,7 @@ from striatal.experiments.spec import initial_gains
 from striatal.learners import LEARNERS, control_config, default_config, learn
 from striatal.learners.forward import rule as forward
 from striatal.learners.forward.model import Transitions, fit_structured
-from striatal.learners.state import TrialRecord
+from striatal.learners.state import LearnerState, TrialRecord
 from striatal.params import CHAPTER_INITIAL_THETA_C, Controller, Plant, Simulation
 from striatal.sim import kernel
 from striatal.sim.robust import ROBUST_HARDWARE, check_robust
@@ -56,7 +56,7 @@ def start(seed: int) -> Controller:
 
 def run(
     plant: Plant, seed: int, max_trials: int = 6, learn_seed: int | None = None
-) -> tuple[Any, list[TrialRecord]]:
+) -> tuple[LearnerState, list[TrialRecord]]:
     """Learn from W(0) of ``seed`` (``striatal sweep --init random``'s), with the robust
     stop rule, under ``learn_seed`` (default: ``seed``)."""
     rows: list[TrialRecord] = []
@@ -91,8 +91,7 @@ def test_imagined_trials_never_reach_simulations_and_real_ones_always_do(
     monkeypatch: pytest.MonkeyPatch, seed: int
 ) -> None:
     calls = Calls(monkeypatch)
-    result, rows = run(Plant(), seed)
-    state = result.state
+    state, rows = run(Plant(), seed)
     assert calls.imagined > 0 and calls.real > 0
     assert state.simulations == calls.real
     assert state.simulated_seconds == pytest.approx(calls.real_steps * Simulation().dt)
@@ -117,8 +116,8 @@ def test_the_control_repeats_w0_and_never_imagines(monkeypatch: pytest.MonkeyPat
     result = learn(Plant(), start(101), config, 101)
     assert calls.imagined == 0
     assert tuple(start(101).gains) == result.W
-    assert result.trials == 3 and not result.success
-    assert result.state.get("imagined") == (0.0, 0.0)
+    assert result.trials_done == 3 and not result.success
+    assert result.get("imagined") == (0.0, 0.0)
 
 
 def test_a_plant_outside_the_family_shows_in_the_fit_and_the_real_checks() -> None:
@@ -148,8 +147,8 @@ def test_a_plant_outside_the_family_shows_in_the_fit_and_the_real_checks() -> No
 def test_the_rules_run_is_deterministic() -> None:
     a, _ = run(Plant(), 101)
     b, _ = run(Plant(), 101)
-    assert a.W == b.W and a.state.simulations == b.state.simulations
-    assert np.array_equal(np.array(a.state.get("data")), np.array(b.state.get("data")))
+    assert a.W == b.W and a.simulations == b.simulations
+    assert np.array_equal(np.array(a.get("data")), np.array(b.get("data")))
 
 
 def test_a_sweep_row_counts_the_imagined_trials_apart() -> None:
@@ -192,16 +191,16 @@ def test_generic_imagination_runs_on_the_model_only_and_counts_apart(
     result = learn(Plant(), start(101), config, 101, on_trial=lambda s, r: rows.append(r))
     assert calls.imagined == 0  # no physical trial while dreaming
     assert learned["n"] > 0
-    assert result.state.simulations == calls.real
-    assert result.state.simulated_seconds == pytest.approx(calls.real_steps * Simulation().dt)
-    assert result.state.get("imagined")[0] == learned["n"]
+    assert result.simulations == calls.real
+    assert result.simulated_seconds == pytest.approx(calls.real_steps * Simulation().dt)
+    assert result.get("imagined")[0] == learned["n"]
     assert sum(dict(r.extra)["imagined"] for r in rows) == learned["n"]
     # the generic model has no pole mass or length to report
     assert all(
         np.isnan(dict(r.extra)["model_pole_mass"]) for r in rows if dict(r.extra)["imagined"]
     )
     again = learn(Plant(), start(101), config, 101)
-    assert again.W == result.W and again.state.simulations == result.state.simulations
+    assert again.W == result.W and again.simulations == result.simulations
 
 
 def test_generic_imagination_cannot_rehearse_other_plants_and_the_real_check_says_so() -> None:

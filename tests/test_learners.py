@@ -77,7 +77,7 @@ def test_plant_jitter_needs_success_on_the_corner_plants() -> None:
     robust = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)  # passes on all corners
     # pgpe judges the candidate it ran: a negligible exploration makes it the start
     cfg = replace(PGPE, plant_jitter=0.2, max_trials=3, explore=1e-9)
-    assert train(Plant(), robust, cfg, seed=0).trials == 1
+    assert train(Plant(), robust, cfg, seed=0).trials_done == 1
     # gains learned by pgpe (seed 0) that pass on the nominal plant but not at -20 %
     fragile = Controller(
         (
@@ -280,10 +280,14 @@ def test_resume_from_state_equals_uninterrupted_run(learner: str) -> None:
     cfg = replace(LEARNER_DEFAULTS[learner], max_trials=30)
     full = train(Plant(), RANDOM_START, cfg, seed=5)
     half = train(Plant(), RANDOM_START, replace(cfg, max_trials=13), seed=5)
-    state = type(half.state).from_dict(json.loads(json.dumps(half.state.to_dict())))
+    state = type(half).from_dict(json.loads(json.dumps(half.to_dict())))
     resumed = train(Plant(), RANDOM_START, cfg, seed=5, state=state)
-    assert (resumed.W, resumed.theta_c, resumed.trials) == (full.W, full.theta_c, full.trials)
-    assert resumed.state.to_dict() == full.state.to_dict()
+    assert (resumed.W, resumed.theta_c, resumed.trials_done) == (
+        full.W,
+        full.theta_c,
+        full.trials_done,
+    )
+    assert resumed.to_dict() == full.to_dict()
 
 
 def test_pgpe_control_explores_the_same_and_changes_nothing() -> None:

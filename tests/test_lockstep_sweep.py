@@ -213,13 +213,13 @@ def test_cli_refusals_are_one_line_and_exit_2(
 
 
 def test_the_simd_kernel_drifts_from_round_off_but_keeps_what_is_exact() -> None:
-    """trial_kernel "lockstep" (``--engine simd``): the trials on the SIMD kernel, whose
+    """``--engine simd``: the trials on the SIMD kernel, whose
     trials equal the scalar kernel's within round-off; learning amplifies the difference
     over trials (here W of one run ends far away), which is why a folder never mixes the
     two kinds and "batch" keeps the exact kernel."""
     specs = _specs(default_config("chapter", max_trials=8), seeds=SEEDS[:2], eval_draws=2)
     exact = runs_csv.sort_rows(execute_batch(specs))
-    fast = runs_csv.sort_rows(execute_batch(specs, trial_kernel="lockstep"))
+    fast = runs_csv.sort_rows(execute_batch(specs, engine="simd"))
     assert [(r["arm"], r["init"], r["seed"]) for r in fast] == [
         (r["arm"], r["init"], r["seed"]) for r in exact
     ]
@@ -234,8 +234,8 @@ def test_the_simd_kernel_drifts_from_round_off_but_keeps_what_is_exact() -> None
     # the counts are the protocol's, whatever the kernel
     for a, b in zip(exact, fast, strict=True):
         assert b["eval_simulations"] == a["eval_simulations"]
-    with pytest.raises(ParameterError, match="trial_kernel"):
-        list(execute_batch(specs, trial_kernel="simd"))
+    with pytest.raises(ParameterError, match="engine must be one of batch, simd"):
+        list(execute_batch(specs, engine="lockstep"))  # type: ignore[arg-type]
 
 
 def test_cli_simd_engine_gives_the_same_statistics_not_the_same_rows(

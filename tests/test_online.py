@@ -302,7 +302,7 @@ def test_online_trial_refuses_bad_rates() -> None:
 def _history(config: learners.LearnerConfig, seed: int) -> list[object]:
     rows: list[object] = []
     r = train(Plant(), RANDOM_START, config, seed, on_trial=lambda s, rec: rows.append(rec.row()))
-    return [r.W, r.theta_c, r.state.memory, rows]
+    return [r.W, r.theta_c, r.memory, rows]
 
 
 def test_ac_same_seed_same_history() -> None:
@@ -339,10 +339,10 @@ def test_ac_resume_from_state_equals_uninterrupted_run() -> None:
     cfg = replace(AC, max_trials=10)
     full = train(Plant(), RANDOM_START, cfg, seed=5)
     half = train(Plant(), RANDOM_START, replace(cfg, max_trials=4), seed=5)
-    state = type(half.state).from_dict(json.loads(json.dumps(half.state.to_dict())))
+    state = type(half).from_dict(json.loads(json.dumps(half.to_dict())))
     resumed = train(Plant(), RANDOM_START, cfg, seed=5, state=state)
-    assert resumed.state.to_dict() == full.state.to_dict()
-    assert len(full.state.get("critic")) == online.N_FEATURES
+    assert resumed.to_dict() == full.to_dict()
+    assert len(full.get("critic")) == online.N_FEATURES
 
 
 def test_ac_on_success_keeps_the_gains_it_was_judged_on() -> None:
@@ -350,9 +350,9 @@ def test_ac_on_success_keeps_the_gains_it_was_judged_on() -> None:
     the result is that W, not the W the exploring trial drifted to."""
     start = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
     r = train(Plant(), start, replace(AC, alpha=0.05, max_trials=3), seed=0)
-    assert r.success and r.trials == 1
+    assert r.success and r.trials_done == 1
     assert r.W == CHAPTER_FINAL_W and r.theta_c == CHAPTER_FINAL_THETA_C
-    assert r.state.simulations == 2
+    assert r.simulations == 2
 
 
 def test_ac_history_columns_and_options() -> None:

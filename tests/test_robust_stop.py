@@ -146,10 +146,10 @@ def test_learn_counts_every_kernel_call_of_the_robust_stop_rule(counted: KernelC
     config = default_config("pgpe", robust=True, max_trials=40)
     template = Controller(gains=(0.6, -0.4, -0.9, 0.9, 0.1, -1.2), theta_c=0.6)
     result = learn(Plant(), template, config, seed=3)
-    assert result.state.simulations == counted.calls
-    assert result.state.simulated_seconds == pytest.approx(counted.seconds())
+    assert result.simulations == counted.calls
+    assert result.simulated_seconds == pytest.approx(counted.seconds())
     # the candidates that passed the nominal test were checked: more runs than trials
-    assert counted.calls >= result.trials
+    assert counted.calls >= result.trials_done
 
 
 def test_a_candidate_that_passes_the_nominal_test_but_not_the_set_does_not_stop_the_run(
@@ -162,11 +162,11 @@ def test_a_candidate_that_passes_the_nominal_test_but_not_the_set_does_not_stop_
     template = Controller(gains=CHAPTER_FINAL_W, theta_c=CHAPTER_FINAL_THETA_C)
     changes = dict(alpha=0.0, theta_c_rule="fixed", success_on="mean", max_trials=4)
     plain = learn(Plant(), template, default_config("chapter", **changes), seed=1)
-    assert plain.success and plain.trials == 1
+    assert plain.success and plain.trials_done == 1
     counted.calls = 0
     robust = learn(Plant(), template, default_config("chapter", robust=True, **changes), seed=1)
-    assert not robust.success and robust.trials == 4
-    assert robust.state.simulations == counted.calls == 4 * 3
+    assert not robust.success and robust.trials_done == 4
+    assert robust.simulations == counted.calls == 4 * 3
     assert ROBUST_CASES[STOP_ORDER[0]].name == "pole mass x1.2, length x0.8"
 
 
@@ -177,8 +177,8 @@ def test_a_robust_candidate_stops_the_run_with_the_robust_controller(
     changes = dict(alpha=0.0, theta_c_rule="fixed", success_on="mean", max_trials=4)
     r = learn(Plant(), template, default_config("chapter", robust=True, **changes), seed=1)
     # trial 1 (noisy), its mean-policy rerun = the nominal case, then the other 8 cases
-    assert r.success and r.trials == 1
-    assert r.state.simulations == counted.calls == 1 + 1 + 8
+    assert r.success and r.trials_done == 1
+    assert r.simulations == counted.calls == 1 + 1 + 8
     assert r.W == ROBUST_W
 
 

@@ -11,13 +11,13 @@ finished, so the sweep writes it to runs.csv and a rerun skips it. Trials that n
 more than a kernel summary (a recorded trial for the shaped reward, a rule's own trial,
 the robustness set, a baseline's search) run inside their run, one by one.
 
-``trial_kernel`` "exact" (``--engine batch``): :func:`striatal.sim.kernel.run_trials_batch`,
+``--engine batch``: :func:`striatal.sim.kernel.run_trials_batch`,
 a parallel loop over the scalar kernel that equals it bit for bit; every run draws its
 noise from its own generator in the order the process engine draws it, so the rows
 are the process engine's, bit for bit (apart from ``wall_seconds``).
 tests/test_lockstep_sweep.py compares whole sweeps.
 
-``trial_kernel`` "lockstep" (``--engine simd``): the trials run on the SIMD kernel
+``--engine simd``: the trials run on the SIMD kernel
 :func:`striatal.sim.kernel.run_trials_lockstep` where it applies (u held, no force
 limit, no track; the exact kernel otherwise). Its trials equal the scalar kernel's only
 within round-off (its polynomial sin/cos are within 1 ulp of libm's), and a chaotic
@@ -39,9 +39,9 @@ from striatal.errors import ParameterError
 from striatal.experiments.runner import run_steps
 from striatal.experiments.spec import RunSpec
 from striatal.learners import check_config
-from striatal.sim.batch import TRIAL_KERNELS, Lockstep
+from striatal.sim.batch import BATCH_ENGINES, Lockstep
 
-__all__ = ["TRIAL_KERNELS", "check_specs", "execute_batch"]
+__all__ = ["BATCH_ENGINES", "check_specs", "execute_batch"]
 
 
 def check_specs(specs: Sequence[RunSpec]) -> None:
@@ -51,20 +51,18 @@ def check_specs(specs: Sequence[RunSpec]) -> None:
 
 
 def execute_batch(
-    specs: Sequence[RunSpec], *, trial_kernel: Literal["exact", "lockstep"] = "exact"
+    specs: Sequence[RunSpec], *, engine: Literal["batch", "simd"] = "batch"
 ) -> Iterator[dict[str, Any]]:
     """Rows of ``specs`` (RUN_COLUMNS), each yielded when its run is finished and evaluated.
 
-    "exact": the rows equal :func:`striatal.experiments.runner.run_one`'s for the same specs
-    except ``wall_seconds``. "lockstep" (``--engine simd``): the trials on
+    "batch": the rows equal :func:`striatal.experiments.runner.run_one`'s for the same specs
+    except ``wall_seconds``. "simd": the trials on
     :func:`striatal.sim.kernel.run_trials_lockstep` where it applies, so its rows are not
     the process engine's, only the same experiment (module docstring).
     """
-    if trial_kernel not in TRIAL_KERNELS:
-        raise ParameterError(
-            f"trial_kernel must be one of {', '.join(TRIAL_KERNELS)}, got {trial_kernel!r}"
-        )
+    if engine not in BATCH_ENGINES:
+        raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
     check_specs(specs)
-    runs = Lockstep([run_steps(s) for s in specs], trial_kernel)
+    runs = Lockstep([run_steps(s) for s in specs], engine)
     for i, row in runs.run():
         yield {**row, "wall_seconds": float(runs.seconds[i])}

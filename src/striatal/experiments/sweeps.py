@@ -286,7 +286,7 @@ def _run_sweep(
         if engine != "processes":
             from striatal.experiments.lockstep_sweep import execute_batch
 
-            rows_in = execute_batch(todo, trial_kernel="lockstep" if engine == "simd" else "exact")
+            rows_in = execute_batch(todo, engine=engine)
         else:
             rows_in = execute(
                 todo,

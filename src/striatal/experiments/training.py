@@ -33,7 +33,6 @@ from striatal.learners import (
     W1_FLOOR,
     History,
     LearnerState,
-    TrainResult,
     TrialRecord,
     default_config,
     initial_state,
@@ -110,9 +109,20 @@ class Run:
         return Plant(**self.settings["plant"])
 
     def to_dict(self) -> dict[str, Any]:
-        # result.json: this run's TrainResult (the learning loop's record), then train's own
-        loop = TrainResult(**{f.name: getattr(self, f.name) for f in fields(TrainResult)})
-        payload = loop.to_dict()
+        """result.json."""
+        payload: dict[str, Any] = {
+            "success": self.success,
+            "trials": self.trials,
+            "W": list(self.W),
+            "theta_c": self.theta_c,
+            "seed": self.seed,
+            "wall_seconds": self.wall_seconds,
+            "interrupted": self.interrupted,
+            "learner": self.learner,
+            "simulations": self.state.simulations,
+            "simulated_seconds": self.state.simulated_seconds,
+            "settings": self.settings,
+        }
         payload["mean_policy_success"] = self.mean_policy_success
         payload["mean_policy_final_state"] = list(self.mean_policy_final_state)
         payload["positive_rewards"] = self.state.n_positive
@@ -432,20 +442,23 @@ def _run(
             raise KeyboardInterrupt
 
     t0 = time.perf_counter()
+    interrupted = False
     try:
-        result = learn(
-            setup.plant,
-            setup.template,
-            config,
-            setup.seed,
-            sim=setup.sim,
-            protocol=setup.protocol,
-            state=state,
-            on_trial=record,
-        )
-        # the state the run ends at (its success, trials, W, theta_c): when interrupted,
-        # the last one with a history row (a trial updated but not yet written is not kept)
-        final = recorded if result.interrupted else result.state
+        try:
+            final = learn(
+                setup.plant,
+                setup.template,
+                config,
+                setup.seed,
+                sim=setup.sim,
+                protocol=setup.protocol,
+                state=state,
+                on_trial=record,
+            )
+        except KeyboardInterrupt:
+            # the run ends at the last state with a history row (a trial updated but not
+            # yet written is not kept)
+            interrupted, final = True, recorded
         checkpoint(final)
     finally:
         if rundir is not None:
@@ -478,7 +491,7 @@ def _run(
         theta_c=final.theta_c,
         seed=setup.seed,
         learner=config.learner,
-        interrupted=result.interrupted,
+        interrupted=interrupted,
         wall_seconds=time.perf_counter() - t0,
         state=final,
         history=history,

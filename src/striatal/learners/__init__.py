@@ -2,7 +2,7 @@
 
 - :mod:`striatal.learners.config`: :class:`LearnerConfig`, every option of a run;
 - :mod:`striatal.learners.state`: :class:`LearnerState` (checkpointable),
-  :class:`TrialRecord` (a history row), :class:`History`, :class:`TrainResult`;
+  :class:`TrialRecord` (a history row), :class:`History`;
 - :mod:`striatal.learners.common`: eq 21, the success test, the shaped reward,
   the three-factor update;
 - :mod:`striatal.learners.rule`: what a rule supplies (:class:`Rule`);
@@ -42,7 +42,7 @@ from striatal.learners.loop import (
     rule_of,
 )
 from striatal.learners.rule import Rule, Trial, TrialPlan, Update
-from striatal.learners.state import History, LearnerState, TrainResult, TrialRecord
+from striatal.learners.state import History, LearnerState, TrialRecord
 
 __all__ = [
     "LEARNERS",
@@ -52,7 +52,6 @@ __all__ = [
     "LearnerConfig",
     "LearnerState",
     "Rule",
-    "TrainResult",
     "Trial",
     "TrialPlan",
     "TrialRecord",

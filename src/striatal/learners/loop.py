@@ -27,7 +27,6 @@ case of the set.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
@@ -43,7 +42,7 @@ from striatal.learners.config import LearnerConfig
 from striatal.learners.pgpe import PGPE
 from striatal.learners.rpe import RPE
 from striatal.learners.rule import Rule, Trial, Update
-from striatal.learners.state import LearnerState, TrainResult, TrialRecord
+from striatal.learners.state import LearnerState, TrialRecord
 from striatal.params import Controller, Plant, Simulation
 from striatal.sim.batch import Steps, TrialRequest, drive, driven
 from striatal.sim.robust import nominal_is_the_case, stop_check
@@ -321,45 +320,30 @@ def learn(
     protocol: Protocol | None = None,
     state: LearnerState | None = None,
     on_trial: Callable[[LearnerState, TrialRecord], None] | None = None,
-) -> TrainResult:
-    """Learn from ``template``'s gains and theta_c (or continue from ``state``).
+) -> LearnerState:
+    """Learn from ``template``'s gains and theta_c (or continue from ``state``); the
+    state after the last trial.
 
     Stops at the first trial that passes the success test (its W and theta_c are
     the result, as in the chapter; with ``config.robust`` it must pass the robustness
     set too) or after ``config.max_trials`` trials.
-    ``on_trial`` is called after every trial (history, checkpoints, progress).
-    A KeyboardInterrupt stops the run; the result then has ``interrupted=True``.
+    ``on_trial`` is called after every trial (history, checkpoints, progress); a
+    KeyboardInterrupt it raises, or the user's, ends the loop and reaches the caller
+    (:func:`striatal.train` keeps the last recorded state).
     """
     check_config(config)
-    sim = sim or Simulation()
-    protocol = protocol or Protocol()
     if state is None:
         state = initial_state(template.gains, template.theta_c, seed)
-    last = [state]
-
-    def recorded(new: LearnerState, record: TrialRecord) -> None:
-        last[0] = new
-        if on_trial is not None:
-            on_trial(new, record)
-
-    t0 = time.perf_counter()
-    interrupted = False
-    try:
-        drive(learn_steps(plant, template, config, state, sim, protocol, on_trial=recorded))
-    except KeyboardInterrupt:
-        interrupted = True
-    state = last[0]
-    return TrainResult(
-        success=state.success,
-        trials=state.trials_done,
-        W=state.W,
-        theta_c=state.theta_c,
-        seed=seed,
-        wall_seconds=time.perf_counter() - t0,
-        state=state,
-        learner=config.learner,
-        interrupted=interrupted,
-        settings={"learner": config.learner, "seed": seed, "config": config.to_dict()},
+    return drive(
+        learn_steps(
+            plant,
+            template,
+            config,
+            state,
+            sim or Simulation(),
+            protocol or Protocol(),
+            on_trial=on_trial,
+        )
     )
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
@@ -23,7 +23,6 @@ __all__ = [
     "FLAG_COLUMNS",
     "History",
     "LearnerState",
-    "TrainResult",
     "TrialRecord",
     "checked_rng_state",
     "history_columns",
@@ -224,34 +223,3 @@ class History:
         columns = records[0].columns if records else ()
         rows = tuple(tuple(_cell(v) for v in r.row()) for r in records)
         return cls(learner=learner, columns=columns, rows=rows, reward_kind=reward_kind)
-
-
-@dataclass(frozen=True)
-class TrainResult:
-    """The outcome of a learning loop (:func:`striatal.learners.learn`)."""
-
-    success: bool
-    trials: int
-    W: tuple[float, ...]
-    theta_c: float
-    seed: int
-    wall_seconds: float
-    state: LearnerState
-    learner: str = "chapter"
-    interrupted: bool = False
-    settings: dict[str, Any] = field(default_factory=dict)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "success": self.success,
-            "trials": self.trials,
-            "W": list(self.W),
-            "theta_c": self.theta_c,
-            "seed": self.seed,
-            "wall_seconds": self.wall_seconds,
-            "interrupted": self.interrupted,
-            "learner": self.learner,
-            "simulations": self.state.simulations,
-            "simulated_seconds": self.state.simulated_seconds,
-            "settings": self.settings,
-        }

@@ -48,7 +48,7 @@ from striatal.sim.rollout import (
 )
 
 __all__ = [
-    "TRIAL_KERNELS",
+    "BATCH_ENGINES",
     "Lockstep",
     "Steps",
     "TrialRequest",
@@ -61,8 +61,9 @@ T = TypeVar("T")
 P = ParamSpec("P")
 #: A computation that needs trials: it yields requests, is sent their outcomes, returns T.
 Steps = Generator[list["TrialRequest"], list[TrialOutcome], T]
-#: The kernels :class:`Lockstep` can batch on: the exact one, or the SIMD one.
-TRIAL_KERNELS: tuple[str, ...] = ("exact", "lockstep")
+#: The kernels :class:`Lockstep` can batch on, by the name of ``striatal sweep --engine``:
+#: "batch" the exact one (:func:`striatal.sim.kernel.run_trials_batch`), "simd" the SIMD one.
+BATCH_ENGINES: tuple[str, ...] = ("batch", "simd")
 #: Trials a kernel thread takes at a time (numba.set_parallel_chunksize): dynamic chunks,
 #: so a thread the OS takes away, or that gets the long trials, does not hold up the rest.
 CHUNK = 2
@@ -157,19 +158,17 @@ def drive(steps: Steps[T]) -> T:
 
 
 def run_requests(
-    requests: Sequence[TrialRequest], trial_kernel: Literal["exact", "lockstep"] = "exact"
+    requests: Sequence[TrialRequest], engine: Literal["batch", "simd"] = "batch"
 ) -> list[TrialOutcome]:
     """The outcomes of ``requests``, in their order, from as few batched kernel calls as
     their :meth:`TrialRequest.batch_key` allow.
 
     The action noise of each request is drawn from its generator in the order of
-    ``requests`` (what :func:`drive` would draw); traces are updated in place. "lockstep"
+    ``requests`` (what :func:`drive` would draw); traces are updated in place. "simd"
     runs a group on the SIMD kernel unless its motor or track needs the exact one.
     """
-    if trial_kernel not in TRIAL_KERNELS:
-        raise ParameterError(
-            f"trial_kernel must be one of {', '.join(TRIAL_KERNELS)}, got {trial_kernel!r}"
-        )
+    if engine not in BATCH_ENGINES:
+        raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
     outcomes: list[TrialOutcome | None] = [None] * len(requests)
     groups: dict[tuple[Any, ...], list[int]] = {}
     noise: dict[int, np.ndarray] = {}
@@ -212,7 +211,7 @@ def run_requests(
             traces=traces,
             hardware=first.hardware,
         )
-        simd = trial_kernel == "lockstep" and first.hardware == CHAPTER_HARDWARE
+        simd = engine == "simd" and first.hardware == CHAPTER_HARDWARE
         old = numba.set_parallel_chunksize(CHUNK)
         try:
             (kernel.run_trials_lockstep if simd else kernel.run_trials_batch)(*args)
@@ -262,10 +261,10 @@ class Lockstep:
     """
 
     def __init__(
-        self, steps: Sequence[Steps[T]], trial_kernel: Literal["exact", "lockstep"] = "exact"
+        self, steps: Sequence[Steps[T]], engine: Literal["batch", "simd"] = "batch"
     ) -> None:
         self.steps = list(steps)
-        self.trial_kernel = trial_kernel
+        self.engine = engine
         self.seconds = np.zeros(len(self.steps))
 
     def _advance(self, i: int, outcomes: list[TrialOutcome] | None) -> list[TrialRequest]:
@@ -287,7 +286,7 @@ class Lockstep:
             order = list(pending)
             flat = [r for i in order for r in pending[i]]
             t0 = time.perf_counter()
-            outcomes = run_requests(flat, self.trial_kernel)
+            outcomes = run_requests(flat, self.engine)
             share = (time.perf_counter() - t0) / max(len(flat), 1)
             at = 0
             for i in order:

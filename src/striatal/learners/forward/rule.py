@@ -187,9 +187,9 @@ def imagine(
             sim=sim,
             protocol=protocol,
         )
-        budget -= result.trials
-        simulations += result.state.simulations
-        seconds += result.state.simulated_seconds
+        budget -= result.trials_done
+        simulations += result.simulations
+        seconds += result.simulated_seconds
         template = replace(template, gains=tuple(result.W), theta_c=result.theta_c)
         solved = result.success
         if solved and config.robust:
