@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from striatal.errors import ParameterError
-from striatal.experiments.robustness import CONDITIONS, Condition, controller_groups, evaluate
+from striatal.experiments.robustness import CONDITIONS, controller_groups, evaluate
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
+from striatal.sim.robust import Perturbation
 from striatal.sim.rollout import Protocol, SensorNoise, TrialOutcome, run_trial, simulate
 
 FINAL = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
@@ -60,13 +61,13 @@ def test_the_plant_changes_but_the_model_stays_nominal() -> None:
 
 
 def test_sensor_noise_is_seeded_and_matters() -> None:
-    cond = Condition("noisy", x_std=0.05, theta_std=0.05)
+    cond = Perturbation("noisy", x_std=0.05, theta_std=0.05)
     a = evaluate([FINAL], cond, repeats=3, seed=1)
     assert a == evaluate([FINAL], cond, repeats=3, seed=1)
     assert a["runs"] == 3
     assert evaluate([FINAL], CONDITIONS[0])["success"] == 1.0
     # noise of 0.01 rad/m leaves the pole balanced but breaks the 0.005/s rest test
-    r = evaluate([FINAL], Condition("n", x_std=0.01, theta_std=0.01), repeats=3)
+    r = evaluate([FINAL], Perturbation("n", x_std=0.01, theta_std=0.01), repeats=3)
     assert r["balanced"] == 1.0 and r["success"] < 1.0
 
 
@@ -112,7 +113,7 @@ def test_cli_table_and_clear_error(tmp_path: Path) -> None:
 
 def test_evaluate_is_the_rollout_mean_policy_trial() -> None:
     """evaluate's verdict on a mismatched plant equals the rollout's own mean-policy trial."""
-    heavy = Condition("heavy", pole_mass=1.2, length=1.2)
+    heavy = Perturbation("heavy", pole_mass=1.2, length=1.2)
     plant = Plant().scaled(pole_mass=1.2, length=1.2)
     o = mean_policy_trial(plant, Plant(), FINAL, Simulation(), Protocol(), SensorNoise(), None)
     assert evaluate([FINAL], heavy)["success"] == float(o.success)

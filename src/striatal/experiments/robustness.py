@@ -13,57 +13,42 @@ Two measures per run: the chapter's success test (at rest within 0.05 m / 0.05 r
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
 from striatal.io.rundir import result_of
-from striatal.params import N_GAINS, Controller, Plant, Simulation, check_seed
-from striatal.sim.rollout import Protocol, SensorNoise, run_trial
+from striatal.params import N_GAINS, Controller, Plant, check_seed
+from striatal.sim.robust import Perturbation
+from striatal.sim.rollout import Protocol, run_trial
 
 __all__ = [
     "CONDITIONS",
-    "Condition",
     "controller_groups",
     "evaluate",
     "robustness_table",
 ]
 
 
-@dataclass(frozen=True)
-class Condition:
-    """A true plant (pole mass and length factors) and sensor noise (stds in m and rad)."""
-
-    name: str
-    pole_mass: float = 1.0
-    length: float = 1.0
-    x_std: float = 0.0
-    theta_std: float = 0.0
-
-    @property
-    def sensor(self) -> SensorNoise:
-        return SensorNoise(x_std=self.x_std, theta_std=self.theta_std)
-
-
-CONDITIONS: tuple[Condition, ...] = (
-    Condition("nominal"),
-    Condition("pole mass -20%", pole_mass=0.8),
-    Condition("pole mass +20%", pole_mass=1.2),
-    Condition("length -20%", length=0.8),
-    Condition("length +20%", length=1.2),
-    Condition("mass and length -20%", pole_mass=0.8, length=0.8),
-    Condition("mass and length +20%", pole_mass=1.2, length=1.2),
-    Condition("sensor noise 0.001", x_std=0.001, theta_std=0.001),
-    Condition("sensor noise 0.01", x_std=0.01, theta_std=0.01),
-    Condition("sensor noise 0.05", x_std=0.05, theta_std=0.05),
+#: The conditions of ``striatal robustness``: the true plant changed, or sensor noise.
+CONDITIONS: tuple[Perturbation, ...] = (
+    Perturbation("nominal"),
+    Perturbation("pole mass -20%", pole_mass=0.8),
+    Perturbation("pole mass +20%", pole_mass=1.2),
+    Perturbation("length -20%", length=0.8),
+    Perturbation("length +20%", length=1.2),
+    Perturbation("mass and length -20%", pole_mass=0.8, length=0.8),
+    Perturbation("mass and length +20%", pole_mass=1.2, length=1.2),
+    Perturbation("sensor noise 0.001", x_std=0.001, theta_std=0.001),
+    Perturbation("sensor noise 0.01", x_std=0.01, theta_std=0.01),
+    Perturbation("sensor noise 0.05", x_std=0.05, theta_std=0.05),
 )
 
 
 def evaluate(
     controllers: Sequence[Controller],
-    condition: Condition,
+    condition: Perturbation,
     *,
     nominal: Plant | None = None,
     repeats: int = 10,
@@ -80,8 +65,8 @@ def evaluate(
         raise ParameterError("no controllers to evaluate")
     seed = check_seed(seed)
     nominal = nominal or Plant()
-    plant = nominal.scaled(pole_mass=condition.pole_mass, length=condition.length)
-    sim, protocol = Simulation(), Protocol()
+    plant = condition.plant(nominal)
+    sim, protocol = condition.sim(), Protocol()
     n = repeats if condition.sensor.active else 1
     streams = np.random.SeedSequence(seed).spawn(len(controllers))
     success = balanced = 0
@@ -113,7 +98,7 @@ def evaluate(
 
 def robustness_table(
     groups: Sequence[tuple[str, Sequence[Controller]]],
-    conditions: Sequence[Condition] = CONDITIONS,
+    conditions: Sequence[Perturbation] = CONDITIONS,
     *,
     repeats: int = 10,
     seed: int = 0,

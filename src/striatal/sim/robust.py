@@ -34,7 +34,7 @@ import numpy as np
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation
 from striatal.sim.batch import TrialRequest
-from striatal.sim.rollout import NO_PROTOCOL, simulate
+from striatal.sim.rollout import NO_PROTOCOL, SensorNoise, simulate
 
 __all__ = [
     "ROBUST_CASES",
@@ -42,7 +42,7 @@ __all__ = [
     "ROBUST_HARDWARE",
     "STOP_ORDER",
     "CaseResult",
-    "RobustCase",
+    "Perturbation",
     "RobustReport",
     "StopCheck",
     "check_robust",
@@ -58,27 +58,48 @@ ROBUST_DURATION = 60.0
 
 
 @dataclass(frozen=True)
-class RobustCase:
-    """One case: the true plant's pole mass and length factors and the start (at rest)."""
+class Perturbation:
+    """What a run changes from the nominal one: the true plant's pole mass and length
+    factors (the controller keeps its nominal model), the start (at rest) and Gaussian
+    sensor noise on the x and theta the controller sees (stds in m and rad).
+
+    The one perturbation model of the project: the robustness set's cases
+    (:data:`ROBUST_CASES`) and the conditions of ``striatal robustness``
+    (:data:`striatal.experiments.robustness.CONDITIONS`) are both made of it.
+    """
 
     name: str
     pole_mass: float = 1.0
     length: float = 1.0
     theta0: float = CHAPTER_THETA0
     x0: float = 0.0
+    x_std: float = 0.0
+    theta_std: float = 0.0
+
+    def plant(self, nominal: Plant) -> Plant:
+        """The true plant: ``nominal`` with its pole mass and length scaled."""
+        return nominal.scaled(pole_mass=self.pole_mass, length=self.length)
+
+    def sim(self, **kwargs: Any) -> Simulation:
+        """A trial from this start (``kwargs``: the other fields of the Simulation)."""
+        return Simulation(theta0=self.theta0, x0=self.x0, **kwargs)
+
+    @property
+    def sensor(self) -> SensorNoise:
+        return SensorNoise(x_std=self.x_std, theta_std=self.theta_std)
 
 
 #: The nine cases of the robustness set (module docstring).
-ROBUST_CASES: tuple[RobustCase, ...] = (
-    RobustCase("nominal"),
-    RobustCase("pole mass x0.8, length x0.8", pole_mass=0.8, length=0.8),
-    RobustCase("pole mass x0.8, length x1.2", pole_mass=0.8, length=1.2),
-    RobustCase("pole mass x1.2, length x0.8", pole_mass=1.2, length=0.8),
-    RobustCase("pole mass x1.2, length x1.2", pole_mass=1.2, length=1.2),
-    RobustCase("theta0 = pi - 0.3", theta0=math.pi - 0.3),
-    RobustCase("theta0 = pi + 0.3", theta0=math.pi + 0.3),
-    RobustCase("x0 = -0.5 m", x0=-0.5),
-    RobustCase("x0 = +0.5 m", x0=0.5),
+ROBUST_CASES: tuple[Perturbation, ...] = (
+    Perturbation("nominal"),
+    Perturbation("pole mass x0.8, length x0.8", pole_mass=0.8, length=0.8),
+    Perturbation("pole mass x0.8, length x1.2", pole_mass=0.8, length=1.2),
+    Perturbation("pole mass x1.2, length x0.8", pole_mass=1.2, length=0.8),
+    Perturbation("pole mass x1.2, length x1.2", pole_mass=1.2, length=1.2),
+    Perturbation("theta0 = pi - 0.3", theta0=math.pi - 0.3),
+    Perturbation("theta0 = pi + 0.3", theta0=math.pi + 0.3),
+    Perturbation("x0 = -0.5 m", x0=-0.5),
+    Perturbation("x0 = +0.5 m", x0=0.5),
 )
 
 
@@ -87,7 +108,7 @@ class CaseResult:
     """The mean-policy run of one case: success test at T_f, how it ended, its extremes
     (each field but ``case`` is the run's :class:`~striatal.sim.rollout.TrialOutcome`'s)."""
 
-    case: RobustCase
+    case: Perturbation
     success: bool
     end_reason: str
     ended_at: float
@@ -158,7 +179,7 @@ def robust_hardware(max_force: float | None = None, track: float | None = None) 
 
 def run_case(
     controller: Controller,
-    case: RobustCase,
+    case: Perturbation,
     *,
     plant: Plant | None = None,
     hardware: Hardware | None = None,
@@ -169,9 +190,10 @@ def run_case(
     the controller's model is ``plant`` itself (default: the chapter's plant)."""
     nominal = plant or Plant()
     hw = hardware or robust_hardware()
-    true_plant = nominal.scaled(pole_mass=case.pole_mass, length=case.length)
-    sim = Simulation(theta0=case.theta0, x0=case.x0, duration=duration, dt=dt)
-    o = simulate(true_plant, controller, sim, protocol=NO_PROTOCOL, model=nominal, hardware=hw)
+    sim = case.sim(duration=duration, dt=dt)
+    o = simulate(
+        case.plant(nominal), controller, sim, protocol=NO_PROTOCOL, model=nominal, hardware=hw
+    )
     kept = {f.name: getattr(o.outcome, f.name) for f in fields(CaseResult) if f.name != "case"}
     return CaseResult(case=case, **kept)
 
@@ -184,7 +206,7 @@ def check_robust(
     track: float | None = None,
     duration: float = ROBUST_DURATION,
     dt: float = 0.01,
-    cases: tuple[RobustCase, ...] = ROBUST_CASES,
+    cases: tuple[Perturbation, ...] = ROBUST_CASES,
 ) -> RobustReport:
     """Run every case of the robustness set (module docstring) and report.
 
@@ -250,14 +272,14 @@ def nominal_is_the_case(sim: Simulation, action_every: int = 1) -> bool:
 def _case_request(
     controller: Controller,
     W: np.ndarray,
-    case: RobustCase,
+    case: Perturbation,
     plant: Plant,
     model: Plant,
     dt: float,
     hardware: Hardware,
 ) -> TrialRequest:
     """The mean-policy run of ``case``'s start, 60 s, on ``plant``, believing ``model``."""
-    sim = Simulation(theta0=case.theta0, x0=case.x0, duration=ROBUST_DURATION, dt=dt)
+    sim = case.sim(duration=ROBUST_DURATION, dt=dt)
     return TrialRequest(
         plant, controller, sim, NO_PROTOCOL, gains=W, model=model, hardware=hardware
     )
@@ -302,7 +324,7 @@ def stop_check(
                 controller,
                 W,
                 case,
-                plant.scaled(pole_mass=case.pole_mass, length=case.length),
+                case.plant(plant),
                 plant,
                 dt,
                 hardware,
