@@ -15,7 +15,7 @@ import pytest
 import striatal
 from striatal.cli import main
 from striatal.errors import ParameterError
-from striatal.experiments.training import floor_w1, initial_gains
+from striatal.experiments.spec import floor_w1, initial_gains
 from striatal.learners import W1_FLOOR
 
 #: Seed 1's random draw has W1 = -0.336 (uniform in [-1, 1]^6 from default_rng([1, 1])).

@@ -7,16 +7,24 @@ the lockstep engine (:mod:`striatal.experiments.lockstep_sweep`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.learners import LearnerConfig, random_initial_gains
-from striatal.params import CHAPTER_INITIAL_W, Controller, Plant, Simulation
+from striatal.learners import W1_FLOOR, LearnerConfig, random_initial_gains
+from striatal.params import (
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+    check_gains,
+    check_seed,
+)
 
-__all__ = ["Init", "RunSpec", "initial_gains", "spawn_seeds"]
+__all__ = ["Init", "RunSpec", "floor_w1", "initial_gains", "spawn_seeds"]
 
 Init = Literal["chapter", "random"]
 
@@ -54,10 +62,29 @@ def spawn_seeds(root: int, n: int) -> tuple[int, ...]:
     return tuple(int(child.generate_state(1)[0]) for child in np.random.SeedSequence(root).spawn(n))
 
 
-def initial_gains(init: Init, seed: int) -> tuple[float, ...]:
-    """W(0): the chapter's, or uniform in [-1, 1]^6 drawn as ``striatal train --init random``."""
+def floor_w1(gains: Sequence[float]) -> tuple[float, ...]:
+    """The six gains with W1 floored at W1_FLOOR = 0.001, the guard of sqrt(W1 g) (eq 22).
+
+    The one treatment of W1 <= 0 in W(0), for ``init_gains`` as for ``init="random"``
+    (which draws W1 uniformly in [-1, 1] and floors it the same way; docs/paper-notes.md
+    section 11). Other values of W are checked (finite, six of them) and kept.
+    """
+    w = check_gains(gains, need_positive_w1=False)
+    return (max(w[0], W1_FLOOR), *w[1:])
+
+
+def initial_gains(
+    init: Init | str, seed: int, init_gains: Sequence[float] | None = None
+) -> tuple[float, ...]:
+    """W(0): ``init_gains``, the chapter's ("chapter") or uniform in [-1, 1]^6 ("random").
+
+    W1 <= W1_FLOOR is floored at W1_FLOOR in both ``init_gains`` and the random draw
+    (:func:`floor_w1`), so every random starting point can also be given by hand.
+    """
+    if init_gains is not None:
+        return floor_w1(init_gains)
     if init == "chapter":
         return CHAPTER_INITIAL_W
     if init == "random":
-        return random_initial_gains(np.random.default_rng([seed, 1]))
+        return random_initial_gains(np.random.default_rng([check_seed(seed), 1]))
     raise ParameterError(f"init must be 'chapter' or 'random', got {init!r}")

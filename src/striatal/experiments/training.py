@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
+from striatal.experiments.spec import floor_w1, initial_gains
 from striatal.io.files import check_out_dir
 from striatal.io.rundir import (
     RUN_FILES,
@@ -37,19 +38,16 @@ from striatal.learners import (
     default_config,
     initial_state,
     learn,
-    random_initial_gains,
 )
 from striatal.learners.config import MAX_COUNT
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
     CHAPTER_INITIAL_THETA_C,
-    CHAPTER_INITIAL_W,
     Controller,
     Hardware,
     Plant,
     Simulation,
-    check_gains,
     check_seed,
 )
 from striatal.sim.robust import check_robust
@@ -60,7 +58,6 @@ __all__ = [
     "DEFAULT_CHECKPOINT_EVERY",
     "RESUME_MAY_CHANGE",
     "Run",
-    "initial_gains",
     "simulate",
     "train",
 ]
@@ -164,32 +161,6 @@ def _check_train_arguments(args: dict[str, Any]) -> None:
     for name in ("on_trial", "should_stop"):
         if args[name] is not None and not callable(args[name]):
             raise ParameterError(f"{name} must be a function, got {args[name]!r}")
-
-
-def floor_w1(gains: Sequence[float]) -> tuple[float, ...]:
-    """The six gains with W1 floored at W1_FLOOR = 0.001, the guard of sqrt(W1 g) (eq 22).
-
-    The one treatment of W1 <= 0 in W(0), for ``init_gains`` as for ``init="random"``
-    (which draws W1 uniformly in [-1, 1] and floors it the same way; docs/paper-notes.md
-    section 11). Other values of W are checked (finite, six of them) and kept.
-    """
-    w = check_gains(gains, need_positive_w1=False)
-    return (max(w[0], W1_FLOOR), *w[1:])
-
-
-def initial_gains(init: str, seed: int, init_gains: Sequence[float] | None = None) -> tuple:
-    """W(0): ``init_gains``, the chapter's ("chapter") or uniform in [-1, 1]^6 ("random").
-
-    W1 <= W1_FLOOR is floored at W1_FLOOR in both ``init_gains`` and the random draw
-    (:func:`floor_w1`), so every random starting point can also be given by hand.
-    """
-    if init_gains is not None:
-        return floor_w1(init_gains)
-    if init == "chapter":
-        return CHAPTER_INITIAL_W
-    if init == "random":
-        return random_initial_gains(np.random.default_rng([check_seed(seed), 1]))
-    raise ParameterError(f"init must be 'chapter' or 'random', got {init!r}")
 
 
 def _fresh_setup(
