@@ -188,3 +188,17 @@ def test_pass_probability_runs_its_trials_on_the_hardware_given() -> None:
 def test_evaluate_prints_the_motor(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["evaluate", "--draws", "2", "--hold", "force", "--track", "20"]) == 0
     assert "motor: force held; max force: none; track: 20 m" in capsys.readouterr().out
+
+
+def test_a_report_states_the_success_test_it_applied(chapter_report) -> None:  # type: ignore[no-untyped-def]
+    from striatal.params import SuccessTest
+
+    stated = chapter_report.to_dict()["success_test"]
+    assert stated == "|theta|<0.05, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.005 at T_f"
+    assert str(SuccessTest(theta=0.1, x_dot=0.02)) == (
+        "|theta|<0.1, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.02 at T_f"
+    )
+    # the sentence is the test: a state just inside every bound passes, one outside fails
+    test = SuccessTest()
+    assert test.passed(np.array([0.049, 0.0049, 0.049, 0.0049]))
+    assert not test.passed(np.array([0.0, 0.0051, 0.0, 0.0]))

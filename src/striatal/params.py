@@ -263,6 +263,13 @@ class SuccessTest:
     def __post_init__(self) -> None:
         _require_positive_fields(self, "success bound ")
 
+    def __str__(self) -> str:
+        """The test in one line, as result files state it."""
+        return (
+            f"|theta|<{self.theta:g}, |x|<{self.x:g}, |theta_dot|<{self.theta_dot:g}, "
+            f"|x_dot|<{self.x_dot:g} at T_f"
+        )
+
     def passed(self, state: np.ndarray) -> bool:
         """True if ``state`` = [x, x_dot, theta, theta_dot] (theta wrapped) passes every bound."""
         s = np.asarray(state, dtype=float)

@@ -8,7 +8,7 @@ import sys
 from striatal.cli import options, progress
 from striatal.errors import ParameterError
 from striatal.io.files import dumps_json
-from striatal.params import Controller, Plant, Simulation
+from striatal.params import Controller, Plant, Simulation, SuccessTest
 
 DESCRIPTION = (
     "Run DRAWS noisy trials of the chapter's protocol (the Gaussian policy of eq 5, sigma "
@@ -89,9 +89,7 @@ def run(args: argparse.Namespace) -> int:
         out = res.to_dict()
         out["duration"] = sim.duration
         out["hardware"] = hardware.to_dict()
-        out["success_test"] = (
-            "|theta|<0.05, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.005 at T_f, on the noisy trial"
-        )
+        out["success_test"] = f"{SuccessTest()}, on the noisy trial"
         sys.stdout.write(dumps_json(out))
         return 0
     lo, hi = res.rate_ci

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 from striatal.cli import progress
 from striatal.cli.helpformat import default_note
 from striatal.errors import ParameterError
-from striatal.params import CHAPTER_THETA0, Simulation, check_seed
+from striatal.params import CHAPTER_THETA0, Simulation, SuccessTest, check_seed
 
 if TYPE_CHECKING:
     from striatal.neural.network import NetworkConfig
@@ -180,7 +180,7 @@ def run(args: argparse.Namespace) -> int:
             "nengo_optimize": config.optimize,
         },
         "integrator": "kernel.rk4_step every 1 ms of network time, u held over the step",
-        "success_test": "|theta|<0.05, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.005 at T_f",
+        "success_test": str(SuccessTest()),
         "upright_test": "|theta| < 0.1 at every 1-ms step of the last 10 s",
     }
     if args.out is not None:

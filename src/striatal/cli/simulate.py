@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from striatal.cli import options
 from striatal.errors import ParameterError
 from striatal.io.files import array_rows, check_out_dir, csv_stream, dumps_json, write_text_set
-from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation
+from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simulation, SuccessTest
 
 if TYPE_CHECKING:
     from striatal.sim.robust import RobustReport
@@ -71,7 +71,7 @@ def settings_of(
         "held over each step",
         "hardware": hardware.to_dict(),
         "policy": "mean (no exploration noise)",
-        "success_test": "|theta|<0.05, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.005 at T_f",
+        "success_test": str(SuccessTest()),
     }
 
 

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation
+from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation, SuccessTest
 from striatal.sim.batch import TrialRequest
 from striatal.sim.rollout import NO_PROTOCOL, SensorNoise, simulate
 
@@ -167,7 +167,7 @@ class RobustReport:
             "controller": self.controller.to_dict(),
             "nominal_plant": self.plant.to_dict(),
             "policy": "mean (no exploration noise)",
-            "success_test": "|theta|<0.05, |x|<0.05, |theta_dot|<0.005, |x_dot|<0.005 at T_f",
+            "success_test": str(SuccessTest()),
             "cases": [c.to_dict() for c in self.cases],
         }
 
