@@ -202,3 +202,14 @@ def test_a_report_states_the_success_test_it_applied(chapter_report) -> None:  #
     test = SuccessTest()
     assert test.passed(np.array([0.049, 0.0049, 0.049, 0.0049]))
     assert not test.passed(np.array([0.0, 0.0051, 0.0, 0.0]))
+
+
+def test_a_case_with_sensor_noise_is_refused_not_run_without_it() -> None:
+    from striatal.errors import ParameterError
+    from striatal.sim.robust import Perturbation
+
+    noisy = Perturbation("noisy", x_std=0.01, theta_std=0.01)
+    with pytest.raises(ParameterError, match="sensor noise"):
+        run_case(Controller(), noisy)
+    with pytest.raises(ParameterError, match="sensor noise"):
+        check_robust(Controller(), cases=(ROBUST_CASES[0], noisy))

@@ -119,11 +119,11 @@ class Run:
             "simulations": self.state.simulations,
             "simulated_seconds": self.state.simulated_seconds,
             "settings": self.settings,
+            "mean_policy_success": self.mean_policy_success,
+            "mean_policy_final_state": list(self.mean_policy_final_state),
+            "positive_rewards": self.state.n_positive,
+            "run_id": self.run_id,
         }
-        payload["mean_policy_success"] = self.mean_policy_success
-        payload["mean_policy_final_state"] = list(self.mean_policy_final_state)
-        payload["positive_rewards"] = self.state.n_positive
-        payload["run_id"] = self.run_id
         if self.robust_report is not None:
             # the learned controller run through the whole set again (not in the budget)
             payload["robust"] = self.robust_report

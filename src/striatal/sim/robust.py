@@ -188,6 +188,11 @@ def run_case(
 ) -> CaseResult:
     """The mean-policy run of one case: the true plant is ``plant`` scaled by the case,
     the controller's model is ``plant`` itself (default: the chapter's plant)."""
+    if case.sensor.active:
+        raise ParameterError(
+            f"robust case {case.name!r} has sensor noise: the robustness set runs noise-free "
+            "(striatal robustness runs conditions with sensor noise)"
+        )
     nominal = plant or Plant()
     hw = hardware or robust_hardware()
     sim = case.sim(duration=duration, dt=dt)
