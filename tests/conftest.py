@@ -1,12 +1,27 @@
-"""Shared fixtures."""
+"""Shared fixtures, and the ways a test runs the ``striatal`` command.
+
+- the ``cli`` fixture: in this process through ``main``, output captured by capsys;
+- :func:`cli_in_process`: the same without a fixture (for hypothesis tests and module
+  fixtures), an escaping exception returned as exit 1 with its traceback;
+- :func:`cli_process` / :func:`cli_process_env`: ``python -m striatal`` in a fresh
+  process, as a user runs it.
+"""
 
 from __future__ import annotations
 
+import io
 import os
+import signal
+import subprocess
+import sys
+import traceback
+from contextlib import redirect_stderr, redirect_stdout
+from typing import NamedTuple
 
 import pytest
 from hypothesis import settings
 
+from striatal.cli import main
 from striatal.params import Plant, Simulation
 
 # `pytest --hypothesis-profile=floor` (tests/test_floor.py): no per-example deadline,
@@ -35,8 +50,6 @@ class Cli:
         self._capsys = capsys
 
     def __call__(self, *argv: object) -> tuple[int, str, str]:
-        from striatal.cli import main
-
         self._capsys.readouterr()  # what earlier calls printed is not this call's
         code = main([str(a) for a in argv])
         out, err = self._capsys.readouterr()
@@ -47,3 +60,53 @@ class Cli:
 def cli(capsys: pytest.CaptureFixture[str]) -> Cli:
     """The shared way to run a command in a test: ``code, out, err = cli("train", ...)``."""
     return Cli(capsys)
+
+
+class Ran(NamedTuple):
+    rc: int
+    out: str
+    err: str
+
+
+def cli_in_process(*argv: str) -> Ran:
+    """``striatal ARGV`` through the CLI's own ``main``; an escaping exception is a traceback."""
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err):
+        try:
+            rc = main(list(argv))
+        except SystemExit as exc:
+            rc = int(exc.code or 0)
+        except Exception:
+            rc = 1
+            err.write(traceback.format_exc())
+    return Ran(rc, out.getvalue(), err.getvalue())
+
+
+def default_sigint() -> None:
+    # a child started from a shell that ignores SIGINT would inherit that
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def cli_process(*argv: str) -> Ran:
+    """``python -m striatal ARGV`` in a fresh process, as a user runs it."""
+    r = subprocess.run(
+        [sys.executable, "-m", "striatal", *argv],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        preexec_fn=default_sigint,
+    )
+    return Ran(r.returncode, r.stdout, r.stderr)
+
+
+def cli_process_env(env: dict[str, str], *argv: str) -> Ran:
+    """:func:`cli_process` with ``env`` added to the environment; output read as bytes."""
+    r = subprocess.run(
+        [sys.executable, "-m", "striatal", *argv],
+        capture_output=True,
+        timeout=300,
+        env={**os.environ, **env},
+        preexec_fn=default_sigint,
+    )
+    decode = env.get("PYTHONIOENCODING", "utf-8")
+    return Ran(r.returncode, r.stdout.decode(decode), r.stderr.decode(decode))

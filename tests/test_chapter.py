@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import cli_process
 
 from striatal.errors import ParameterError
 from striatal.learners import (
@@ -148,15 +149,9 @@ def test_invalid_configs_raise() -> None:
             LearnerConfig(**kw)  # type: ignore[arg-type]
 
 
-def cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "striatal", *args], capture_output=True, text=True, timeout=300
-    )
-
-
 def test_train_cli_writes_result_history_and_resumes(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    r = cli(
+    r = cli_process(
         "train",
         "--seed",
         "1",
@@ -168,8 +163,8 @@ def test_train_cli_writes_result_history_and_resumes(tmp_path: Path) -> None:
         str(out),
         "--json",
     )
-    assert r.returncode == 0, r.stderr
-    result = json.loads(r.stdout)
+    assert r.rc == 0, r.err
+    result = json.loads(r.out)
     assert result == json.loads((out / "result.json").read_text())
     for key in ("success", "trials", "W", "theta_c", "seed", "wall_seconds", "settings"):
         assert key in result
@@ -178,20 +173,20 @@ def test_train_cli_writes_result_history_and_resumes(tmp_path: Path) -> None:
     assert lines[0].startswith("trial,reward,W1,W2,W3,W4,W5,W6,theta_c,sigma")
     assert len(lines) == 1 + result["trials"]
     # resuming a finished run changes nothing
-    again = cli("train", "--resume", "--out", str(out), "--json")
-    assert again.returncode == 0, again.stderr
-    assert json.loads(again.stdout)["W"] == result["W"]
+    again = cli_process("train", "--resume", "--out", str(out), "--json")
+    assert again.rc == 0, again.err
+    assert json.loads(again.out)["W"] == result["W"]
     assert (out / "history.csv").read_text().splitlines() == lines
 
 
 def test_train_cli_truncated_checkpoint_is_a_clear_error(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    assert cli("train", "--max-trials", "5", "--out", str(out)).returncode == 0
+    assert cli_process("train", "--max-trials", "5", "--out", str(out)).rc == 0
     ck = out / "checkpoint.json"
     ck.write_text(ck.read_text()[:40])
-    r = cli("train", "--resume", "--out", str(out))
-    assert r.returncode == 2
-    assert len(r.stderr.strip().splitlines()) == 1 and "checkpoint" in r.stderr
+    r = cli_process("train", "--resume", "--out", str(out))
+    assert r.rc == 2
+    assert len(r.err.strip().splitlines()) == 1 and "checkpoint" in r.err
 
 
 # --------------------------------------------------------------------------- Python API
@@ -214,12 +209,12 @@ def test_python_api_gives_exactly_what_the_cli_gives(tmp_path: Path) -> None:
     )
     assert printed.returncode == 0, printed.stderr
     out = tmp_path / "cli"
-    r = cli(
+    r = cli_process(
         *("train", "--learner", "pgpe", "--init", "random", "--seed", "0"),
         *("--max-trials", "300", "--json", "--out", str(out)),
     )
-    assert r.returncode == 0, r.stderr
-    want = json.loads(r.stdout)
+    assert r.rc == 0, r.err
+    want = json.loads(r.out)
     assert printed.stdout.split() == [str(want["trials"]), str(want["success"])]
     import striatal
 
@@ -273,10 +268,10 @@ def test_learn_returns_its_last_state_and_lets_an_interrupt_through() -> None:
 def test_simulate_defaults_are_the_cli_defaults() -> None:
     import striatal
 
-    r = cli("simulate", "--json")
-    assert r.returncode == 0, r.stderr
+    r = cli_process("simulate", "--json")
+    assert r.rc == 0, r.err
     traj = striatal.simulate()
-    summary = json.loads(r.stdout)
+    summary = json.loads(r.out)
     assert summary["success"] is traj.outcome.success is True
     assert summary["final_state"] == list(traj.outcome.final_state)
 

@@ -4,19 +4,12 @@ from __future__ import annotations
 
 import csv
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from conftest import cli_process
 
 from striatal.cli import main
-
-
-def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "striatal", *args], capture_output=True, text=True, timeout=300
-    )
 
 
 def test_simulate_chapter_final_json(capsys: pytest.CaptureFixture[str]) -> None:
@@ -71,18 +64,18 @@ def test_simulate_out_writes_trajectory_and_summary(
 )
 def test_bad_input_is_one_line_exit_2_nothing_written(args: list[str], tmp_path: Path) -> None:
     out = tmp_path / "never"
-    r = run_cli("simulate", *args, "--out", str(out))
-    assert r.returncode == 2
-    assert r.stdout == ""
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1, r.stderr
-    assert "Traceback" not in r.stderr
+    r = cli_process("simulate", *args, "--out", str(out))
+    assert r.rc == 2
+    assert r.out == ""
+    lines = r.err.strip().splitlines()
+    assert len(lines) == 1, r.err
+    assert "Traceback" not in r.err
     assert not out.exists()
 
 
 def test_python_m_and_console_script_help() -> None:
-    r = run_cli("--help")
-    assert r.returncode == 0 and "simulate" in r.stdout
+    r = cli_process("--help")
+    assert r.rc == 0 and "simulate" in r.out
 
 
 def test_simulate_result_of_train_uses_its_gains_and_readings(

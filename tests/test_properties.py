@@ -14,22 +14,20 @@ draws fresh ones).
 
 from __future__ import annotations
 
-import io
 import json
 import math
 import os
 import shutil
 import tempfile
-from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from conftest import cli_in_process
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError
 from striatal.io.files import read_csv, read_json
 from striatal.learners import LearnerConfig
@@ -336,7 +334,7 @@ def test_simulate_with_any_numbers_runs_or_is_exit_2(parts: tuple[list[str], ...
     argv = ["simulate", "--json", *[a for part in parts for a in part]]
     if "--duration" not in argv:
         argv += ["--duration", "2"]
-    rc, out, err = cli(*argv)
+    rc, out, err = cli_in_process(*argv)
     event(f"exit {rc}")
     assert rc in (0, 2), err
     if rc == 2:
@@ -378,7 +376,7 @@ def test_train_with_any_numbers_runs_or_is_exit_2(parts: tuple[list[str], ...]) 
         argv += ["--max-trials", "2"]
     if "--duration" not in argv:
         argv += ["--duration", "2"]
-    rc, out, err = cli(*argv)
+    rc, out, err = cli_in_process(*argv)
     event(f"exit {rc}")
     assert rc in (0, 2), err
     if rc == 2:
@@ -411,21 +409,11 @@ def test_random_bytes_as_json_or_csv(data: bytes, tmp_path: Path) -> None:
         assert isinstance(rows, list)
 
 
-def cli(*argv: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
-        try:
-            rc = main(list(argv))
-        except SystemExit as exc:
-            rc = int(exc.code or 0)
-    return rc, out.getvalue(), err.getvalue()
-
-
 @pytest.fixture(scope="module")
 def checkpointed(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A finished 5-trial train run, with its checkpoint.json and history.csv."""
     out = tmp_path_factory.mktemp("ckpt") / "run"
-    rc, _, err = cli("train", "--max-trials", "5", "--seed", "1", "--out", str(out))
+    rc, _, err = cli_in_process("train", "--max-trials", "5", "--seed", "1", "--out", str(out))
     assert rc == 0, err
     return out
 
@@ -435,7 +423,7 @@ def resume_on(template: Path, checkpoint: bytes) -> tuple[int, str, str, bytes]:
         out = Path(tmp) / "run"
         shutil.copytree(template, out)
         (out / "checkpoint.json").write_bytes(checkpoint)
-        rc, stdout, err = cli("train", "--resume", "--out", str(out), "--no-progress")
+        rc, stdout, err = cli_in_process("train", "--resume", "--out", str(out), "--no-progress")
         return rc, stdout, err, (out / "checkpoint.json").read_bytes()
 
 
@@ -507,7 +495,7 @@ def robustness_on(data: bytes) -> tuple[int, str, str]:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "result.json"
         path.write_bytes(data)
-        return cli("robustness", str(path), "--repeats", "1", "--json")
+        return cli_in_process("robustness", str(path), "--repeats", "1", "--json")
 
 
 @examples(60)

@@ -17,7 +17,6 @@ from __future__ import annotations
 import ast
 import contextlib
 import csv
-import io
 import json
 import math
 import os
@@ -29,17 +28,15 @@ import subprocess
 import sys
 import tempfile
 import time
-import traceback
 from collections.abc import Callable
-from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from conftest import cli_in_process, cli_process, cli_process_env, default_sigint
 
-from striatal.cli import main
 from striatal.errors import DataFileError, ParameterError, StriatalError
 from striatal.experiments.pool import WATCHDOG_SECONDS
 from striatal.io.files import read_json
@@ -69,57 +66,6 @@ SWEEP_KILL_AFTER = 5
 
 
 # --------------------------------------------------------------------------- runners
-
-
-@dataclass(frozen=True)
-class Ran:
-    rc: int
-    out: str
-    err: str
-
-
-def cli_in_process(*argv: str) -> Ran:
-    """``striatal ARGV`` through the CLI's own ``main``; an escaping exception is a traceback."""
-    out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
-        try:
-            rc = main(list(argv))
-        except SystemExit as exc:
-            rc = int(exc.code or 0)
-        except Exception:
-            rc = 1
-            err.write(traceback.format_exc())
-    return Ran(rc, out.getvalue(), err.getvalue())
-
-
-def _default_sigint() -> None:
-    # a child started from a shell that ignores SIGINT would inherit that
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
-def cli_process(*argv: str) -> Ran:
-    """``python -m striatal ARGV`` in a fresh process, as a user runs it."""
-    r = subprocess.run(
-        [sys.executable, "-m", "striatal", *argv],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        preexec_fn=_default_sigint,
-    )
-    return Ran(r.returncode, r.stdout, r.stderr)
-
-
-def cli_process_env(env: dict[str, str], *argv: str) -> Ran:
-    """:func:`cli_process` with ``env`` added to the environment; output read as bytes."""
-    r = subprocess.run(
-        [sys.executable, "-m", "striatal", *argv],
-        capture_output=True,
-        timeout=300,
-        env={**os.environ, **env},
-        preexec_fn=_default_sigint,
-    )
-    decode = env.get("PYTHONIOENCODING", "utf-8")
-    return Ran(r.returncode, r.stdout.decode(decode), r.stderr.decode(decode))
 
 
 def snapshot(folder: Path) -> dict[str, bytes]:
@@ -773,7 +719,7 @@ def interrupt_at_start(delays: tuple[float, ...]) -> Callable[[Path], tuple[bool
                 stdout=subprocess.DEVNULL,
                 stderr=subprocess.PIPE,
                 text=True,
-                preexec_fn=_default_sigint,
+                preexec_fn=default_sigint,
             )
             time.sleep(start + delay)
             proc.send_signal(signal.SIGINT)
@@ -796,7 +742,7 @@ def interrupted_sweep(sig: signal.Signals) -> Callable[[Path], tuple[bool, str]]
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             text=True,
-            preexec_fn=_default_sigint,
+            preexec_fn=default_sigint,
         )
         deadline = time.monotonic() + 120
         while _complete_rows(out / "runs.csv") < SWEEP_KILL_AFTER:
@@ -964,7 +910,7 @@ def interrupted_train(
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             text=True,
-            preexec_fn=_default_sigint,
+            preexec_fn=default_sigint,
         )
         deadline = time.monotonic() + 120
         while _checkpoint_trials(out / "checkpoint.json") < KILL_AFTER:
@@ -1179,7 +1125,7 @@ def orphaned_workers(tmp: Path) -> tuple[bool, str]:
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
         text=True,
-        preexec_fn=_default_sigint,
+        preexec_fn=default_sigint,
     )
     workers = _wait_children(proc, 2)
     time.sleep(1.0)  # both in a learning run
@@ -1241,7 +1187,7 @@ def ray_sigterm(tmp: Path) -> tuple[bool, str]:
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             text=True,
-            preexec_fn=_default_sigint,
+            preexec_fn=default_sigint,
         )
         probes = _wait_children(proc, 1)  # Ray's handshake has begun, in a child
         time.sleep(1.0)

@@ -23,10 +23,10 @@ from typing import Any
 
 import numpy as np
 import pytest
+from conftest import cli_in_process
 from test_reliability import (
     Scenario,
     check_doc_section,
-    cli_in_process,
     library_error,
     outcome,
     params_of,
