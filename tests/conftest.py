@@ -89,18 +89,12 @@ def default_sigint() -> None:
 
 def cli_process(*argv: str) -> Ran:
     """``python -m striatal ARGV`` in a fresh process, as a user runs it."""
-    r = subprocess.run(
-        [sys.executable, "-m", "striatal", *argv],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        preexec_fn=default_sigint,
-    )
-    return Ran(r.returncode, r.stdout, r.stderr)
+    return cli_process_env({}, *argv)
 
 
 def cli_process_env(env: dict[str, str], *argv: str) -> Ran:
-    """:func:`cli_process` with ``env`` added to the environment; output read as bytes."""
+    """:func:`cli_process` with ``env`` added to the environment; output read as bytes
+    and decoded as ``PYTHONIOENCODING`` says (UTF-8 by default)."""
     r = subprocess.run(
         [sys.executable, "-m", "striatal", *argv],
         capture_output=True,
