@@ -276,10 +276,9 @@ def test_a_full_disk_on_the_second_file_keeps_the_old_pair(
 def test_stale_temporary_files_are_removed_at_the_next_write(tmp_path: Path) -> None:
     """A temp file whose writer is gone (unlocked) goes at the next write into its folder;
     one of an older striatal's names goes once an hour old; other files stay."""
-    import fcntl
     import time
 
-    from striatal.io.files import STALE_SECONDS
+    from striatal.io.files import STALE_SECONDS, path_lock
 
     dead = tmp_path / ".striatal-ab12cd34.tmp"
     dead.write_text("half")
@@ -294,8 +293,7 @@ def test_stale_temporary_files_are_removed_at_the_next_write(tmp_path: Path) -> 
     hour_ago = time.time() - STALE_SECONDS - 10
     for p in (old_name, mine):
         os.utime(p, (hour_ago, hour_ago))
-    with busy.open() as fh:
-        fcntl.flock(fh.fileno(), fcntl.LOCK_EX)
+    with path_lock(busy):  # its writer's lock, held as a live writer holds it
         write_json(tmp_path / "a.json", {"a": 1})
     left = sorted(p.name for p in tmp_path.iterdir())
     assert left == sorted(["a.json", busy.name, young_old_name.name, mine.name])

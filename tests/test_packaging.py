@@ -168,19 +168,21 @@ def test_citation_url_reader() -> None:
     assert _citation_urls("title: x\n") == {}
 
 
-def test_import_works_without_fcntl(tmp_path: Path) -> None:
-    """Only a folder lock needs POSIX: without fcntl, import and files still work."""
+def test_folder_lock_works_without_fcntl(tmp_path: Path) -> None:
+    """The folder lock is filelock's: without fcntl (not POSIX) it is filelock's soft lock,
+    which still refuses a second writer, and leaves nothing in the folder."""
     code = (
-        "import sys; sys.modules['fcntl'] = None\n"
+        "import sys, warnings; sys.modules['fcntl'] = None\n"
+        "warnings.simplefilter('ignore')\n"
         "import striatal.io.rundir as rd\n"
         "from striatal.errors import StriatalError\n"
-        "assert rd.fcntl is None\n"
-        "folder = rd.RunDir(sys.argv[1])\n"
-        "try:\n"
-        "    with folder.lock():\n"
-        "        raise SystemExit('the lock was taken')\n"
-        "except StriatalError as exc:\n"
-        "    print(exc)\n"
+        "first, second = rd.RunDir(sys.argv[1]), rd.RunDir(sys.argv[1])\n"
+        "with first.lock():\n"
+        "    try:\n"
+        "        with second.lock():\n"
+        "            raise SystemExit('the lock was taken twice')\n"
+        "    except StriatalError as exc:\n"
+        "        print(exc)\n"
     )
     out = tmp_path / "run"
     proc = subprocess.run(
@@ -191,8 +193,14 @@ def test_import_works_without_fcntl(tmp_path: Path) -> None:
         env={**os.environ, "PYTHONPATH": str(ROOT / "src")},
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
-    assert "POSIX" in proc.stdout and str(out) in proc.stdout
-    assert not out.exists(), "nothing is written when the lock cannot be taken"
+    assert "in use by another striatal process" in proc.stdout and str(out) in proc.stdout
+    assert list(out.iterdir()) == [], "the lock file is not in the folder"
+
+
+def test_no_hand_written_fcntl_locks() -> None:
+    """Locks are filelock's (portable): no module of the package uses fcntl."""
+    sources = (ROOT / "src" / "striatal").rglob("*.py")
+    assert [p for p in sources if "fcntl" in p.read_text(encoding="utf-8")] == []
 
 
 def test_lock_still_locks_with_fcntl(tmp_path: Path) -> None:

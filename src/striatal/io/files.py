@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import getpass
+import hashlib
 import io
 import json
 import math
@@ -24,13 +26,9 @@ from typing import TYPE_CHECKING, Any, TextIO
 
 if TYPE_CHECKING:
     import numpy as np
+    from filelock import FileLock
 
 from striatal.errors import DataFileError
-
-try:
-    import fcntl
-except ImportError:  # not POSIX: temporary files are not locked, and age alone marks them stale
-    fcntl = None  # type: ignore[assignment]
 
 __all__ = [
     "MAX_INPUT_BYTES",
@@ -44,6 +42,7 @@ __all__ = [
     "csv_stream",
     "csv_text",
     "dumps_json",
+    "path_lock",
     "read_csv",
     "read_json",
     "read_text",
@@ -174,7 +173,7 @@ def atomic_write_set(files: Sequence[tuple[Path, Callable[[Path], object]]]) -> 
     KeyboardInterrupt and on SIGTERM; ones that a killed process left are removed
     at the next write into their folder (:func:`remove_stale_temps`).
     """
-    temps: list[tuple[str, int, Path]] = []
+    temps: list[tuple[str, FileLock, Path]] = []
     try:
         with _removed_on_sigterm():
             for target, write in files:
@@ -182,11 +181,11 @@ def atomic_write_set(files: Sequence[tuple[Path, Callable[[Path], object]]]) -> 
             for tmp, _fd, target in temps:
                 replace_into(tmp, target)
     finally:
-        for tmp, fd, _target in temps:
+        for tmp, lock, _target in temps:
             _LIVE_TEMPS.discard(tmp)
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(tmp)
-            os.close(fd)
+            lock.release()
 
 
 #: How a temporary file of :func:`atomic_write_set` begins and ends.
@@ -199,8 +198,38 @@ _OLD_TEMP = re.compile(r"^\..+\.[a-z0-9_]{8}\.tmp$")
 _LIVE_TEMPS: set[str] = set()
 
 
-def _write_temp(target: Path, write: Callable[[Path], object]) -> tuple[str, int, Path]:
-    """(temporary file, its locked descriptor, ``target``): ``write`` done and fsynced."""
+def _lock_folder() -> Path:
+    """The folder of striatal's lock files: one per user, in the system's temporary folder.
+
+    A lock file never goes into a user's folder, so a folder in use holds only its own
+    files, and a refused second writer leaves nothing there.
+    """
+    try:
+        user = getpass.getuser()
+    except Exception:  # no user name in the environment or the password database
+        user = str(os.getpid())
+    folder = Path(tempfile.gettempdir()) / f"striatal-locks-{re.sub(r'[^A-Za-z0-9_.-]', '_', user)}"
+    folder.mkdir(mode=0o700, exist_ok=True)
+    return folder
+
+
+def path_lock(path: str | os.PathLike[str]) -> FileLock:
+    """The :class:`filelock.FileLock` that stands for ``path`` (a folder or a temporary file).
+
+    The lock file is named by a hash of ``path``'s resolved form, so every process that
+    names one place, by whatever spelling (a link, a relative path), takes one lock. The
+    lock goes away with its process, even after SIGKILL (the operating system's lock on
+    an open file).
+    """
+    from filelock import FileLock  # here, not at the top: ``striatal --help`` stays fast
+
+    key = os.path.realpath(os.fspath(path))
+    digest = hashlib.sha256(key.encode("utf-8", "surrogateescape")).hexdigest()[:32]
+    return FileLock(_lock_folder() / f"{digest}.lock", timeout=0)
+
+
+def _write_temp(target: Path, write: Callable[[Path], object]) -> tuple[str, FileLock, Path]:
+    """(temporary file, its held lock, ``target``): ``write`` done and fsynced."""
     check_no_dangling_link(target.parent)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
@@ -209,12 +238,17 @@ def _write_temp(target: Path, write: Callable[[Path], object]) -> tuple[str, int
     except OSError as exc:
         raise DataFileError(f"cannot write {target}: {exc.strerror or exc}") from None
     _LIVE_TEMPS.add(tmp)
+    from filelock import Timeout
+
+    lock = path_lock(tmp)
     try:
         try:
-            if fcntl is not None:
-                with contextlib.suppress(OSError):  # a file system without locks
-                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            os.fchmod(fd, 0o666 & ~_umask())
+            with contextlib.suppress(OSError, Timeout):  # no lock folder: age marks it stale
+                lock.acquire()
+            try:
+                os.fchmod(fd, 0o666 & ~_umask())
+            finally:
+                os.close(fd)
             write(Path(tmp))
             with open(tmp, "rb") as fh:
                 os.fsync(fh.fileno())
@@ -225,9 +259,9 @@ def _write_temp(target: Path, write: Callable[[Path], object]) -> tuple[str, int
         _LIVE_TEMPS.discard(tmp)
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
-        os.close(fd)
+        lock.release()
         raise
-    return tmp, fd, target
+    return tmp, lock, target
 
 
 def remove_stale_temps(folder: Path, *, now: float | None = None) -> list[str]:
@@ -248,7 +282,7 @@ def remove_stale_temps(folder: Path, *, now: float | None = None) -> list[str]:
         if not name.endswith(TEMP_SUFFIX) or not entry.is_file(follow_symlinks=False):
             continue
         try:
-            if name.startswith(TEMP_PREFIX) and fcntl is not None:
+            if name.startswith(TEMP_PREFIX):
                 if name in {os.path.basename(t) for t in _LIVE_TEMPS}:
                     continue
                 if not _unlocked(entry.path):
@@ -267,13 +301,14 @@ def remove_stale_temps(folder: Path, *, now: float | None = None) -> list[str]:
 
 def _unlocked(path: str) -> bool:
     """Whether no process holds the lock of the temporary file ``path``."""
-    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    from filelock import Timeout
+
+    lock = path_lock(path)
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
+        lock.acquire()
+    except Timeout:
         return False
-    finally:
-        os.close(fd)
+    lock.release()
     return True
 
 

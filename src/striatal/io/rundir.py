@@ -25,16 +25,16 @@ import contextlib
 import hashlib
 import json
 import math
-import os
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from striatal.errors import DataFileError, ParameterError, StriatalError
+from striatal.errors import DataFileError, ParameterError
 from striatal.io.files import (
     atomic_write_text,
     csv_text,
+    path_lock,
     read_csv,
     read_json,
     read_text,
@@ -52,11 +52,6 @@ from striatal.learners import (
 from striatal.learners.state import history_columns
 from striatal.params import Controller, Plant, Simulation, check_seed
 from striatal.sim.rollout import Protocol
-
-try:
-    import fcntl
-except ImportError:  # not POSIX: everything but RunDir.lock still works
-    fcntl = None  # type: ignore[assignment]
 
 __all__ = [
     "CHECKPOINT",
@@ -200,32 +195,28 @@ class RunDir:
     # -- one process at a time
     @contextlib.contextmanager
     def lock(self) -> Iterator[None]:
-        """Hold an exclusive lock on the folder (``fcntl.flock``) or raise DataFileError.
+        """Hold an exclusive lock on the folder or raise DataFileError.
 
-        The lock is on the folder itself (no lock file is left behind) and goes away
-        with the process, even after SIGKILL. Needs a POSIX system (``fcntl``); elsewhere
-        it raises StriatalError before touching the folder.
+        A :class:`filelock.FileLock` (:func:`striatal.io.files.path_lock`): its lock file
+        is outside the folder, so nothing is left behind in it, and the lock goes away
+        with the process, even after SIGKILL.
         """
-        if fcntl is None:
-            raise StriatalError(
-                f"cannot lock output folder {self.path}: folder locks need a POSIX system "
-                "(Linux, macOS); this Python has no fcntl module"
-            )
+        from filelock import Timeout
+
         try:
             self.path.mkdir(parents=True, exist_ok=True)
-            fd = os.open(self.path, os.O_RDONLY)
+            lock = path_lock(self.path)
+            lock.acquire()
+        except Timeout:
+            raise DataFileError(
+                f"output folder {self.path} is in use by another striatal process"
+            ) from None
         except OSError as exc:
             raise DataFileError(f"cannot use output folder {self.path}: {exc.strerror}") from None
         try:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                raise DataFileError(
-                    f"output folder {self.path} is in use by another striatal process"
-                ) from None
             yield
         finally:
-            os.close(fd)
+            lock.release()
 
     def clear(self) -> None:
         """Remove a previous run's checkpoint and result (a fresh start over an old run)."""
