@@ -1340,7 +1340,7 @@ SCENARIOS: tuple[Scenario, ...] = (
     S("neg-list", "bad input", "`striatal sweep --alpha-grid -1,2`",
       "exit 2, one line naming alpha (-1,2 is the grid, not an option)",
       usage_error(("sweep", "--alpha-grid", "-1,2", "--seeds", "1", "--out", "OUT"),
-                  says="alpha must be")),
+                  says="--alpha-grid must be a list of finite numbers in [0,")),
     # ---- a stdout that is not UTF-8 (issue 16, item 13)
     S("latin-1", "bad input", "`PYTHONIOENCODING=latin-1 striatal interpret --chapter-final`",
       "exit 0; what latin-1 cannot hold printed as an escape", non_utf8_stdout("latin-1")),

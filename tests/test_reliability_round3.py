@@ -360,23 +360,23 @@ ROUND3: tuple[Scenario, ...] = (
       "`\"123456\"` (was read as the gains 1..6)", "exit 2, one line naming W",
       usage_error(("simulate", "--result", "OUT/result.json", "--duration", "5"),
                   prepare=_edited(_trained(), "result.json", lambda d: d.update(W="123456")),
-                  says="W must be a list of six numbers")),
+                  says="field W: input should be a valid list")),
     S("result-w-text-figure", "bad file", "`striatal figure --result result.json`, W as above",
       "exit 2, one line naming W",
       usage_error(("figure", "--result", "OUT/result.json", "--out", "OUT/f.png"),
                   prepare=_edited(_trained(), "result.json", lambda d: d.update(W="123456")),
-                  says="W must be a list of six numbers")),
+                  says="field W: input should be a valid list")),
     S("result-theta-c-text", "bad file", "`striatal evaluate --result result.json` whose "
       "`\"theta_c\"` is `\"0.6\"`", "exit 2, one line naming theta_c",
       usage_error(("evaluate", "--result", "OUT/result.json"),
                   prepare=_edited(_trained(), "result.json", lambda d: d.update(theta_c="0.6")),
-                  says="theta_c must be a number")),
+                  says="field theta_c: input should be a valid number")),
     S("result-w-bool", "bad file", "`striatal interpret result.json` whose `\"W\"` holds "
       "`true`", "exit 2, one line naming W",
       usage_error(("interpret", "OUT/result.json"),
                   prepare=_edited(_trained(), "result.json",
                                   lambda d: d["W"].__setitem__(0, True)),
-                  says="W must be a list of six numbers")),
+                  says="field W.0: input should be a valid number")),
     S("resume-gamma-text", "bad file", "`striatal train --resume`, checkpoint `\"gamma\": "
       "\"0.9\"` (was an 82-line Numba TypingError)", "exit 2, one line naming gamma",
       usage_error(("train", "--resume", "--out", "OUT", "--no-progress"),
@@ -432,7 +432,8 @@ ROUND3: tuple[Scenario, ...] = (
       library_error(lambda _: train(action_every=10**20, max_trials=1), ParameterError)),
     S("seeds-billion", "bad input", "`striatal sweep --seeds 1000000000` (memory grew while the "
       "seed sequences were spawned)", "exit 2, one line naming --seeds, at once",
-      usage_error(("sweep", "--seeds", "1000000000", "--out", "OUT"), says="--seeds must be")),
+      usage_error(("sweep", "--seeds", "1000000000", "--out", "OUT"),
+                  says="--seeds: must be a whole number in [1, 100,000]")),
     S("seeds-overflow", "bad input", "`striatal ablation --seeds 10**30` (was an OverflowError)",
       "exit 2, one line naming --seeds",
       usage_error(("ablation", "--seeds", str(10**30), "--out", "OUT"), says="argument --seeds")),
@@ -446,13 +447,13 @@ ROUND3: tuple[Scenario, ...] = (
       usage_error(("curves", "OUT/history.csv", "--out", "OUT/c.png"),
                   prepare=_edited(_trained(), "result.json",
                                   _settings_entry("learner", {"a": 1})),
-                  says="learner must be a name")),
+                  says="its settings: field learner: input should be a valid string")),
     S("learner-dict-interpret", "bad file", "`striatal interpret R/result.json`, the same",
       "exit 2, one line naming the learner",
       usage_error(("interpret", "OUT/result.json"),
                   prepare=_edited(_trained(), "result.json",
                                   _settings_entry("learner", {"a": 1})),
-                  says="learner must be a name")),
+                  says="field settings.learner: input should be a valid string")),
     S("api-action-every-0", "bad input", "`striatal.simulate(action_every=0)` (was "
       "ZeroDivisionError)", "ParameterError naming action_every",
       library_error(lambda _: simulate(action_every=0), ParameterError)),
@@ -483,7 +484,8 @@ ROUND3: tuple[Scenario, ...] = (
     S("connect-timeout-inf", "bad input", "`striatal sweep --backend ray --address "
       "127.0.0.1:1 --connect-timeout inf`", "exit 2, one line saying finite",
       usage_error(("sweep", "--backend", "ray", "--address", "127.0.0.1:1", "--connect-timeout",
-                   "inf", "--seeds", "1", "--out", "OUT"), says="finite number of seconds")),
+                   "inf", "--seeds", "1", "--out", "OUT"),
+                  says="--connect-timeout: must be a finite number")),
     S("history-bom", "bad file", "`striatal curves history.csv`, the file starting with a UTF-8 "
       "byte-order mark", "read as without it", bom_history),
     S("enospc-simulate", "bad file", "`striatal simulate --duration 5 --out DIR` on a full disk "

@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any
 
 from striatal.cli import options
-from striatal.errors import DataFileError, ParameterError
-from striatal.io.files import dumps_json, read_json, write_json
+from striatal.errors import ParameterError
+from striatal.io.files import dumps_json, write_json
 
 DESCRIPTION = (
     "Read summary.json of one or more sweeps (a folder or the file itself), print one "
@@ -19,34 +19,6 @@ DESCRIPTION = (
     "exact test, McNemar's on the shared seeds); optionally write the rows as JSON. Run "
     "the arms with 'striatal sweep --baselines lqr,hand,random,cmaes'."
 )
-
-#: Fields every arm must have, with the JSON types each may take (None: JSON null).
-_FIELDS: dict[str, tuple[type, ...]] = {
-    "arm": (str,),
-    "init": (str,),
-    "method": (str,),
-    "runs": (int,),
-    "success_rate": (int, float, type(None)),
-    "unsolved_share": (int, float, type(None)),
-    "trials_median": (int, float, type(None)),
-}
-#: Optional fields, checked when present.
-_OPTIONAL: dict[str, tuple[type, ...]] = {
-    "role": (str,),
-    "learner": (str,),
-    "success_rate_ci": (list, type(None)),
-    "simulations_median": (int, float, type(None)),
-    "simulations_median_ci": (list, type(None)),
-    "simulations_iqm": (int, float, type(None)),
-    "simulations_iqm_ci": (list, type(None)),
-    "simulations_total": (int, type(None)),
-    "mean_policy_success_rate": (int, float, type(None)),
-    "trials_q1": (int, float, type(None)),
-    "trials_q3": (int, float, type(None)),
-    "pass_rate_W0_mean": (int, float, type(None)),
-    "pass_rate_mean": (int, float, type(None)),
-    "wall_seconds_total": (int, float, type(None)),
-}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -59,51 +31,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _check_fields(obj: dict[str, Any], where: str) -> None:
-    for name in _FIELDS:
-        if name not in obj:
-            raise DataFileError(f"{where} has an arm without {name!r}")
-    for name, types in (*_FIELDS.items(), *_OPTIONAL.items()):
-        if name not in obj:
-            continue
-        v = obj[name]
-        if isinstance(v, bool) or not isinstance(v, types):
-            raise DataFileError(
-                f"{where}: arm field {name!r} is {type(v).__name__} {v!r:.40}, "
-                f"expected {' or '.join('null' if t is type(None) else t.__name__ for t in types)}"
-            )
-        if isinstance(v, list) and (
-            len(v) != 2 or any(isinstance(x, bool) or not isinstance(x, int | float) for x in v)
-        ):
-            raise DataFileError(f"{where}: arm field {name!r} must be [low, high], got {v!r:.40}")
-
-
 def load_summary(path: Path) -> dict[str, Any]:
-    """A sweep's summary.json (from its folder or the file), checked for its arms and
-    the types of their fields."""
-    p = path / "summary.json" if path.is_dir() else path
-    data = read_json(p, what="sweep summary")
-    if not isinstance(data, dict) or not isinstance(data.get("arms"), list):
-        raise DataFileError(f"{p} is not the summary.json of a striatal sweep")
-    for a in data["arms"]:
-        if not isinstance(a, dict):
-            raise DataFileError(f"{p} has an arm that is not an object")
-        _check_fields(a, str(p))
-    pairs = data.get("learner_vs_control", [])
-    if not isinstance(pairs, list) or not all(
-        isinstance(c, dict)
-        and isinstance(c.get("arm"), str)
-        and isinstance(c.get("control"), str)
-        and isinstance(c.get("init"), str)
-        and isinstance(c.get("fisher"), dict)
-        and isinstance(c["fisher"].get("p_value"), int | float)
-        and isinstance(c.get("mcnemar"), dict | type(None))
-        for c in pairs
-    ):
-        pairs = []  # a summary from before the tests were recorded: no comparison to print
-    data["learner_vs_control"] = pairs
-    settings = data.get("settings", {})
-    data["settings"] = settings if isinstance(settings, dict) else {}
+    """A sweep's summary.json (from its folder or the file), read through its schema
+    (:func:`striatal.io.schema.read_summary`: types, rates in [0, 1], counts >= 0 and
+    consistent, arms unique)."""
+    from striatal.io.schema import read_summary
+
+    data = read_summary(path)
+    data["settings"] = data.get("settings") or {}
+    data["learner_vs_control"] = data.get("learner_vs_control") or []
     return data
 
 

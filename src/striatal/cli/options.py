@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from striatal import arguments
 from striatal.cli import config
 from striatal.cli.helpformat import default_note
 from striatal.errors import ParameterError
@@ -262,11 +263,16 @@ def add_worker_arguments(
     )
     group.add_argument(
         "--connect-timeout",
-        type=float,
+        type=arguments.cli_type("connect_timeout"),
         default=connect_timeout,
         help="give up on a Ray address that accepts no connection after this many seconds",
     )
-    group.add_argument("--workers", type=int, default=config.WORKERS, help="local worker processes")
+    group.add_argument(
+        "--workers",
+        type=arguments.cli_type("workers"),
+        default=config.WORKERS,
+        help="local worker processes",
+    )
 
 
 def check_worker_arguments(args: argparse.Namespace) -> None:

@@ -40,13 +40,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _arm_specs(folder: Path) -> dict[str, Any]:
     """The ``settings.arms`` of ``folder``'s summary.json ({} when the sweep wrote none
     or it records no arms: the legend then uses the arm names)."""
-    from striatal.io.files import read_json
+    from striatal.io.schema import read_summary
 
     path = folder / "summary.json"
     if not path.exists():
         return {}
-    data = read_json(path, what="sweep summary")
-    settings = data.get("settings") if isinstance(data, dict) else None
+    data = read_summary(path)
+    settings = data.get("settings")
     arms = settings.get("arms") if isinstance(settings, dict) else None
     return arms if isinstance(arms, dict) else {}
 

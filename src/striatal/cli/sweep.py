@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from striatal import arguments
 from striatal.cli import config, learner_options, options
 from striatal.cli.lists import CommaList
 from striatal.experiments import baselines, pool, report, runner, sweeps
@@ -30,9 +31,17 @@ DESCRIPTION = (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("sweep")
     g.add_argument(
-        "--seeds", type=int, default=sweeps.SEEDS, help="number of seeds N per arm and init"
+        "--seeds",
+        type=arguments.cli_type("seeds"),
+        default=sweeps.SEEDS,
+        help="number of seeds N per arm and init",
     )
-    g.add_argument("--seed", type=int, default=0, help="root seed of SeedSequence")
+    g.add_argument(
+        "--seed",
+        type=arguments.cli_type("seed"),
+        default=0,
+        help="root seed S: the runs' seeds are SeedSequence(S).spawn(N)",
+    )
     g.add_argument(
         "--init",
         action=CommaList,
@@ -42,7 +51,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "random); comma-separated",
     )
     g.add_argument(
-        "--theta-c0", type=float, default=CHAPTER_INITIAL_THETA_C, help="theta_c(0) [rad]"
+        "--theta-c0",
+        type=arguments.cli_type("theta_c0"),
+        default=CHAPTER_INITIAL_THETA_C,
+        help="theta_c(0) [rad]",
     )
     g.add_argument("--alpha-grid", action=CommaList, item=float, help="alphas (default: --alpha)")
     g.add_argument("--gamma-grid", action=CommaList, item=float, help="gammas (default: --gamma)")
@@ -51,7 +63,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     g.add_argument(
         "--eval-draws",
-        type=int,
+        type=arguments.cli_type("eval_draws"),
         default=runner.EVAL_DRAWS,
         help="noisy trials of each pass-probability estimate (W(0) and final gains of every "
         "run), counted as eval_simulations, not in the budget; 0: none",
@@ -90,6 +102,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def prepare(args: argparse.Namespace) -> sweeps.Plan:
     """The sweep the options describe (:func:`striatal.experiments.sweeps.plan`)."""
     options.check_worker_arguments(args)
+    arguments.check_all({"alpha_grid": args.alpha_grid, "gamma_grid": args.gamma_grid}, front="cli")
     return sweeps.plan(
         args.learner,
         seeds=args.seeds,

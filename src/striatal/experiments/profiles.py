@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +30,9 @@ from typing import Any
 import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
+from striatal.experiments.runs_csv import RUN_COLUMNS
 from striatal.experiments.stats import wilson_interval
+from striatal.io import schema
 from striatal.io.files import read_text
 
 __all__ = [
@@ -74,8 +75,11 @@ def read_sweep_runs(folder: Path) -> list[SweepRun]:
     """The rows of ``folder/runs.csv`` (written by ``striatal sweep``).
 
     Needs the columns ``arm``, ``seed``, ``success`` (0/1) and ``trials``; keeps
-    ``simulations``, ``simulated_seconds`` and ``init`` when present. A last line cut short
-    (a kill during a write) is dropped; any other bad line raises DataFileError.
+    ``simulations``, ``simulated_seconds`` and ``init`` when present. Each row is held to
+    its schema (:class:`striatal.io.schema.RunRow`, or :class:`~striatal.io.schema.CostRow`
+    for a file with fewer columns); a row repeated by (arm, init, seed) counts once, and
+    one that disagrees is refused. A last line cut short (a kill during a write) is
+    dropped; any other bad line raises DataFileError.
     """
     path = Path(folder) / "runs.csv"
     if not path.exists() and not path.is_symlink():
@@ -89,7 +93,9 @@ def read_sweep_runs(folder: Path) -> list[SweepRun]:
     if missing:
         raise DataFileError(f"runs file {path} lacks the column(s) {', '.join(missing)}")
     costs = [c for c in X_COLUMNS if c in header]
-    runs: list[SweepRun] = []
+    # the whole schema of a row where the file has every column, the costs otherwise
+    model = schema.RunRow if set(header) >= set(RUN_COLUMNS[:-1]) else schema.CostRow
+    parsed: list[tuple[int, dict[str, Any]]] = []
     for i, line in enumerate(lines[1:], start=2):
         try:
             if not line.endswith("\n"):
@@ -98,24 +104,31 @@ def read_sweep_runs(folder: Path) -> list[SweepRun]:
             if len(cells) != len(header):
                 raise ValueError(f"{len(cells)} cells, expected {len(header)}")
             row = dict(zip(header, cells, strict=True))
-            if row["success"] not in ("0", "1") or not row["arm"]:
-                raise ValueError(f"success must be 0 or 1, got {row['success']!r}")
-            values = {c: float(row[c]) for c in costs}
-            if not all(math.isfinite(v) and v >= 0 for v in values.values()):
-                raise ValueError(f"costs must be finite and >= 0, got {values}")
-            runs.append(
-                SweepRun(
-                    row["arm"],
-                    int(row["seed"]),
-                    row["success"] == "1",
-                    values,
-                    row.get("init", ""),
-                )
-            )
+            try:
+                model.model_validate(row)
+            except schema.ValidationError as exc:
+                raise ValueError(schema.one_line(exc, "").removeprefix(": ")) from None
+            empty = [c for c in costs if not row[c]]
+            if empty:
+                raise ValueError(f"its {empty[0]} is empty")
+            parsed.append((i, row))
         except (ValueError, StopIteration, csv.Error) as exc:
             if i == len(lines):
                 break
             raise DataFileError(f"runs file {path} line {i} is malformed: {exc}") from None
+    same = [c for c in header if c not in ("wall_seconds", "settings_id")]
+    keyed = [(i, {**r, "init": r.get("init", "")}) for i, r in parsed]
+    rows = schema.unique_rows(keyed, ("arm", "init", "seed"), f"runs file {path}", same=same)
+    runs = [
+        SweepRun(
+            r["arm"],
+            int(r["seed"]),
+            r["success"] == "1",
+            {c: float(r[c]) for c in costs},
+            r["init"],
+        )
+        for r in rows
+    ]
     return runs
 
 

@@ -1,7 +1,9 @@
 """runs.csv: one row per finished run, appended as runs finish, read back on resume.
 
-A last line that a kill cut short is dropped on reading; a row whose (arm, init, seed)
-an earlier row already has is dropped too, so no run is counted twice.
+Every row is checked against its schema (:class:`striatal.io.schema.RunRow`). A last
+line that a kill cut short is dropped on reading; a row whose (arm, init, seed) an
+earlier row already has, with the same results, is dropped too, so no run is counted
+twice; one with other results is refused.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from striatal.errors import DataFileError
+from striatal.io import schema
 from striatal.io.files import csv_text, read_text
 from striatal.params import N_GAINS
 
@@ -71,6 +74,10 @@ def row_text(row: dict[str, Any]) -> str:
 def _parse_row(cells: list[str], columns: tuple[str, ...] = RUN_COLUMNS) -> dict[str, Any]:
     if len(cells) != len(columns):
         raise ValueError(f"{len(cells)} cells, expected {len(columns)}")
+    try:
+        schema.RunRow.model_validate(dict(zip(columns, cells, strict=True)))
+    except schema.ValidationError as exc:
+        raise ValueError(schema.one_line(exc, "").removeprefix(": ")) from None
     row: dict[str, Any] = {"imagined_simulations": 0, "imagined_seconds": 0.0, "settings_id": ""}
     for name, cell in zip(columns, cells, strict=True):
         if name == "settings_id":
@@ -90,7 +97,7 @@ def _parse_row(cells: list[str], columns: tuple[str, ...] = RUN_COLUMNS) -> dict
     return row
 
 
-def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
+def read_runs(path: Path, *, max_trials: int | None = None) -> tuple[list[dict[str, Any]], str]:
     """(rows, clean text) of runs.csv; a last line that does not parse is dropped.
 
     A last line without its newline or that does not parse is what a kill during
@@ -98,7 +105,9 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
     imagined columns were recorded reads with 0 imagined trials, one written before
     ``settings_id`` with an empty id (the clean text of either has today's columns).
     A row whose (arm, init, seed) an earlier row already has is dropped (the first is
-    kept), so no run is counted twice.
+    kept) if it agrees with it (wall time aside), so no run is counted twice; one that
+    does not is refused. With ``max_trials`` (the sweep's budget), a row of more trials
+    is refused.
     """
     if not path.exists():
         return [], csv_text(RUN_COLUMNS, [])
@@ -116,7 +125,7 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
         raise DataFileError(f"runs file {path} does not have the header of a striatal sweep")
     rows: list[dict[str, Any]] = []
     kept = [lines[0]]
-    seen: set[tuple[str, str, int]] = set()
+    seen: dict[tuple[str, str, int], dict[str, Any]] = {}
     for i, line in enumerate(lines[1:], start=2):
         last = i == len(lines)
         try:
@@ -128,10 +137,21 @@ def read_runs(path: Path) -> tuple[list[dict[str, Any]], str]:
             if last:
                 break
             raise DataFileError(f"runs file {path} line {i} is malformed: {exc}") from None
+        if max_trials is not None and row["trials"] > max_trials:
+            raise DataFileError(
+                f"runs file {path} line {i}: trials {row['trials']} exceed the sweep's "
+                f"budget of {max_trials}"
+            )
         key = (row["arm"], row["init"], row["seed"])
         if key in seen:
+            schema.unique_rows(
+                [(i - 1, seen[key]), (i, row)],
+                ("arm", "init", "seed"),
+                f"runs file {path}",
+                same=[c for c in RUN_COLUMNS if c not in ("wall_seconds", "settings_id")],
+            )
             continue
-        seen.add(key)
+        seen[key] = row
         rows.append(row)
         kept.append(line)
     if columns is not RUN_COLUMNS:  # an older file: its rows again, with today's columns

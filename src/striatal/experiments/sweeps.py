@@ -15,12 +15,14 @@ The output folder is locked
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal, TextIO
 
+from striatal import arguments
 from striatal.errors import ParameterError
 from striatal.experiments import baselines as baseline_methods
 from striatal.experiments.pool import (
@@ -45,13 +47,22 @@ from striatal.experiments.spec import Init, RunSpec, initial_gains, spawn_seeds
 from striatal.io.files import atomic_write_text, check_out_dir
 from striatal.io.rundir import RunDir
 from striatal.learners import LearnerConfig, default_config, rule_of
-from striatal.learners.config import require_count
+from striatal.learners.config import (
+    Eligibility,
+    ForwardModel,
+    RewardKind,
+    SuccessOn,
+    ThetaCRule,
+    require_count,
+)
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
     CHAPTER_INITIAL_W,
+    BalanceSign,
     Controller,
     Plant,
     Simulation,
+    SwitchKind,
     check_seed,
 )
 from striatal.sim.rollout import Protocol
@@ -247,7 +258,8 @@ def _run_sweep(
 ) -> SweepResult:
     from tqdm import tqdm
 
-    from striatal.io.files import read_json, write_json
+    from striatal.io.files import write_json
+    from striatal.io.schema import read_sweep_settings
 
     rows: list[dict[str, Any]] = []
     stream: TextIO | None = None
@@ -258,7 +270,7 @@ def _run_sweep(
         spath = out / "sweep.json"
         checked = spath.exists()
         if checked:
-            old = read_json(spath, what="sweep settings")
+            old = read_sweep_settings(spath)
             # settings.options records how the sweep was asked for (an option left to its
             # default or given at that value), the rest what it computes: only that counts
             new = json_roundtrip(settings)
@@ -272,7 +284,7 @@ def _run_sweep(
                     "another --out or the same options to resume it"
                 )
         rpath = out / "runs.csv"
-        old_rows, clean = read_runs(rpath)
+        old_rows, clean = read_runs(rpath, max_trials=max_trials)
         check_row_settings(old_rows, ids, checked=checked, where=rpath)
         if not checked:
             write_json(spath, settings)
@@ -481,10 +493,18 @@ def plan(
             f"the sweep would hold {runs} runs (arms x inits x seeds), at most {MAX_RUNS}"
         )
     config = default_config(learner or "chapter", **options)
+    check_libraries(config)
     plant = Plant() if plant is None else plant
     sim = Simulation() if sim is None else sim
     if not isinstance(plant, Plant) or not isinstance(sim, Simulation):
         raise ParameterError("plant must be a striatal.Plant and sim a striatal.Simulation")
+    steps = math.ceil(sim.duration / sim.dt)
+    arguments.check_work(
+        runs * steps * (config.max_trials + 2 * eval_draws),
+        "the sweep",
+        f"{runs:,} runs x ({config.max_trials:,} trials + 2 x {eval_draws:,} draws) x "
+        f"{steps:,} steps",
+    )
     readings: dict[str, Any] = {
         "balance_sign": balance_sign,
         "switch": switch,
@@ -554,6 +574,22 @@ def plan(
     return Plan(specs, settings, config.max_trials)
 
 
+def check_libraries(config: LearnerConfig) -> None:
+    """ParameterError, before any run or file, if a library the runs need does not load
+    (not merely missing: a broken install fails only on import)."""
+    if config.learner == "forward" and config.forward_model == "generic":
+        try:
+            import sklearn.linear_model
+            import sklearn.pipeline
+            import sklearn.preprocessing  # noqa: F401
+        except Exception as exc:
+            first = (str(exc).splitlines() or [type(exc).__name__])[0][:200]
+            raise ParameterError(
+                f"--forward-model generic needs scikit-learn, which does not load ({first}): "
+                "pip install 'striatal[model]'"
+            ) from None
+
+
 def in_sample_note(settings: dict[str, Any]) -> str | None:
     """The warning for a sweep run on the root its preset was tuned on, else None."""
     root = settings.get("tuning_root")
@@ -565,46 +601,149 @@ def in_sample_note(settings: dict[str, Any]) -> str | None:
     )
 
 
+#: The learner options of :func:`sweep` (the fields of LearnerConfig but ``learner``):
+#: None keeps the learner's preset (:func:`striatal.learners.default_config`), except
+#: ``max_force`` and ``track``, where None is "no limit", as in LearnerConfig.
+LEARNER_OPTIONS = (
+    "alpha",
+    "gamma",
+    "baseline",
+    "action_every",
+    "reset_trace",
+    "eligibility",
+    "success_on",
+    "theta_c_rule",
+    "max_trials",
+    "max_step",
+    "w1_floor",
+    "reward",
+    "rpe_rate",
+    "normalise",
+    "explore",
+    "sigma_rate",
+    "decay",
+    "plant_jitter",
+    "symmetric",
+    "robust",
+    "critic_rate",
+    "td_discount",
+    "critic_decay",
+    "imagine_trials",
+    "forward_model",
+    "max_force",
+    "track",
+)
+
+
 def sweep(
     learner: str | None = None,
     *,
-    out: str | Path | None = None,
+    out: str | os.PathLike[str] | None = None,
+    seeds: int = SEEDS,
+    seed: int = 0,
+    init: str | Sequence[str] = "chapter",
+    theta_c0: float = CHAPTER_INITIAL_THETA_C,
+    alpha_grid: Sequence[float] | None = None,
+    gamma_grid: Sequence[float] | None = None,
+    control: bool = True,
+    eval_draws: int = EVAL_DRAWS,
+    baselines: Sequence[str] = (),
+    plant: Plant | None = None,
+    sim: Simulation | None = None,
+    balance_sign: BalanceSign | None = None,
+    switch: SwitchKind | None = None,
+    inhibition: float | None = None,
+    alpha: float | None = None,
+    gamma: float | None = None,
+    baseline: float | None = None,
+    action_every: int | None = None,
+    reset_trace: bool | None = None,
+    eligibility: Eligibility | None = None,
+    success_on: SuccessOn | None = None,
+    theta_c_rule: ThetaCRule | None = None,
+    max_trials: int | None = None,
+    max_step: float | None = None,
+    w1_floor: float | None = None,
+    reward: RewardKind | None = None,
+    rpe_rate: float | None = None,
+    normalise: bool | None = None,
+    explore: float | None = None,
+    sigma_rate: float | None = None,
+    decay: float | None = None,
+    plant_jitter: float | None = None,
+    symmetric: bool | None = None,
+    robust: bool | None = None,
+    critic_rate: float | None = None,
+    td_discount: float | None = None,
+    critic_decay: float | None = None,
+    imagine_trials: int | None = None,
+    forward_model: ForwardModel | None = None,
+    max_force: float | None = None,
+    track: float | None = None,
     engine: Engine = "processes",
     workers: int = 1,
     backend: Backend = "local",
     address: str | None = None,
     connect_timeout: float = CONNECT_TIMEOUT,
     progress: bool = False,
-    **arguments: Any,
 ) -> SweepResult:
     """Many learning runs over seeds, as ``striatal sweep`` runs them (same defaults).
 
-    ``learner``: a key of :data:`striatal.learners.RULES` (default "chapter"). The sweep's
-    own arguments (``seeds`` 100, root ``seed`` 0, ``init`` "chapter" or "random" or
-    both, ``theta_c0``, ``alpha_grid``, ``gamma_grid``, ``control`` True, ``eval_draws``
-    200, ``baselines`` from :data:`striatal.experiments.baseline_methods.BASELINES`, ``plant``,
-    ``sim``, the controller readings) and any :class:`striatal.learners.LearnerConfig`
-    field (``max_trials``, ``success_on``...) are those of :func:`plan`. Every arm runs
-    on the same seeds: the learner, its no-learning control and the baselines. With
-    ``out``, runs.csv, sweep.json and summary.json are written there and a rerun resumes
-    (:func:`run_sweep`). Returns the rows sorted by (arm, init, seed) and the summary.
+    ``learner``: a key of :data:`striatal.learners.RULES` (default "chapter").
+    ``seeds`` per arm and init (100), from the root ``seed`` (0); ``init`` "chapter" or
+    "random" or both; ``theta_c0`` [rad]; ``alpha_grid``, ``gamma_grid``: a grid of
+    learner arms; ``control``: the learner's no-learning control arm; ``eval_draws``
+    (200) noisy draws judging W(0) and the final W; ``baselines`` from
+    :data:`striatal.experiments.baseline_methods.BASELINES`; ``plant``, ``sim`` and the
+    controller readings. ``alpha`` ... ``track``: the
+    :class:`striatal.learners.LearnerConfig` fields, None keeping the learner's preset.
+    Every argument is checked, before anything runs or is written, against the one
+    table the command line uses (:mod:`striatal.arguments`, LearnerConfig's fields).
+    Every arm runs on the same seeds: the learner, its no-learning control and the
+    baselines. With ``out``, runs.csv, sweep.json and summary.json are written there and
+    a rerun resumes (:func:`run_sweep`). Returns the rows sorted by (arm, init, seed)
+    and the summary.
 
     >>> result = sweep(seeds=4, init="random", learner="pgpe", max_trials=50)  # doctest: +SKIP
     >>> result.summary["arms"]  # doctest: +SKIP
     """
-    if out is not None and not isinstance(out, str | os.PathLike):
+    given = dict(locals())
+    if out is not None and (
+        not isinstance(out, str | os.PathLike) or not str(os.fspath(out)).strip()
+    ):
         raise ParameterError(f"out must be a folder's path, got {out!r}")
+    checked = arguments.check_all(
+        {k: v for k, v in given.items() if k in arguments.ARGS and k not in LEARNER_OPTIONS}
+    )
+    options = {k: arguments.plain(given[k]) for k in LEARNER_OPTIONS if given[k] is not None}
     folder = None if out is None else check_out_dir(out)
-    the_plan = plan(learner, **arguments)
+    the_plan = plan(
+        learner,
+        seeds=checked["seeds"],
+        seed=checked["seed"],
+        init=checked["init"],
+        theta_c0=checked["theta_c0"],
+        alpha_grid=checked["alpha_grid"] or (),
+        gamma_grid=checked["gamma_grid"] or (),
+        control=checked["control"],
+        eval_draws=checked["eval_draws"],
+        baselines=checked["baselines"],
+        plant=plant,
+        sim=sim,
+        balance_sign=None if balance_sign is None else checked["balance_sign"],
+        switch=None if switch is None else checked["switch"],
+        inhibition=None if inhibition is None else checked["inhibition"],
+        **options,
+    )
     return run_sweep(
         the_plan.specs,
         the_plan.settings,
         out=folder,
         max_trials=the_plan.max_trials,
-        backend=backend,
-        workers=workers,
-        address=address,
-        connect_timeout=connect_timeout,
-        progress=progress,
-        engine=engine,
+        backend=checked["backend"],
+        workers=checked["workers"],
+        address=checked["address"],
+        connect_timeout=checked["connect_timeout"],
+        progress=checked["progress"],
+        engine=checked["engine"],
     )

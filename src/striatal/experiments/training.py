@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from striatal import arguments
 from striatal.errors import DataFileError, ParameterError
 from striatal.experiments.spec import floor_w1, initial_gains
 from striatal.io.files import check_out_dir
@@ -220,11 +221,8 @@ def _resume_changes(
         "balance_sign": setup.template.balance_sign,
         "switch": setup.template.switch,
         "inhibition": setup.template.inhibition,
-        **setup.config.to_dict(),
-        "robust": setup.config.robust,
-        "symmetric": setup.config.symmetric,
-        "max_force": setup.config.max_force,
-        "track": setup.config.track,
+        # every field, at its default too (to_dict leaves some of those out)
+        **{f.name: getattr(setup.config, f.name) for f in fields(setup.config)},
     }
     differ = []
     for name, value in given.items():
@@ -316,6 +314,16 @@ def train(
             "should_stop": should_stop,
         }
     )
+    # a NumPy number is the Python number it holds (np.int64(2) is a whole number)
+    seed, theta_c0, inhibition, checkpoint_every = (
+        arguments.plain(v) for v in (seed, theta_c0, inhibition, checkpoint_every)
+    )
+    options = {k: arguments.plain(v) for k, v in options.items()}
+    if seed is not None:
+        seed = arguments.check(arguments.ARGS["seed"], seed)
+    for name, value in (("theta_c0", theta_c0), ("inhibition", inhibition)):
+        if value is not None:
+            arguments.check(arguments.ARGS[name], value)
     if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, int):
         raise ParameterError(f"checkpoint_every must be a whole number, got {checkpoint_every!r}")
     if checkpoint_every < 1:

@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from striatal.errors import DataFileError, ParameterError
+from striatal.io import schema
 from striatal.io.files import (
     atomic_write_text,
     csv_text,
@@ -242,24 +243,27 @@ class RunDir:
         )
 
     def read_checkpoint(self) -> tuple[str, dict[str, Any], LearnerState, str]:
-        """(run id, settings, state, history hash) of checkpoint.json; else DataFileError."""
+        """(run id, settings, state, history hash) of checkpoint.json; else DataFileError.
+
+        Checked against :class:`striatal.io.schema.CheckpointModel`, the learner's memory
+        included (:func:`striatal.io.schema.check_memory`).
+        """
         path = self.checkpoint_path
         data = read_json(path, what="checkpoint")
+        where = f"checkpoint {path}"
         if not isinstance(data, dict) or data.get("version") != CHECKPOINT_VERSION:
             raise DataFileError(
-                f"checkpoint {path} is not a striatal train checkpoint "
-                f"(version {CHECKPOINT_VERSION})"
+                f"{where} is not a striatal train checkpoint (version {CHECKPOINT_VERSION})"
             )
+        model = schema.validated(schema.CheckpointModel, data, where)
+        learner = model.settings.get("learner")
+        if isinstance(learner, str):
+            schema.check_memory(learner, model.state, where)
         try:
             state = LearnerState.from_dict(data["state"])
-            settings = data["settings"]
-            run = str(data["run_id"])
-            digest = str(data["history_sha256"])
-        except (KeyError, TypeError, ParameterError) as exc:
-            raise DataFileError(f"checkpoint {path} is corrupted: {exc}") from None
-        if not isinstance(settings, dict):
-            raise DataFileError(f"checkpoint {path} is corrupted: its settings are not an object")
-        return run, settings, state, digest
+        except ParameterError as exc:
+            raise DataFileError(f"{where} is corrupted: {exc}") from None
+        return model.run_id, dict(model.settings), state, model.history_sha256
 
     # -- history
     def start_history(self, columns: Sequence[str]) -> None:
@@ -387,26 +391,49 @@ def read_history(path: str | Path, *, learner: str | None = None) -> History:
         if c not in columns:
             raise DataFileError(f"history {p} lacks the column {c}")
     out: list[tuple[float, ...]] = []
+    kinds = [schema.HISTORY_CELLS.get(c, "finite") for c in columns]
     for line, row in enumerate(rows, start=2):
         values = []
-        for c in columns:
-            cell = row.get(c)
-            try:
-                v = float(cell) if cell != "" else math.nan  # type: ignore[arg-type]
-            except (TypeError, ValueError):
-                raise DataFileError(
-                    f"history {p} line {line}: column {c} is not a number ({cell!r})"
-                ) from None
-            if not math.isfinite(v) and c not in ("min_abs_theta_swingup",):
-                raise DataFileError(f"history {p} line {line}: column {c} is not finite")
-            values.append(v)
+        for c, kind in zip(columns, kinds, strict=True):
+            values.append(_history_cell(row.get(c), c, kind, f"history {p} line {line}"))
         out.append(tuple(values))
+    trial = columns.index("trial")
+    numbers = [int(r[trial]) for r in out]
+    if numbers != list(range(numbers[0], numbers[0] + len(numbers))):
+        raise DataFileError(
+            f"history {p}: its trial numbers are not consecutive (a row repeated or missing)"
+        )
     if settings is None and "reward" in columns:
         # no settings beside it: the sparse reward takes only the values of eqs 24-25
         i = columns.index("reward")
         if any(r[i] not in (10.0, 0.0, -5.0) for r in out):
             reward_kind = "shaped"
     return History(learner=learner, columns=columns, rows=tuple(out), reward_kind=reward_kind)
+
+
+def _history_cell(cell: str | None, column: str, kind: str, where: str) -> float:
+    """One history.csv cell as :data:`striatal.io.schema.HISTORY_CELLS` says it may be."""
+    if cell is None:
+        raise DataFileError(f"{where}: column {column} is missing (a short row)")
+    if cell == "":
+        if kind == "empty":
+            return math.nan
+        raise DataFileError(f"{where}: column {column} is empty")
+    try:
+        v = float(cell)
+    except ValueError:
+        raise DataFileError(f"{where}: column {column} is not a number ({cell!r:.40})") from None
+    if not math.isfinite(v):
+        raise DataFileError(f"{where}: column {column} is not finite")
+    if kind == "flag" and v not in (0.0, 1.0):
+        raise DataFileError(f"{where}: column {column} must be 0 or 1, got {cell!r:.40}")
+    if kind == "count" and (v < 0 or v != int(v)):
+        raise DataFileError(
+            f"{where}: column {column} must be a whole number >= 0, got {cell!r:.40}"
+        )
+    if kind == "nonnegative" and v < 0:
+        raise DataFileError(f"{where}: column {column} must be >= 0, got {cell!r:.40}")
+    return v
 
 
 def _learner_name(value: object, where: str) -> str | None:
@@ -427,7 +454,9 @@ def _sibling_settings(history_path: Path) -> dict[str, Any] | None:
                 continue
             s = data.get("settings") if isinstance(data, dict) else None
             if isinstance(s, dict):
-                _learner_name(s.get("learner"), f"{f}, beside {history_path}: its settings")
+                schema.validated(
+                    schema.RunSettingsModel, s, f"{f}, beside {history_path}: its settings"
+                )
                 return s
     return None
 
@@ -448,22 +477,14 @@ class ResultFile:
     data: dict[str, Any]
 
 
-def _is_number(value: object) -> bool:
-    """Whether ``value`` is a number as JSON holds one (not text, not true/false)."""
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
 def result_of(data: Any, path: str | Path) -> ResultFile:
     """:func:`read_result` of already-parsed JSON ``data`` read from ``path``."""
     p = Path(path)
     where = f"result {p}" if str(path) else "result"
     if not isinstance(data, dict) or "W" not in data or "theta_c" not in data:
         raise DataFileError(f"{where} is not a striatal result.json (no W and theta_c)")
+    schema.validated(schema.ResultModel, data, where)
     W, theta_c = data["W"], data["theta_c"]
-    if not (isinstance(W, list) and len(W) == 6 and all(_is_number(w) for w in W)):
-        raise DataFileError(f"{where}: W must be a list of six numbers, got {W!r}")
-    if not _is_number(theta_c):
-        raise DataFileError(f"{where}: theta_c must be a number, got {theta_c!r}")
     settings = data.get("settings", {})
     if not isinstance(settings, dict):
         raise DataFileError(f"{where}: its settings must be an object, got {settings!r}")
