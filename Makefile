@@ -46,7 +46,7 @@ run: $(RUN_STAMP)
 	$(S) simulate --result $(OUT)/train/result.json --out $(OUT)/train/learned
 	$(S) figure --result $(OUT)/train/result.json --out $(OUT)/train/fig5.png
 	$(S) curves $(OUT)/train/history.csv --out $(OUT)/train/curves.png
-	$(S) interpret $(OUT)/train/result.json --history $(OUT)/train/history.csv \
+	$(S) interpret --result $(OUT)/train/result.json --history $(OUT)/train/history.csv \
 		| tee $(OUT)/train/interpret.txt
 	$(S) switch-figure --out $(OUT)/soft_switch.png
 	@echo "results in $(OUT)/: chapter-final/ sweep-chapter/ train/ soft_switch.png"

@@ -174,7 +174,7 @@ def test_interpret_cli_json_reads_result_and_history_beside_it(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     res = _write_run(tmp_path / "run")
-    assert main(["interpret", str(res), "--json"]) == 0
+    assert main(["interpret", "--result", str(res), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     coefs = {t["signal"]: t["coefficient"] for t in out["mu_1"]["terms"]}
     assert coefs["theta"] == pytest.approx(21.30128) and coefs["x_dot"] == pytest.approx(0.8027)
@@ -195,9 +195,9 @@ def test_interpret_cli_human_chapter_final(capsys: pytest.CaptureFixture[str]) -
 
 def test_interpret_cli_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     res = _write_run(tmp_path / "run")
-    assert main(["interpret", str(res), "--chapter-final"]) == 2
+    assert main(["interpret", "--result", str(res), "--chapter-final"]) == 2
     (tmp_path / "broken.json").write_text('{"W": [1, 2, 3]}')
-    assert main(["interpret", str(tmp_path / "broken.json")]) == 2
+    assert main(["interpret", "--result", str(tmp_path / "broken.json")]) == 2
     assert main(["interpret", "--history", str(tmp_path / "none.csv")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 3 and "none.csv" in err

@@ -1362,7 +1362,7 @@ SCENARIOS: tuple[Scenario, ...] = (
                                        "OUT/f.png"), prepare=_folder_result, says="folder")),
     S("read-huge", "bad file", "`striatal interpret FILE`, FILE 256 MiB + 1 byte",
       "exit 2, one line, nothing read",
-      usage_error(("interpret", "OUT/result.json"), prepare=_huge_result,
+      usage_error(("interpret", "--result", "OUT/result.json"), prepare=_huge_result,
                   says="larger than 256 MiB")),
     # ---- outputs that cannot be written, said before computing (issue 16, item 18)
     S("out-dangling-sim", "bad file", "`striatal simulate --out LINK`, LINK a symbolic link "

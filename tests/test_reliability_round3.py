@@ -371,9 +371,9 @@ ROUND3: tuple[Scenario, ...] = (
       usage_error(("evaluate", "--result", "OUT/result.json"),
                   prepare=_edited(_trained(), "result.json", lambda d: d.update(theta_c="0.6")),
                   says="field theta_c: input should be a valid number")),
-    S("result-w-bool", "bad file", "`striatal interpret result.json` whose `\"W\"` holds "
+    S("result-w-bool", "bad file", "`striatal interpret --result result.json` whose `\"W\"` holds "
       "`true`", "exit 2, one line naming W",
-      usage_error(("interpret", "OUT/result.json"),
+      usage_error(("interpret", "--result", "OUT/result.json"),
                   prepare=_edited(_trained(), "result.json",
                                   lambda d: d["W"].__setitem__(0, True)),
                   says="field W.0: input should be a valid number")),
@@ -448,9 +448,9 @@ ROUND3: tuple[Scenario, ...] = (
                   prepare=_edited(_trained(), "result.json",
                                   _settings_entry("learner", {"a": 1})),
                   says="its settings: field learner: input should be a valid string")),
-    S("learner-dict-interpret", "bad file", "`striatal interpret R/result.json`, the same",
+    S("learner-dict-interpret", "bad file", "`striatal interpret --result R/result.json`, the same",
       "exit 2, one line naming the learner",
-      usage_error(("interpret", "OUT/result.json"),
+      usage_error(("interpret", "--result", "OUT/result.json"),
                   prepare=_edited(_trained(), "result.json",
                                   _settings_entry("learner", {"a": 1})),
                   says="field settings.learner: input should be a valid string")),

@@ -211,6 +211,7 @@ def _args(*args: Arg) -> dict[str, Arg]:
 ARGS: dict[str, Arg] = _args(
     Arg("seeds", "count", "seeds per arm and init", low=1, high=100_000),
     Arg("seed", "count", "root seed: SeedSequence(seed).spawn(seeds)", low=0, high=2**31 - 1),
+    Arg("max_trials", "count", "learning-trial budget of a run", low=1, high=2**31 - 1),
     Arg("init", "names", "initial gains: chapter, random or both", choices=("chapter", "random"),
         min_items=1),
     Arg(
@@ -272,4 +273,5 @@ def cli_type(name: str) -> Any:
             raise argparse.ArgumentTypeError(f"must be {_what(arg)}, got {text:.40}") from None
 
     parse.__name__ = _what(arg).split(" in ")[0]
+    parse.numeric = True  # type: ignore[attr-defined]
     return parse

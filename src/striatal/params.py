@@ -60,7 +60,13 @@ HoldKind = Literal["u", "force"]
 
 
 def as_float(name: str, value: object) -> float:
-    """``float(value)``, or ParameterError naming ``name`` if it is not a number."""
+    """``float(value)``, or ParameterError naming ``name`` if it is not a number.
+
+    Text ("1.8") and true/false are not numbers, whatever ``float`` would make of them:
+    every front (keyword arguments, Gymnasium kwargs, files) is held to that here.
+    """
+    if isinstance(value, str | bytes | bytearray | bool) or type(value).__name__ == "bool_":
+        raise ParameterError(f"{name} must be a number, got {value!r}")
     try:
         return float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError, OverflowError):

@@ -13,6 +13,7 @@ import math
 import sys
 from typing import Any
 
+from striatal import arguments
 from striatal.cli import config, options
 from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
@@ -20,6 +21,7 @@ from striatal.experiments import pool, sweeps
 from striatal.experiments.ablation import VARIANT_NAMES, build, markdown_table, table_rows, variant
 from striatal.io.files import atomic_write_text, check_out_dir, dumps_json, write_json
 from striatal.io.rundir import RunDir
+from striatal.io.schema import AblationModel
 
 #: The files that ``--out DIR`` gets (its sweep's, then its own).
 OUT_FILES = ("sweep.json", "runs.csv", "summary.json", "ablation.json", "ablation.md")
@@ -34,13 +36,18 @@ DESCRIPTION = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seeds", type=int, default=sweeps.SEEDS, help="number of seeds N")
     parser.add_argument(
-        "--first-seed", type=int, default=0, help="seeds S..S+N-1 (a fresh set: S = 100)"
+        "--seeds", type=arguments.cli_type("seeds"), default=sweeps.SEEDS, help="number of seeds N"
+    )
+    parser.add_argument(
+        "--first-seed",
+        type=arguments.cli_type("seed"),
+        default=0,
+        help="seeds S..S+N-1 (a fresh set: S = 100)",
     )
     parser.add_argument(
         "--max-trials",
-        type=int,
+        type=arguments.cli_type("max_trials"),
         default=300,
         help="learning-trial budget of every variant's run (one budget for all, so the "
         "variants compare on equal terms)",
@@ -54,7 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--eval-draws",
-        type=int,
+        type=arguments.cli_type("eval_draws"),
         default=0,
         help="noisy trials of each pass-probability estimate (W(0) and final gains), "
         "counted apart as eval_simulations; 0: none",
@@ -92,10 +99,6 @@ def variant_line(name: str, s: dict[str, Any]) -> str:
 def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         check_out_dir(args.out)
-    if args.seeds < 1:
-        raise ParameterError(f"--seeds must be >= 1, got {args.seeds}")
-    if args.first_seed < 0:
-        raise ParameterError(f"--first-seed must be >= 0, got {args.first_seed}")
     options.check_worker_arguments(args)
     names = list(args.variants)
     if not names:
@@ -103,6 +106,13 @@ def run(args: argparse.Namespace) -> int:
     if len(set(names)) != len(names):
         raise ParameterError("--variants names a variant twice")
     chosen = [variant(n) for n in names]
+    steps = math.ceil(60.0 / 0.01)  # every variant's trial: T_f 60 s in steps of 10 ms
+    arguments.check_work(
+        len(chosen) * args.seeds * steps * (args.max_trials + 2 * args.eval_draws),
+        "the ablation",
+        f"{len(chosen)} variants x {args.seeds:,} seeds x ({args.max_trials:,} trials + "
+        f"2 x {args.eval_draws:,} draws) x {steps:,} steps",
+    )
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     specs, settings = build(chosen, seeds, args.max_trials, args.eval_draws)
     settings["options"] = config.recorded_options(args)
@@ -124,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
                 print(variant_line(v.name, s), file=sys.stderr, flush=True)
         table = markdown_table(rows)
         if args.out is not None:
+            AblationModel.of(data, f"{args.out / 'ablation.json'} (as written)")
             write_json(args.out / "ablation.json", data)
             atomic_write_text(args.out / "ablation.md", table)
     sys.stdout.write(dumps_json(data) if args.json else table)

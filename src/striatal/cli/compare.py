@@ -9,7 +9,7 @@ from typing import Any
 
 from striatal.cli import options
 from striatal.errors import ParameterError
-from striatal.io.files import dumps_json, write_json
+from striatal.io.files import atomic_write_text, dumps_json, write_json
 
 DESCRIPTION = (
     "Read summary.json of one or more sweeps (a folder or the file itself), print one "
@@ -24,7 +24,10 @@ DESCRIPTION = (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("summaries", nargs="+", type=Path, help="sweep folders or summary.json")
     parser.add_argument(
-        "--out", type=options.out_path, default=None, help="write the table as JSON here"
+        "--out",
+        type=options.out_path,
+        default=None,
+        help="write the table here, its format from the suffix: .json or .md (markdown)",
     )
     parser.add_argument(
         "--json", action="store_true", help="print the table as JSON (as --out writes it)"
@@ -86,8 +89,10 @@ def label_pairs(summaries: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.out is not None and not args.out.parent.is_dir():
-        raise ParameterError(f"--out {args.out}: folder {args.out.parent} does not exist")
+    if args.out is not None:
+        options.out_format(args.out, (".json", ".md"))
+        if not args.out.parent.is_dir():
+            raise ParameterError(f"--out {args.out}: folder {args.out.parent} does not exist")
     summaries = [load_summary(p) for p in args.summaries]
     arms = label_arms(summaries, [str(p) for p in args.summaries])
     arms.sort(key=lambda a: (a["init"], a["arm"]))
@@ -102,6 +107,9 @@ def run(args: argparse.Namespace) -> int:
         "settings": [s.get("settings", {}) for s in summaries],
     }
     if args.out is not None:
-        write_json(args.out, record)
+        if args.out.suffix.lower() == ".md":
+            atomic_write_text(args.out, table)
+        else:
+            write_json(args.out, record)
     sys.stdout.write(dumps_json(record) if args.json else table)
     return 0

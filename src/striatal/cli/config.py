@@ -185,8 +185,29 @@ def tokens(parser: argparse.ArgumentParser, values: Mapping[str, Any], source: s
     return words
 
 
+def _numeric(convert: Any) -> bool:
+    """Whether an option's ``type`` (or a list's item) reads a number."""
+    return convert in (int, float) or bool(getattr(convert, "numeric", False))
+
+
+def _check_not_text(action: argparse.Action, value: Any, where: str) -> None:
+    """ParameterError if a file gives text where the option takes a number: ``seeds = "2"``
+    is not the number 2 (TOML has numbers; only ``none`` of a "no limit" option is text)."""
+    convert = action.item if isinstance(action, lists.CommaList) else action.type
+    values = value if isinstance(value, list) else [value]
+    if _numeric(convert) and any(isinstance(v, str) for v in values):
+        if (
+            isinstance(value, str)
+            and value.strip().lower() == "none"
+            and getattr(convert, "takes_none", False)
+        ):
+            return
+        raise ParameterError(f"{where} must be a number, not the text {value!r:.40}")
+
+
 def _words_of(group: Sequence[argparse.Action], value: Any, where: str) -> list[str]:
     first = group[0]
+    _check_not_text(first, value, where)
     flag = first.option_strings[-1]
     if first.nargs == 0:  # a flag (store_true, or one of a pair like --normalise/--no-normalise)
         if not isinstance(value, bool):

@@ -31,6 +31,7 @@ def whole_number(text: str) -> int:
 
 
 whole_number.__name__ = "int"
+whole_number.numeric = True  # type: ignore[attr-defined]
 
 
 def bounded_int(low: int, high: int) -> Callable[[str], int]:
@@ -46,6 +47,7 @@ def bounded_int(low: int, high: int) -> Callable[[str], int]:
         return value
 
     parse.__name__ = "whole number"
+    parse.numeric = True  # type: ignore[attr-defined]
     return parse
 
 
@@ -64,4 +66,5 @@ def bounded_float(low: float, high: float, *, low_open: bool = True) -> Callable
         return value
 
     parse.__name__ = "number"
+    parse.numeric = True  # type: ignore[attr-defined]
     return parse

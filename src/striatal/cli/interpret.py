@@ -25,8 +25,13 @@ DESCRIPTION = (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "result", type=Path, nargs="?", default=None, help="result.json of striatal train"
+        "--result",
+        type=Path,
+        default=None,
+        help="take W, theta_c and the plant from this result.json of striatal train",
     )
+    # the old spelling (the file as a word): refused with one line naming --result
+    parser.add_argument("old_result", nargs="?", default=None, help=argparse.SUPPRESS)
     options.add_controller_arguments(parser, gains_required=True)
     options.add_plant_arguments(parser)
     parser.add_argument(
@@ -51,6 +56,11 @@ def build(args: argparse.Namespace) -> dict[str, Any]:
     from striatal.neural import interpret
 
     learner = "chapter"
+    if args.old_result is not None:
+        raise ParameterError(
+            f"give the result file as --result {args.old_result} (as simulate, figure, "
+            "animate and neural take it)"
+        )
     if args.result is not None:
         if args.gains is not None or args.chapter_initial or args.chapter_final:
             raise ParameterError("give either RESULT or a gain set, not both")

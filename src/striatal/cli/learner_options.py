@@ -32,10 +32,33 @@ def flag_of(f: Field[Any]) -> str:
     return "--" + f.metadata.get("flag", f.name.replace("_", "-"))
 
 
+#: The word that sets an optional number (``--track``, ``--max-force``) to "no limit".
+NONE = "none"
+
+
+def _optional(kind: Any) -> Any:
+    """The option type of an optional number field: a number, or ``none`` (no limit)."""
+
+    def parse(text: str) -> Any:
+        return NONE if text.strip().lower() == NONE else kind(text)
+
+    parse.__name__ = getattr(kind, "__name__", "number")
+    parse.numeric = True  # type: ignore[attr-defined]
+    parse.takes_none = True  # type: ignore[attr-defined]
+    return parse
+
+
 def _defaults_note(f: Field[Any], presets: dict[str, LearnerConfig]) -> str:
-    values = {name: getattr(c, f.name) for name, c in presets.items()}
+    # only the learners that read the option: another's default would be offered in vain
+    values = {
+        name: getattr(c, f.name)
+        for name, c in presets.items()
+        if f.name in getattr(RULES[name], "options", (f.name,))
+    }
+    if not values:
+        values = {name: getattr(c, f.name) for name, c in presets.items()}
     if len(set(values.values())) == 1:
-        value = values["chapter"]
+        value = next(iter(values.values()))
         return default_note("none" if value is None else default_text(value))
     return default_note(", ".join(f"{k} {default_text(v)}" for k, v in values.items()))
 
@@ -65,7 +88,7 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
     )
     presets = learner_defaults()
     for f in option_fields():
-        kind, choices, _ = field_kind(f)
+        kind, choices, optional = field_kind(f)
         flag, help_text = flag_of(f), _help(f, presets).replace("%", "%%")
         if kind is bool and "sets" in f.metadata:
             # a flag that sets the field to the opposite of its default: --carry-trace
@@ -86,7 +109,7 @@ def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
             lg.add_argument(
                 flag,
                 dest=f.name,
-                type=kind,
+                type=_optional(kind) if optional and kind is float else kind,
                 choices=choices or None,
                 metavar=f.metadata.get("metavar"),
                 help=help_text,
@@ -100,6 +123,8 @@ def learner_changes(args: argparse.Namespace) -> dict[str, Any]:
         if "sets" in f.metadata:
             if getattr(args, flag_of(f)[2:].replace("-", "_"), False):
                 changes[f.name] = f.metadata["sets"]
+        elif getattr(args, f.name, None) == NONE:
+            changes[f.name] = None  # --track none: no limit, said explicitly
         elif getattr(args, f.name, None) is not None:
             changes[f.name] = getattr(args, f.name)
     return changes

@@ -33,6 +33,17 @@ def out_path(text: str) -> Path:
     return Path(text)
 
 
+def out_format(path: Path, suffixes: tuple[str, ...]) -> str:
+    """The format of ``--out path``, taken from its suffix (one of ``suffixes``), or
+    ParameterError naming the suffixes the command writes."""
+    suffix = path.suffix.lower()
+    if suffix not in suffixes:
+        raise ParameterError(
+            f"--out {path}: the format is taken from the suffix; use {' or '.join(suffixes)}"
+        )
+    return suffix
+
+
 def add_plant_arguments(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("plant (section 2.1)")
     g.add_argument("--cart-mass", type=float, default=1.0, help="M [kg]")

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from striatal.cli import options
 from striatal.errors import ParameterError
 from striatal.io.files import dumps_json
 
@@ -26,7 +27,9 @@ DESCRIPTION = (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("sweeps", type=Path, nargs="+", metavar="SWEEP_DIR", help="sweep folders")
-    parser.add_argument("--out", type=Path, required=True, help="PNG (or .pdf/.svg)")
+    parser.add_argument(
+        "--out", type=options.out_path, default=Path("profile.png"), help="PNG (or .pdf/.svg)"
+    )
     parser.add_argument(
         "--x",
         choices=("simulations", "simulated_seconds", "trials"),

@@ -6,10 +6,12 @@ import argparse
 import sys
 from pathlib import Path
 
+from striatal import arguments
 from striatal.cli import options
 from striatal.cli.lists import CommaList
 from striatal.errors import DataFileError, ParameterError
 from striatal.io.files import atomic_write_text, dumps_json, read_json
+from striatal.io.schema import AblationModel
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant
 
 DESCRIPTION = (
@@ -30,11 +32,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME[,...]",
         help="variants of an ablation.json, one column each (default: all)",
     )
-    parser.add_argument("--repeats", type=int, default=10, help="sensor-noise runs per controller")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
+    parser.add_argument(
+        "--repeats",
+        type=arguments.cli_type("repeats"),
+        default=10,
+        help="sensor-noise runs per controller",
+    )
+    parser.add_argument(
+        "--seed", type=arguments.cli_type("seed"), default=0, help="seed of the sensor noise"
+    )
     parser.add_argument("--json", action="store_true", help="print the rows as JSON")
     parser.add_argument(
-        "--out", type=options.out_path, default=None, help="write the markdown table here"
+        "--out",
+        type=options.out_path,
+        default=None,
+        help="write the table here, its format from the suffix: .md (markdown) or .json (the rows)",
     )
 
 
@@ -42,12 +54,15 @@ def run(args: argparse.Namespace) -> int:
     from striatal.experiments import baselines
     from striatal.experiments.robustness import CONDITIONS, controller_groups, robustness_table
 
-    if args.repeats < 1:
-        raise ParameterError(f"--repeats must be >= 1, got {args.repeats}")
+    if args.out is not None:
+        options.out_format(args.out, (".md", ".json"))
     merged: dict[str, list[Controller]] = {}
     for f in args.files:
         try:
-            found = controller_groups(read_json(f, what="result"), variants=args.variants)
+            data = read_json(f, what="result")
+            if isinstance(data, dict) and "W" not in data:
+                AblationModel.of(data, f"ablation {f}")
+            found = controller_groups(data, variants=args.variants)
         except (KeyError, TypeError) as exc:
             raise DataFileError(f"{f} is not a result.json or ablation.json: {exc!r}") from None
         except ParameterError as exc:
@@ -66,8 +81,18 @@ def run(args: argparse.Namespace) -> int:
         ("chapter's final gains", [reference]),
         ("LQR baseline", [Controller(lqr_W, lqr_theta_c)]),
     ]
+    controllers = sum(len(c) for _, c in groups)
+    noisy = sum(1 for c in CONDITIONS if c.sensor.active)
+    runs = controllers * (len(CONDITIONS) - noisy + noisy * args.repeats)
+    steps = 6000  # each run: T_f 60 s in steps of 10 ms
+    arguments.check_work(
+        runs * steps,
+        "the robustness table",
+        f"{controllers:,} controllers x ({len(CONDITIONS) - noisy} conditions + {noisy} noisy "
+        f"x {args.repeats:,} repeats) x {steps:,} steps",
+    )
     table, rows = robustness_table(groups, CONDITIONS, repeats=args.repeats, seed=args.seed)
     if args.out is not None:
-        atomic_write_text(args.out, table)
+        atomic_write_text(args.out, dumps_json(rows) if args.out.suffix == ".json" else table)
     sys.stdout.write(dumps_json(rows) if args.json else table)
     return 0
