@@ -32,6 +32,7 @@ __all__ = [
     "Arg",
     "check",
     "check_all",
+    "check_learning_work",
     "check_work",
     "plain",
     "spelling",
@@ -199,6 +200,30 @@ def check_work(steps: float, what: str, how: str) -> None:
         raise ParameterError(
             f"{what} would simulate up to {steps:.3g} steps ({how}), more than the "
             f"limit of {MAX_STEPS:.0e}; ask for fewer"
+        )
+
+
+#: The most imagined control steps one real trial may start (the forward learner's
+#: ``imagine_trials`` x steps per trial): 10**9, about an hour; its default is 1.2 * 10**7.
+MAX_IMAGINED_STEPS = 10**9
+
+
+def check_learning_work(
+    runs: int, max_trials: int, imagine_trials: int, steps: int, draws: int, what: str
+) -> None:
+    """:func:`check_work` of ``runs`` learning runs of ``max_trials`` trials of ``steps``
+    steps (and ``draws`` noisy checks of W(0) and W each), and the bound of one real
+    trial's imagination (:data:`MAX_IMAGINED_STEPS`), before anything runs."""
+    check_work(
+        runs * steps * (max_trials + 2 * draws),
+        what,
+        f"{runs:,} runs x ({max_trials:,} trials + 2 x {draws:,} draws) x {steps:,} steps",
+    )
+    if imagine_trials * steps > MAX_IMAGINED_STEPS:
+        raise ParameterError(
+            f"{what}: one real trial would imagine up to {imagine_trials * steps:.3g} steps "
+            f"({imagine_trials:,} imagined trials x {steps:,} steps), more than the limit "
+            f"of {MAX_IMAGINED_STEPS:.0e}; lower --imagine-trials"
         )
 
 

@@ -106,12 +106,13 @@ def run(args: argparse.Namespace) -> int:
     if len(set(names)) != len(names):
         raise ParameterError("--variants names a variant twice")
     chosen = [variant(n) for n in names]
-    steps = math.ceil(60.0 / 0.01)  # every variant's trial: T_f 60 s in steps of 10 ms
-    arguments.check_work(
-        len(chosen) * args.seeds * steps * (args.max_trials + 2 * args.eval_draws),
+    arguments.check_learning_work(
+        len(chosen) * args.seeds,
+        args.max_trials,
+        0,
+        math.ceil(60.0 / 0.01),  # every variant's trial: T_f 60 s in steps of 10 ms
+        args.eval_draws,
         "the ablation",
-        f"{len(chosen)} variants x {args.seeds:,} seeds x ({args.max_trials:,} trials + "
-        f"2 x {args.eval_draws:,} draws) x {steps:,} steps",
     )
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     specs, settings = build(chosen, seeds, args.max_trials, args.eval_draws)

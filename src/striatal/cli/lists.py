@@ -28,6 +28,7 @@ class CommaList(argparse.Action):
         *,
         item: Callable[[str], Any] = str,
         names: Sequence[str] | None = None,
+        max_items: int = MAX_ITEMS,
         **kwargs: Any,
     ) -> None:
         if "metavar" not in kwargs:
@@ -36,6 +37,7 @@ class CommaList(argparse.Action):
         super().__init__(option_strings, dest, **kwargs)
         self.item = item
         self.names = tuple(names) if names else None
+        self.max_items = max_items
 
     def __call__(
         self,
@@ -48,10 +50,11 @@ class CommaList(argparse.Action):
 
     def parse(self, text: str) -> tuple[Any, ...]:
         """The values of ``text`` (comma-separated), converted and checked; at most
-        :data:`MAX_ITEMS` of them."""
-        if text.count(",") >= MAX_ITEMS:
+        ``max_items`` (:data:`MAX_ITEMS`) of them."""
+        if text.count(",") >= self.max_items:
             raise argparse.ArgumentError(
-                self, f"at most {MAX_ITEMS} comma-separated values, got {text.count(',') + 1}"
+                self,
+                f"at most {self.max_items:,} comma-separated values, got {text.count(',') + 1:,}",
             )
         items = []
         for part in (p.strip() for p in text.split(",")):

@@ -31,6 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--inhibition",
         action=CommaList,
         item=float,
+        # one curve and legend entry each: more than a dozen cannot be told apart, and
+        # the legend's layout grows faster than linearly in their number
+        max_items=12,
         default=(2.0, 5.0, 20.0, 50.0),
         metavar="GAMMA[,...]",
         help="strengths of lateral inhibition gamma [1/rad], one curve each; comma-separated",

@@ -498,12 +498,13 @@ def plan(
     sim = Simulation() if sim is None else sim
     if not isinstance(plant, Plant) or not isinstance(sim, Simulation):
         raise ParameterError("plant must be a striatal.Plant and sim a striatal.Simulation")
-    steps = math.ceil(sim.duration / sim.dt)
-    arguments.check_work(
-        runs * steps * (config.max_trials + 2 * eval_draws),
+    arguments.check_learning_work(
+        runs,
+        config.max_trials,
+        config.imagine_trials if config.learner == "forward" else 0,
+        math.ceil(sim.duration / sim.dt),
+        eval_draws,
         "the sweep",
-        f"{runs:,} runs x ({config.max_trials:,} trials + 2 x {eval_draws:,} draws) x "
-        f"{steps:,} steps",
     )
     readings: dict[str, Any] = {
         "balance_sign": balance_sign,

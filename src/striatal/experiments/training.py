@@ -8,6 +8,7 @@ the same W(0), the same files with ``out=``.
 
 from __future__ import annotations
 
+import math
 import numbers
 import os
 import time
@@ -177,6 +178,15 @@ def _fresh_setup(
 ) -> tuple[dict[str, Any], Setup]:
     seed = check_seed(seed)
     config = default_config(learner, **options)
+    sim = Simulation() if sim is None else sim
+    arguments.check_learning_work(
+        1,
+        config.max_trials,
+        config.imagine_trials if config.learner == "forward" else 0,
+        math.ceil(sim.duration / sim.dt) if isinstance(sim, Simulation) else 1,
+        0,
+        "the run",
+    )
     W0 = initial_gains(init, seed, init_gains)
     template = Controller(gains=W0, theta_c=theta_c0, **controller)
     plant = Plant() if plant is None else plant

@@ -82,12 +82,19 @@ def arm_label(arm: str, spec: Mapping[str, Any] | None) -> str:
 
 def arm_labels(arms: Sequence[tuple[str, str, Mapping[str, Any] | None]]) -> list[str]:
     """Labels of ``(source, arm, spec)`` triples (:func:`arm_label`); a label that
-    occurs more than once gets its source in brackets, ``random search (sweep-a)``."""
+    occurs more than once gets its source in brackets, ``random search (sweep-a)``, and
+    one that still does (the arms of a grid) its arm's name, ``learner, alpha=0.5``."""
     labels = [arm_label(arm, spec) for _, arm, spec in arms]
     counts = Counter(labels)
-    return [
+    labels = [
         f"{label} ({source})" if counts[label] > 1 else label
         for label, (source, _, _) in zip(labels, arms, strict=True)
+    ]
+    # arms of one sweep that the spec does not tell apart (a grid's alphas): by their name
+    counts = Counter(labels)
+    return [
+        f"{label}, {arm.rpartition('/')[2]}" if counts[label] > 1 else label
+        for label, (_, arm, _) in zip(labels, arms, strict=True)
     ]
 
 

@@ -1,0 +1,387 @@
+"""Round 4 of the hostile pass: each listed defect, closed by its class, with a test.
+
+The classes (docs/reliability.md): every file read through its schema
+(:mod:`striatal.io.schema`), every argument held to one table
+(:mod:`striatal.arguments`), work bounded before it starts, nothing written before
+every check. ``tests/test_fuzz.py`` tries the classes at large; these are the cases.
+"""
+
+from __future__ import annotations
+
+import csv
+import importlib.util
+import inspect
+import io
+import json
+import shutil
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from conftest import Ran, cli_in_process
+
+import striatal
+from striatal.errors import DataFileError, ParameterError
+
+
+def one_line(r: Ran, *needles: str) -> None:
+    """Exit 2 and one line on stderr holding every needle."""
+    assert r.rc == 2, (r.rc, r.err[-2000:])
+    lines = r.err.strip().splitlines()
+    assert len(lines) == 1, r.err
+    for n in needles:
+        assert n in lines[0], (n, lines[0])
+
+
+@pytest.fixture(scope="module")
+def swept(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("round4") / "sweep"
+    r = cli_in_process(
+        *("sweep", "--seeds", "2", "--max-trials", "3", "--duration", "2"),
+        *("--eval-draws", "0", "--no-progress", "--out", str(out)),
+    )
+    assert r.rc == 0, r.err
+    return out
+
+
+@pytest.fixture(scope="module")
+def forward_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("round4") / "forward"
+    r = cli_in_process(
+        *("train", "--learner", "forward", "--max-trials", "3", "--duration", "3"),
+        *("--imagine-trials", "20", "--out", str(out)),
+    )
+    assert r.rc == 0, r.err
+    return out
+
+
+def copy_of(folder: Path, tmp: Path) -> Path:
+    dest = tmp / folder.name
+    shutil.copytree(folder, dest)
+    return dest
+
+
+def edit_runs(folder: Path, change: Any) -> None:
+    """runs.csv of ``folder`` with ``change(rows)`` applied (rows: list of dicts)."""
+    path = folder / "runs.csv"
+    rows = list(csv.DictReader(io.StringIO(path.read_text())))
+    header = list(rows[0])
+    rows = change(rows)
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, header, lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    path.write_text(buf.getvalue())
+
+
+def edit_json(path: Path, change: Any) -> None:
+    data = json.loads(path.read_text())
+    change(data)
+    path.write_text(json.dumps(data))
+
+
+# -- N1, N4, N2, N11: the forward learner's files and options ------------------------
+
+
+@pytest.mark.skipif(importlib.util.find_spec("sklearn") is None, reason="needs [model]")
+def test_n1_the_generic_model_run_writes_its_result_and_resumes(tmp_path: Path) -> None:
+    """N1: the generic model's empty model cells are what its history schema allows."""
+    out = tmp_path / "G"
+    argv = ("train", "--learner", "forward", "--forward-model", "generic", "--duration", "3")
+    r = cli_in_process(*argv, "--max-trials", "2", "--imagine-trials", "5", "--out", str(out))
+    assert r.rc == 0, r.err
+    assert (out / "result.json").exists()
+    assert "model_pole_mass" in (out / "history.csv").read_text().splitlines()[0]
+    r = cli_in_process(
+        *argv, "--max-trials", "3", "--imagine-trials", "5", "--out", str(out), "--resume"
+    )
+    assert r.rc == 0, r.err
+    r = cli_in_process("curves", str(out / "history.csv"), "--out", str(tmp_path / "c.png"))
+    assert r.rc == 0, r.err
+
+
+@pytest.mark.parametrize(
+    ("how", "says"),
+    [
+        ("deleted", "state.memory.data is missing or empty"),
+        ("emptied", "state.memory.data is missing or empty"),
+        ("text", "field state.memory.data: input should be a valid list"),
+        ("huge", "field state.memory.data.5"),
+        ("one short", "not a multiple of 9"),
+        ("unknown", "state.memory.trace is not kept by the forward learner"),
+        ("imagined negative", "state.memory.imagined holds a negative count"),
+    ],
+)
+def test_n4_the_forward_memory_is_checked_on_resume(
+    forward_run: Path, tmp_path: Path, how: str, says: str
+) -> None:
+    """N4: a deleted, emptied, text, 1e300 or short memory is refused in one line."""
+    run = copy_of(forward_run, tmp_path)
+
+    def change(d: dict[str, Any]) -> None:
+        mem = d["state"]["memory"]
+        if how == "deleted":
+            del d["state"]["memory"]
+        elif how == "emptied":
+            mem["data"] = []
+        elif how == "text":
+            mem["data"] = "text"
+        elif how == "huge":
+            mem["data"][5] = 1e300
+        elif how == "one short":
+            mem["data"] = mem["data"][:-1]
+        elif how == "unknown":
+            mem["trace"] = [0.0] * 6
+        else:
+            mem["imagined"] = [-1.0, 0.0]
+
+    edit_json(run / "checkpoint.json", change)
+    before = {p.name: p.read_bytes() for p in run.iterdir()}
+    r = cli_in_process(
+        *("train", "--learner", "forward", "--max-trials", "4", "--duration", "3"),
+        *("--imagine-trials", "20", "--resume", "--out", str(run)),
+    )
+    one_line(r, says)
+    assert {p.name: p.read_bytes() for p in run.iterdir()} == before
+
+
+def test_n2_resume_accepts_the_run_s_own_forward_options(forward_run: Path, tmp_path: Path) -> None:
+    """N2: --forward-model structured and --imagine-trials as the run has them."""
+    run = copy_of(forward_run, tmp_path)
+    r = cli_in_process(
+        *("train", "--learner", "forward", "--forward-model", "structured"),
+        *("--max-trials", "3", "--duration", "3", "--imagine-trials", "20"),
+        *("--resume", "--out", str(run)),
+    )
+    assert r.rc == 0, r.err
+
+
+def test_n11_one_trial_s_imagination_is_bounded() -> None:
+    """N11: --imagine-trials 2**31-1 would imagine for days: refused before the first trial."""
+    r = cli_in_process("train", "--learner", "forward", "--imagine-trials", "2147483647")
+    one_line(r, "one real trial would imagine up to", "--imagine-trials")
+
+
+# -- N6, H4, N5, N9: sweep folders -----------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("change", "says"),
+    [
+        (lambda rows: [{**rows[0], "simulations": "-4"}, *rows[1:]], "simulations"),
+        (lambda rows: [{**rows[0], "trials": "5", "simulations": "2"}, *rows[1:]], "simulations"),
+        (lambda rows: [{**rows[0], "trials": "5", "simulations": "9"}, *rows[1:]], "budget of 3"),
+        (lambda rows: [*rows, {**rows[0], "success": "1", "trials": "2"}], "a second row"),
+        (lambda rows: [{**rows[0], "pass_rate": "7.5"}, *rows[1:]], "pass_rate"),
+    ],
+)
+def test_n6_a_sweep_rerun_refuses_rows_against_the_schema(
+    swept: Path, tmp_path: Path, change: Any, says: str
+) -> None:
+    """N6: negative counts, fewer simulations than trials, more trials than the budget,
+    a conflicting duplicate: one line, nothing rewritten."""
+    folder = copy_of(swept, tmp_path)
+    edit_runs(folder, change)
+    before = {p.name: p.read_bytes() for p in folder.iterdir()}
+    r = cli_in_process(
+        *("sweep", "--seeds", "2", "--max-trials", "3", "--duration", "2"),
+        *("--eval-draws", "0", "--no-progress", "--out", str(folder)),
+    )
+    one_line(r, says)
+    assert {p.name: p.read_bytes() for p in folder.iterdir()} == before
+
+
+def test_h4_profile_counts_a_repeated_row_once(swept: Path, tmp_path: Path) -> None:
+    folder = copy_of(swept, tmp_path)
+    edit_runs(folder, lambda rows: [*rows, rows[0], rows[0]])
+    r = cli_in_process("profile", str(folder), "--out", str(tmp_path / "p.png"), "--json")
+    assert r.rc == 0, r.err
+    runs = {p["arm"]: p["runs"] for p in json.loads(r.out)["profiles"]}
+    assert runs == {"control": 2, "learner": 2}
+    edit_runs(folder, lambda rows: [*rows, {**rows[0], "success": "1", "trials": "1"}])
+    one_line(cli_in_process("profile", str(folder), "--out", str(tmp_path / "q.png")), "second row")
+
+
+def test_n5_eval_draws_is_refused_by_its_name_before_anything_is_written(tmp_path: Path) -> None:
+    out = tmp_path / "s"
+    r = cli_in_process("sweep", "--eval-draws", "1000001", "--out", str(out))
+    one_line(r, "--eval-draws", "1,000,000")
+    assert not out.exists()
+
+
+def test_n9_a_library_that_does_not_load_is_refused_before_any_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """N9: a broken scikit-learn (found, but its import fails) is refused before writing."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "sklearn.linear_model", None)
+    out = tmp_path / "s"
+    r = cli_in_process(
+        *("sweep", "--learner", "forward", "--forward-model", "generic", "--seeds", "1"),
+        *("--max-trials", "1", "--out", str(out)),
+    )
+    one_line(r, "scikit-learn")
+    assert not out.exists() or not any(out.iterdir())
+
+
+# -- H17, H25: compare reads summaries through their schema --------------------------
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "says"),
+    [
+        ("success_rate", 7.5, "success_rate"),
+        ("runs", -3, "runs"),
+        ("successes", 9, "successes"),
+        ("success_rate_ci", [0.9, 0.1], "success_rate"),
+    ],
+)
+def test_h25_compare_refuses_impossible_rates_and_counts(
+    swept: Path, tmp_path: Path, field: str, value: Any, says: str
+) -> None:
+    folder = copy_of(swept, tmp_path)
+    edit_json(folder / "summary.json", lambda d: d["arms"][0].__setitem__(field, value))
+    one_line(cli_in_process("compare", str(folder)), says)
+
+
+def test_h17_compare_refuses_notes_of_the_wrong_type(swept: Path, tmp_path: Path) -> None:
+    folder = copy_of(swept, tmp_path)
+    edit_json(folder / "summary.json", lambda d: d.__setitem__("notes", 5))
+    one_line(cli_in_process("compare", str(folder)), "field notes")
+
+
+def test_compare_writes_the_format_of_its_suffix(swept: Path, tmp_path: Path) -> None:
+    """Issue 39 item 4: --out's format from its suffix."""
+    assert cli_in_process("compare", str(swept), "--out", str(tmp_path / "t.md")).rc == 0
+    assert (tmp_path / "t.md").read_text().startswith("| arm |")
+    assert cli_in_process("compare", str(swept), "--out", str(tmp_path / "t.json")).rc == 0
+    assert "arms" in json.loads((tmp_path / "t.json").read_text())
+    one_line(cli_in_process("compare", str(swept), "--out", str(tmp_path / "t.txt")), ".json")
+
+
+# -- H9, H11, H12, H20: work bounded before it starts --------------------------------
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (("ablation", "--seeds", "2147483647"), "--seeds"),
+        (("sweep", "--seeds", "100000", "--max-trials", "2000000"), "would simulate up to"),
+        (("robustness", "R", "--repeats", "1000000000"), "--repeats"),
+        (("sweep", "--connect-timeout", "1e308"), "--connect-timeout"),
+        (("switch-figure", "--inhibition", ",".join(["5"] * 13)), "at most 12"),
+    ],
+)
+def test_work_past_its_limit_is_refused_at_once(argv: tuple[str, ...], says: str) -> None:
+    """H9, H11, H12, H20: one line giving the estimate or the bound, before any work."""
+    import time
+
+    t0 = time.monotonic()
+    one_line(cli_in_process(*argv), says)
+    assert time.monotonic() - t0 < 10
+
+
+# -- N8, N13, N3: the Python API, TOML and the Gymnasium kwargs -----------------------
+
+
+def test_sweep_lists_its_parameters_by_name() -> None:
+    """Issue 39 item 3: no ``**`` catch-all; every parameter typed, with its default."""
+    sig = inspect.signature(striatal.sweep)
+    kinds = {p.kind for p in sig.parameters.values()}
+    assert inspect.Parameter.VAR_KEYWORD not in kinds
+    assert {"seeds", "seed", "init", "max_trials", "baselines", "alpha"} <= set(sig.parameters)
+    assert all(p.annotation is not inspect.Parameter.empty for p in sig.parameters.values())
+
+
+def test_sweep_parameters_are_the_table_s_and_the_learner_config_s() -> None:
+    """The sweep's parameters, the option table and LearnerConfig's fields agree, and the
+    command line has an option for each (its own spelling)."""
+    from dataclasses import fields
+
+    from striatal.arguments import ARGS
+    from striatal.cli import build_parser
+    from striatal.experiments.sweeps import LEARNER_OPTIONS
+    from striatal.learners import LearnerConfig
+
+    params = set(inspect.signature(striatal.sweep).parameters)
+    assert set(LEARNER_OPTIONS) == {f.name for f in fields(LearnerConfig)} - {"learner"}
+    own = params - set(LEARNER_OPTIONS) - {"learner", "out", "plant", "sim"}
+    assert own <= set(ARGS), own - set(ARGS)
+    parser = build_parser(only="sweep")
+    sub = next(a for a in parser._actions if hasattr(a, "choices") and a.choices)
+    dests = {a.dest for a in sub.choices["sweep"]._actions}  # type: ignore[index]
+    cli_name = {"control": "no_control", "progress": "no_progress", "reset_trace": "carry_trace"}
+    api_only = {f.name for f in fields(LearnerConfig) if not f.metadata.get("cli", True)}
+    missing = {p for p in params - {"plant", "sim"} if cli_name.get(p, p) not in dests}
+    assert missing == api_only
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "says"),
+    [
+        ({"control": "no"}, "control must be true or false"),
+        ({"out": ""}, "out must be a folder's path"),
+        ({"seeds": 2.0}, "seeds must be a whole number"),
+        ({"alpha_grid": [0.5] * 1001}, "at most 1,000"),
+        ({"alpha_grid": []}, "alpha_grid needs at least 1"),
+    ],
+)
+def test_n8_the_sweep_api_refuses_in_one_line(
+    tmp_path: Path, kwargs: dict[str, Any], says: str
+) -> None:
+    out = tmp_path / "s"
+    with pytest.raises(ParameterError, match=says):
+        striatal.sweep(**{"out": out, **kwargs})
+    assert not out.exists()
+
+
+def test_n8_numpy_integers_are_whole_numbers() -> None:
+    run = striatal.train(max_trials=np.int64(2), sim=striatal.Simulation(duration=2.0))
+    assert run.trials == 2 and json.dumps(run.to_dict()["settings"])
+
+
+def test_n13_text_is_not_a_number_in_a_config_file(tmp_path: Path) -> None:
+    toml = tmp_path / "c.toml"
+    toml.write_text('seeds = "2"\n')
+    one_line(cli_in_process("sweep", "--config", str(toml)), "seeds must be a number")
+
+
+def test_n13_text_is_not_a_number_in_gymnasium_kwargs() -> None:
+    gym = pytest.importorskip("gymnasium")
+    with pytest.raises(ParameterError, match="track must be a number"):
+        gym.make("striatal/CartPoleSwingUp-v0", track="1.8")
+
+
+def test_n3_none_is_no_limit_as_the_help_says() -> None:
+    r = cli_in_process("train", "--track", "none", "--max-force", "none", "--max-trials", "1")
+    assert r.rc == 0, r.err
+
+
+def test_n10_train_help_offers_a_default_only_for_the_learners_that_read_it() -> None:
+    r = cli_in_process("train", "--help")
+    text = " ".join(r.out.split())
+    alpha = text.split("--alpha ALPHA", 1)[1].split("--gamma", 1)[0]
+    assert "forward" not in alpha
+
+
+def test_n7_grid_arms_get_distinct_labels() -> None:
+    from striatal.viz.profiles import arm_labels
+
+    spec = {"method": "learn", "config": {"learner": "chapter"}}
+    labels = arm_labels([("s", "alpha=0.5", spec), ("s", "alpha=2", spec)])
+    assert len(set(labels)) == 2
+
+
+def test_old_spelling_of_interpret_s_file_names_the_new_one() -> None:
+    one_line(cli_in_process("interpret", "R/result.json"), "--result R/result.json")
+
+
+def test_a_result_file_of_the_wrong_type_is_one_line(tmp_path: Path) -> None:
+    from striatal.io.rundir import read_result
+
+    p = tmp_path / "result.json"
+    p.write_text(json.dumps({"W": [1.0] * 6, "theta_c": 0.6, "trials": -1}))
+    with pytest.raises(DataFileError, match="field trials"):
+        read_result(p)
