@@ -8,7 +8,7 @@ RUN_STAMP  := $(VENV)/.stamp-run
 TEST_STAMP := $(VENV)/.stamp-test
 OUT ?= results
 
-.PHONY: run test test-floor lint bench docs tutorial clean
+.PHONY: run test test-floor fuzz lint bench docs tutorial clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -64,6 +64,10 @@ lint: $(TEST_STAMP)
 # lowest supported versions into a venv of its own, is `make test-floor`, CI's next step
 test: lint
 	$(BIN)/pytest -q -n 2 -m "not floor"
+
+# the fuzzer's long budget (tests/test_fuzz.py; make test runs its short one)
+fuzz: $(TEST_STAMP)
+	STRIATAL_FUZZ_EXAMPLES=$${STRIATAL_FUZZ_EXAMPLES:-500} $(BIN)/pytest -q -n 2 tests/test_fuzz.py
 
 test-floor: $(TEST_STAMP)
 	$(BIN)/pytest -q -m floor
