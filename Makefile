@@ -15,12 +15,12 @@ $(BIN)/python:
 	$(BIN)/python -m pip install -q --upgrade pip
 
 $(RUN_STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/pip install -q -e .
+	$(BIN)/pip install -q -e ".[report]"
 	touch $@
 
 $(TEST_STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/pip install -q torch==2.13.0  # the CPU build; [rl] only asks for a range
-	$(BIN)/pip install -q -e ".[dev,rl,cluster,render,neural,model]"
+	$(BIN)/pip install -q -e ".[dev,rl,cluster,render,neural,model,report,tracking]"
 	touch $@ $(RUN_STAMP)
 
 # The chapter's experiment (about 3 minutes on 2 cores):
@@ -30,7 +30,8 @@ $(TEST_STAMP): pyproject.toml | $(BIN)/python
 #  3. one learning run (seed 1, one of the seeds that succeeds: seeds 0, 2 and 3 do
 #     not within 2000 trials; step 2 says how often a seed does), its learned gains
 #     simulated with the mean policy, their Figure 5, the learning curves and
-#     the section-4 neural reading.
+#     the section-4 neural reading;
+#  4. one HTML page of both (results/report.html: tables, tests, figures, commands).
 SEED ?= 1
 SEEDS ?= 100
 WORKERS ?= 2
@@ -50,6 +51,7 @@ run: $(RUN_STAMP)
 		| tee $(OUT)/train/interpret.txt
 	$(S) switch-figure --out $(OUT)/soft_switch.png
 	@echo "results in $(OUT)/: chapter-final/ sweep-chapter/ train/ soft_switch.png"
+	$(S) report $(OUT)/sweep-chapter $(OUT)/train --out $(OUT)/report.html
 
 # Speed figures of docs/performance.md
 bench: $(TEST_STAMP)
