@@ -92,7 +92,8 @@ def test_sweep_returns_a_sweep_with_arms_runs_and_a_plot(folders: dict[str, Path
         assert list(arm.interval or ()) == stored["success_rate_ci"]
     fig = sweep.plot()
     title = fig.axes[0].get_title()
-    assert "chapter from the chapter's W(0): 3 seeds (root 0)" in title and "25 trials" in title
+    assert "chapter learner from the chapter's W(0): 3 seeds (root 0)" in title
+    assert "at most 25 trials" in title
 
 
 def test_load_opens_a_run_folder_as_train_returned_it(folders: dict[str, Path]) -> None:

@@ -137,7 +137,7 @@ def legend_overlap(legend: Legend, points: np.ndarray, pad: float = 2.0) -> int:
 
 def sweep_title(settings: Mapping[str, Any]) -> str:
     """The setting of a sweep in a few words, from its sweep.json ``settings``: learner,
-    W(0), seeds and root, budget and success test (``pgpe from random W(0): 100 seeds
+    W(0), seeds and root, budget and success test (``pgpe learner from random W(0): 100 seeds
     (root 0), at most 300 trials, success on the mean policy``); "" without settings."""
     arms = settings.get("arms")
     learners = sorted(
@@ -157,7 +157,8 @@ def sweep_title(settings: Mapping[str, Any]) -> str:
     inits = settings.get("inits") or ["chapter"]
     start = " and ".join("the chapter's W(0)" if i == "chapter" else "random W(0)" for i in inits)
     root = settings.get("root_seed", 0)
-    parts = [f"{', '.join(learners)} from {start}: {settings['seeds']} seeds (root {root})"]
+    who = f"{' and '.join(learners)} learner{'s' if len(learners) > 1 else ''}"
+    parts = [f"{who} from {start}: {settings['seeds']} seeds (root {root})"]
     if "max_trials" in settings:
         parts.append(f"at most {settings['max_trials']} trials")
     on = settings.get("success_on")
