@@ -41,16 +41,28 @@ def test_figure5_has_four_panels_and_a_snapshot_every_0_2_s(chapter_run: Traject
     fig = plots.figure5(chapter_run)
     assert len(fig.axes) == 4
     snaps = fig.figure5_parts.snapshots
-    assert len(snaps.get_segments()) == round(60.0 / 0.2) + 1 == 301
-    idx = plots.snapshot_indices(chapter_run)
+    # the pole settles (balanced within 0.05 rad of upright to the end) at 26.35 s: the
+    # snapshots end with that 10-s row, at 30 s, and a note stands for the 30 s left
+    assert plots.settled_from(chapter_run) == pytest.approx(26.35)
+    idx, end = plots.drawn_snapshots(chapter_run)
+    assert end == 30.0 and len(plots.snapshot_indices(chapter_run)) == 301
+    assert len(snaps.get_segments()) == len(idx) == round(30.0 / 0.2) + 1 == 151
     t, th = chapter_run.t[idx], chapter_run.column("theta")[idx]
-    np.testing.assert_allclose(t, np.arange(301) * 0.2, atol=1e-9)
+    np.testing.assert_allclose(t, np.arange(151) * 0.2, atol=1e-9)
+    theta = plots.display_theta(chapter_run)
+    after = chapter_run.t >= 26.35 - 1e-9
+    assert np.abs(theta[after] - plots.final_upright(theta)).max() <= plots.SETTLED_BAND
+    notes = [x for x in fig.axes[0].texts if x.get_gid() == "settled_note"]
+    assert len(notes) == 1 and notes[0].get_text().startswith("30–60 s: the pole stays")
+    assert "every 0.2 s up to 30 s (151 poses; from 30 s to 60 s it stays" in (
+        fig.figure5_parts.caption
+    )
     seg = np.array(snaps.get_segments())
     # One row per 10 s, top to bottom; 50 poses a row, POSE_GAP pole lengths apart;
-    # the last snapshot (t = 60 s) ends the sixth row rather than starting a seventh.
-    row = np.minimum(np.floor(t / 10.0 + 1e-9), 5)
+    # the last snapshot (t = 30 s) ends the third row rather than starting a fourth.
+    row = np.minimum(np.floor(t / 10.0 + 1e-9), 2)
     slot = np.rint((t - 10.0 * row) / 0.2)
-    assert slot.max() == 50 and row.max() == 5
+    assert slot.max() == 50 and row.max() == 2
     np.testing.assert_allclose(seg[:, 0, 0], slot * plots.POSE_GAP)
     np.testing.assert_allclose(seg[:, 0, 1], -row * plots.ROW_HEIGHT)
     # pole tip at l (sin, cos) theta from the pivot: the pose, as simulated
@@ -58,9 +70,18 @@ def test_figure5_has_four_panels_and_a_snapshot_every_0_2_s(chapter_run: Traject
     np.testing.assert_allclose(seg[:, 1, 1] - seg[:, 0, 1], np.cos(th), atol=1e-12)
     # Poses of one row do not sit on each other, and rows do not overlap.
     assert plots.POSE_GAP > 0.5 and plots.ROW_HEIGHT > 2.0
-    # The snapshot panel is not a thin strip: at least a third as tall as wide.
-    bbox = fig.axes[0].get_window_extent(fig.canvas.get_renderer())
-    assert bbox.height > bbox.width / 3
+    # The snapshots take less of the figure than the three panels under them
+    renderer = fig.canvas.get_renderer()
+    heights = [ax.get_window_extent(renderer).height for ax in fig.axes]
+    assert heights[0] < sum(heights[1:])
+
+
+def test_a_run_that_never_settles_draws_every_snapshot() -> None:
+    """The printed balancing sign: the cart runs away, nothing settles, all 301 poses."""
+    run = simulate(Plant(), Controller(balance_sign="chapter"), Simulation())
+    assert plots.settled_from(run) is None
+    idx, end = plots.drawn_snapshots(run)
+    assert end == pytest.approx(float(run.t[-1])) and len(idx) == len(plots.snapshot_indices(run))
 
 
 def test_snapshot_layout_rows() -> None:
@@ -249,6 +270,16 @@ def test_curves_cli(tmp_path: Path) -> None:
     assert main(["curves", str(tmp_path / "missing.csv"), "--out", str(out)]) == 2
 
 
+def history_of(h: Any, **columns: np.ndarray) -> Any:
+    """``h`` with the named columns replaced."""
+    from dataclasses import replace
+
+    rows = np.array(h.rows, dtype=float)
+    for name, values in columns.items():
+        rows[:, h.columns.index(name)] = values
+    return replace(h, rows=tuple(tuple(r) for r in rows))
+
+
 def _labels(fig: Any) -> list[str]:
     return [str(ln.get_label()) for ax in fig.axes for ln in ax.get_lines()]
 
@@ -261,16 +292,22 @@ def test_learning_curves_label_each_learner_correctly(tmp_path: Path) -> None:
     for h in (run.history, plots.read_history(tmp_path / "p" / "history.csv")):
         assert h.learner == "pgpe" and h.reward_kind == "shaped"
         fig = plots.learning_curves(h, window=2)
-        ax_r, _ax_w, _ax_c, ax_e, _ax_rate = fig.axes
+        # its exploration std did not change in 4 trials: said in the title, no flat panel
+        np.testing.assert_array_equal(h.column("explore"), np.ones(4))
+        ax_r, _ax_w, _ax_c, _ax_rate = fig.axes
         titles = " ".join(ax.get_title() for ax in fig.axes) + fig.texts[0].get_text()
-        assert "exploration std s of pgpe" in ax_e.get_title() and "σ" not in titles
+        assert "pgpe's s = 1 in every trial (not drawn)" in fig.texts[0].get_text()
+        assert "σ" not in titles
         assert "+10" not in titles and "reward > 0" not in " ".join(_labels(fig))
         assert ax_r.get_ylabel() == "shaped reward"
         assert "W6 (unused)" in _labels(fig)
-        np.testing.assert_array_equal(ax_e.get_lines()[0].get_ydata(), np.ones(4))
-    sparse = plots.read_history(
-        _history_csv(tmp_path / "h.csv", [0.0, -5.0, 10.0], np.ones((3, 6)))
-    )
+    changing = history_of(h, explore=np.array([1.0, 0.9, 0.8, 0.8]))
+    ax_e = plots.learning_curves(changing, window=2).axes[3]
+    assert "exploration std s of pgpe" in ax_e.get_title()
+    np.testing.assert_array_equal(ax_e.get_lines()[0].get_ydata(), [1.0, 0.9, 0.8, 0.8])
+    W = np.ones((3, 6))
+    W[:, 5] = [0.0, 0.5, 1.0]  # sigma changes: its panel is drawn
+    sparse = plots.read_history(_history_csv(tmp_path / "h.csv", [0.0, -5.0, 10.0], W))
     fig = plots.learning_curves(sparse, window=2)
     by_label = {ln.get_label(): ln for ln in fig.axes[0].get_lines()}
     assert list(by_label["reward 0"].get_ydata()) == [0.0]

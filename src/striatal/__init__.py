@@ -10,7 +10,10 @@ Ctrl-C, before NumPy and Numba load (docs/reliability.md). The Python API:
 - :func:`train`: a whole learning run, as ``striatal train`` runs it (same defaults);
 - :func:`simulate`: one run of a controller, as ``striatal simulate`` (same defaults);
 - :func:`sweep`: many learning runs over seeds, with the learner's control and baselines,
-  as ``striatal sweep`` runs them (same defaults, same rows and summary);
+  as ``striatal sweep`` runs them (same defaults, same rows and summary), as a
+  :class:`Sweep` (``.arms``, ``.runs``, ``.plot()``);
+- :func:`load`: the :class:`Sweep` or :class:`Run` in a folder that ``striatal sweep``
+  or ``striatal train`` wrote (``load("results/sweep-chapter")``, ``load("results/train")``);
 - :func:`check_robust`: the robustness set of ``striatal simulate --robust`` (9 runs,
   the motor force held: :class:`Hardware`);
 - :mod:`striatal.learners`: the learning rules, their presets and the trial loop;
@@ -34,7 +37,8 @@ if TYPE_CHECKING:
     from typing import Any
 
     from striatal import learners
-    from striatal.experiments.sweeps import SweepResult, sweep
+    from striatal.experiments.results import Sweep, load
+    from striatal.experiments.sweeps import sweep
     from striatal.experiments.training import Run, simulate, train
     from striatal.io import rundir
     from striatal.io.rundir import read_history, read_result
@@ -81,7 +85,8 @@ _FROM = {
     "simulate": "striatal.experiments.training",
     "train": "striatal.experiments.training",
     "sweep": "striatal.experiments.sweeps",
-    "SweepResult": "striatal.experiments.sweeps",
+    "Sweep": "striatal.experiments.results",
+    "load": "striatal.experiments.results",
 }
 
 
@@ -164,13 +169,14 @@ __all__ = [
     "Run",
     "Simulation",
     "SuccessTest",
-    "SweepResult",
+    "Sweep",
     "Trajectory",
     "TrialOutcome",
     "__version__",
     "check_robust",
     "default_config",
     "learners",
+    "load",
     "plots",
     "read_history",
     "read_result",

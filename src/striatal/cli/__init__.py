@@ -104,6 +104,11 @@ COMMANDS: dict[str, Command] = {
         "fraction of seeds solved against budget, per arm, with 95 %% bands",
         compiles=False,
     ),
+    "report": Command(
+        "report",
+        "one self-contained HTML page of a sweep, a training run or several sweeps",
+        compiles=False,
+    ),
     "animate": Command(
         "animate", "animate one run of the switching controller as a GIF (or MP4 with ffmpeg)"
     ),

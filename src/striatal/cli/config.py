@@ -41,6 +41,7 @@ RUN_ONLY = (
     "engine",
     "json",
     "no_progress",
+    "tensorboard",
 )
 
 

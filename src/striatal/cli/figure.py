@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     fig = plots.figure5(traj, every=args.every)
     plots.save_figure(fig, out, dpi=args.dpi)
     o = traj.outcome
-    snapshots = len(plots.snapshot_indices(traj, args.every))
+    snapshots = len(plots.drawn_snapshots(traj, args.every)[0])
     caption = plots.figure5_caption(traj, every=args.every)
     if args.json:
         record = {

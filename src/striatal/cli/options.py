@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from striatal import arguments
 from striatal.cli import config
@@ -24,6 +26,9 @@ from striatal.params import (
     Simulation,
     check_gains,
 )
+
+if TYPE_CHECKING:
+    from striatal.io.tracking import TensorBoardTracker
 
 
 def out_path(text: str) -> Path:
@@ -303,3 +308,26 @@ def worker_options(args: argparse.Namespace) -> dict[str, Any]:
         "address": args.address,
         "connect_timeout": args.connect_timeout,
     }
+
+
+def add_tensorboard_argument(group: argparse._ArgumentGroup, what: str) -> None:
+    """--tensorboard DIR: ``what`` as TensorBoard scalars (:mod:`striatal.io.tracking`)."""
+    group.add_argument(
+        "--tensorboard",
+        type=out_path,
+        default=None,
+        metavar="DIR",
+        help=f"write {what} as TensorBoard scalars here (the [tracking] extra)",
+    )
+
+
+@contextlib.contextmanager
+def tracker(args: argparse.Namespace) -> Iterator[TensorBoardTracker | None]:
+    """The TensorBoard tracker of ``--tensorboard DIR`` (closed after), None without it."""
+    if getattr(args, "tensorboard", None) is None:
+        yield None
+        return
+    from striatal.io.tracking import TensorBoardTracker
+
+    with TensorBoardTracker(args.tensorboard) as t:
+        yield t

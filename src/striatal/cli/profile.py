@@ -40,9 +40,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the curves as JSON")
 
 
-def _arm_specs(folder: Path) -> dict[str, Any]:
-    """The ``settings.arms`` of ``folder``'s summary.json ({} when the sweep wrote none
-    or it records no arms: the legend then uses the arm names)."""
+def _settings(folder: Path) -> dict[str, Any]:
+    """The ``settings`` of ``folder``'s summary.json ({} when the sweep wrote none)."""
     from striatal.io.schema import read_summary
 
     path = folder / "summary.json"
@@ -50,8 +49,24 @@ def _arm_specs(folder: Path) -> dict[str, Any]:
         return {}
     data = read_summary(path)
     settings = data.get("settings")
-    arms = settings.get("arms") if isinstance(settings, dict) else None
+    return settings if isinstance(settings, dict) else {}
+
+
+def _arm_specs(folder: Path) -> dict[str, Any]:
+    """The ``settings.arms`` of ``folder``'s summary.json ({} when the sweep wrote none
+    or it records no arms: the legend then uses the arm names)."""
+    arms = _settings(folder).get("arms")
     return arms if isinstance(arms, dict) else {}
+
+
+def _title(folders: list[Path]) -> str | None:
+    """The setting of each sweep (:func:`striatal.viz.profiles.sweep_title`), one line
+    each, the same line once; None when no sweep records its settings."""
+    from striatal.viz.profiles import sweep_title
+
+    titles = [sweep_title(_settings(f)) for f in folders]
+    lines = list(dict.fromkeys(t for t in titles if t))
+    return "\n".join(lines) if lines else None
 
 
 def _labels(folders: list[Path], profiles: list[Profile]) -> list[str]:
@@ -79,7 +94,9 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--dpi must be in [10, 1000], got {args.dpi}")
     profiles, column, note = sweep_profiles(args.sweeps, args.x)
     labels = _labels(list(args.sweeps), profiles)
-    fig = plots.performance_profiles(profiles, xlabel=X_LABELS[column], labels=labels)
+    fig = plots.performance_profiles(
+        profiles, xlabel=X_LABELS[column], labels=labels, title=_title(list(args.sweeps))
+    )
     plots.save_figure(fig, out, dpi=args.dpi)
     if note:
         print(f"note: {note}", file=sys.stderr)

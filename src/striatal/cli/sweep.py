@@ -95,6 +95,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--out", type=options.out_path, default=None, help="write runs.csv, summary.json here"
     )
     eg.add_argument("--json", action="store_true", help="print summary.json on stdout")
+    options.add_tensorboard_argument(eg, "each finished run's success, trials and simulations")
     eg.add_argument("--no-progress", action="store_true", help="no progress bar")
     config.add_config_arguments(parser)
 
@@ -130,15 +131,17 @@ def run(args: argparse.Namespace) -> int:
     if note is not None:
         print(note, file=sys.stderr)
     settings = {**the_plan.settings, "options": config.recorded_options(args)}
-    result = sweeps.run_sweep(
-        the_plan.specs,
-        settings,
-        out=out,
-        max_trials=the_plan.max_trials,
-        **options.worker_options(args),
-        progress=not (args.no_progress or args.json) and sys.stderr.isatty(),
-        engine=args.engine,
-    )
+    with options.tracker(args) as tracker:
+        result = sweeps.run_sweep(
+            the_plan.specs,
+            settings,
+            out=out,
+            max_trials=the_plan.max_trials,
+            **options.worker_options(args),
+            progress=not (args.no_progress or args.json) and sys.stderr.isatty(),
+            engine=args.engine,
+            on_run=tracker.on_run if tracker is not None else None,
+        )
     if args.json:
         sys.stdout.write(dumps_json(result.summary))
         return 0

@@ -77,6 +77,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--max-trials (extends the run) and --checkpoint-every",
     )
     og.add_argument("--no-progress", action="store_true", help="no progress bar")
+    options.add_tensorboard_argument(og, "every trial's history row and simulations so far")
 
 
 class _StopRequest:
@@ -172,15 +173,18 @@ def run(args: argparse.Namespace) -> int:
     )
     recent: deque[float] = deque(maxlen=50)
 
-    def on_trial(s: LearnerState, rec: TrialRecord) -> None:
-        recent.append(rec.reward)
-        bar.n = s.trials_done
-        bar.update(0)
-        bar.set_postfix(reward=rec.reward, mean=f"{np.mean(recent):.2f}")
-
     stop = _StopRequest()
     try:
-        with stop:
+        with stop, options.tracker(args) as tracker:
+
+            def on_trial(s: LearnerState, rec: TrialRecord) -> None:
+                recent.append(rec.reward)
+                bar.n = s.trials_done
+                bar.update(0)
+                bar.set_postfix(reward=rec.reward, mean=f"{np.mean(recent):.2f}")
+                if tracker is not None:
+                    tracker.on_trial(s, rec)
+
             result = train(
                 out=args.out,
                 resume=args.resume,

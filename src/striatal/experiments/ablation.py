@@ -24,6 +24,7 @@ import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.experiments import runner, sweeps
+from striatal.experiments.results import Sweep
 from striatal.experiments.spec import RunSpec
 from striatal.learners import LearnerConfig, control_config, default_config
 from striatal.params import (
@@ -241,7 +242,7 @@ def summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
 
 
 def table_rows(
-    variants: Sequence[Variant], result: sweeps.SweepResult
+    variants: Sequence[Variant], result: Sweep
 ) -> tuple[list[tuple[Variant, dict[str, Any]]], dict[str, Any]]:
     """(table rows, ablation.json) of a finished ablation sweep, in the variants' order.
 

@@ -43,6 +43,7 @@ __all__ = [
     "SweepRun",
     "choose_x",
     "performance_profile",
+    "profiles_of",
     "read_sweep_runs",
     "sweep_profiles",
 ]
@@ -242,13 +243,22 @@ def sweep_profiles(folders: Sequence[Path], x: str | None = None) -> tuple[list[
     column, note = choose_x(available, x)
     profiles = []
     for folder, runs in per_folder:
-        several = len({r.init for r in runs}) > 1
-        for arm, init in dict.fromkeys((r.arm, r.init if several else "") for r in runs):
-            mine = [r for r in runs if r.arm == arm and (not several or r.init == init)]
-            label = arm if len(per_folder) == 1 else f"{folder.name}/{arm}"
-            profiles.append(
-                performance_profile(
-                    label, [r.costs[column] for r in mine], [r.success for r in mine], init
-                )
-            )
+        prefix = "" if len(per_folder) == 1 else f"{folder.name}/"
+        profiles += profiles_of(runs, column, prefix)
     return profiles, column, note
+
+
+def profiles_of(runs: Sequence[SweepRun], column: str, prefix: str = "") -> list[Profile]:
+    """One profile per arm of one sweep's ``runs`` against cost ``column``, named
+    ``prefix + arm``; one per (arm, init), its ``init`` set, when the runs started from
+    more than one init."""
+    several = len({r.init for r in runs}) > 1
+    profiles = []
+    for arm, init in dict.fromkeys((r.arm, r.init if several else "") for r in runs):
+        mine = [r for r in runs if r.arm == arm and (not several or r.init == init)]
+        profiles.append(
+            performance_profile(
+                prefix + arm, [r.costs[column] for r in mine], [r.success for r in mine], init
+            )
+        )
+    return profiles

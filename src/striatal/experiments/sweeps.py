@@ -17,7 +17,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal, TextIO
@@ -33,6 +33,7 @@ from striatal.experiments.pool import (
     wait_for_address,
 )
 from striatal.experiments.report import summarise
+from striatal.experiments.results import Sweep
 from striatal.experiments.runner import (
     CONTROL_ARM,
     EVAL_DRAWS,
@@ -170,14 +171,6 @@ def specs_of(
     return specs, {a.name: a.settings() for a in arms}
 
 
-@dataclass(frozen=True)
-class SweepResult:
-    rows: list[dict[str, Any]]
-    ran: int
-    skipped: int
-    summary: dict[str, Any]
-
-
 def run_sweep(
     specs: Sequence[RunSpec],
     settings: dict[str, Any],
@@ -191,7 +184,8 @@ def run_sweep(
     progress: bool = False,
     engine: Engine = "processes",
     locked: bool = False,
-) -> SweepResult:
+    on_run: Callable[[dict[str, Any]], None] | None = None,
+) -> Sweep:
     """Run the specs not already in ``out``/runs.csv, appending each row as it finishes,
     then write ``out``/summary.json (atomically) from all rows.
 
@@ -207,7 +201,8 @@ def run_sweep(
     options as they were given, recorded for ``--print-config --from-summary``.
     ``out`` is locked for the whole sweep: a second sweep on it gets DataFileError.
     ``locked``: the caller already holds ``RunDir(out).lock()`` (to write more files
-    under the same lock).
+    under the same lock). ``on_run`` is called with each row as it is written (a
+    :class:`striatal.io.tracking.Tracker`'s ``on_run``, e.g. TensorBoard).
     """
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
@@ -241,6 +236,7 @@ def run_sweep(
             connect_timeout,
             progress,
             engine,
+            on_run,
         )
 
 
@@ -255,7 +251,8 @@ def _run_sweep(
     connect_timeout: float,
     progress: bool,
     engine: Engine = "processes",
-) -> SweepResult:
+    on_run: Callable[[dict[str, Any]], None] | None = None,
+) -> Sweep:
     from tqdm import tqdm
 
     from striatal.io.files import write_json
@@ -313,6 +310,8 @@ def _run_sweep(
             if stream is not None:
                 stream.write(row_text(row))
                 stream.flush()
+            if on_run is not None:
+                on_run(row)
             bar.update(1)
     finally:
         bar.close()
@@ -321,8 +320,12 @@ def _run_sweep(
     summary = summarise(rows, max_trials, settings)
     if out is not None:
         write_json(out / "summary.json", summary)
-    return SweepResult(
-        rows=sort_rows(rows), ran=len(todo), skipped=len(specs) - len(todo), summary=summary
+    return Sweep(
+        rows=sort_rows(rows),
+        summary=summary,
+        folder=out,
+        ran=len(todo),
+        skipped=len(specs) - len(todo),
     )
 
 
@@ -687,7 +690,7 @@ def sweep(
     address: str | None = None,
     connect_timeout: float = CONNECT_TIMEOUT,
     progress: bool = False,
-) -> SweepResult:
+) -> Sweep:
     """Many learning runs over seeds, as ``striatal sweep`` runs them (same defaults).
 
     ``learner``: a key of :data:`striatal.learners.RULES` (default "chapter").
@@ -702,11 +705,14 @@ def sweep(
     table the command line uses (:mod:`striatal.arguments`, LearnerConfig's fields).
     Every arm runs on the same seeds: the learner, its no-learning control and the
     baselines. With ``out``, runs.csv, sweep.json and summary.json are written there and
-    a rerun resumes (:func:`run_sweep`). Returns the rows sorted by (arm, init, seed)
-    and the summary.
+    a rerun resumes (:func:`run_sweep`). Returns a
+    :class:`~striatal.experiments.results.Sweep`: its ``.runs`` (rows sorted by (arm, init,
+    seed)), ``.arms`` (each rate with its interval), ``.summary`` and ``.plot()`` (the
+    performance profiles).
 
     >>> result = sweep(seeds=4, init="random", learner="pgpe", max_trials=50)  # doctest: +SKIP
-    >>> result.summary["arms"]  # doctest: +SKIP
+    >>> [(a.name, a.success_rate, a.interval) for a in result.arms]  # doctest: +SKIP
+    >>> result.plot().savefig("profiles.png")  # doctest: +SKIP
     """
     given = dict(locals())
     if out is not None and (

@@ -235,9 +235,19 @@ def upright_curve_figure(rows: Sequence[Mapping[str, Any]]) -> Figure:
     fig = new_figure(5.5, 3.5)
     ax = fig.subplots()
     ax.errorbar(ns, frac, yerr=[low, high], marker="o", capsize=3, gid="upright")
-    for n, f, a, b in zip(ns, frac, k, m, strict=True):
-        ax.annotate(f"{a}/{b}", (n, f), textcoords="offset points", xytext=(4, -12), fontsize=8)
+    for i, (n, f, a, b) in enumerate(zip(ns, frac, k, m, strict=True)):
+        # the last label reads leftwards, inside the axes: to its right is the figure's edge
+        last = i == len(ns) - 1
+        ax.annotate(
+            f"{a}/{b}",
+            (n, f),
+            textcoords="offset points",
+            xytext=(-4 if last else 4, -12),
+            ha="right" if last else "left",
+            fontsize=8,
+        )
     ax.set_xscale("log")
+    ax.margins(x=0.08)
     ax.set_xticks(ns, [str(n) for n in ns])
     ax.minorticks_off()
     ax.set_xlabel("LIF neurons (cortex, channels, switch)")

@@ -40,7 +40,9 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
 
     Axes (in ``fig.axes`` order): reward, gains, theta_c, one per learner column
     (sigma for chapter and rpe, explore for pgpe, sigma, return, mean_delta and
-    critic_norm for ac: :data:`RULE_PANELS`), then the
+    critic_norm for ac: :data:`RULE_PANELS`) that changed during the run (one that
+    never did, e.g. pgpe's exploration std without adaptation, is stated in the
+    title instead of drawn flat), then the
     twin axis of the running rates. The sparse reward (eqs 24-25) is drawn as +10,
     0 and -5 with the running fraction of +10; the shaped reward as its values and
     running mean. W1..W5 are what the controller acted with (pgpe: the mean of its
@@ -48,7 +50,14 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
     """
     if window < 1:
         raise ParameterError(f"window must be >= 1, got {window}")
-    extra = [c for c in history.rule_columns if c in RULE_PANELS]
+    own = [c for c in history.rule_columns if c in RULE_PANELS]
+    # a column that never changed gets a line of the title, not a flat panel
+    extra = [c for c in own if len(history) and np.ptp(history.column(c)) > 0]
+    flat = [
+        f"{RULE_PANELS[c][0].split(' ')[0]} = {history.column(c)[0]:.4g} in every trial"
+        for c in own
+        if c not in extra and len(history)
+    ]
     fig = new_figure(11.0, 7.6 + 1.2 * len(extra))
     axes = fig.subplots(
         3 + len(extra), 1, sharex=True, height_ratios=[1.0, 1.4, 0.8] + [0.8] * len(extra)
@@ -108,10 +117,11 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
         ax.set_title(panel_title, fontsize=10)
     axes[-1].set_xlabel("trial")
     counted = f"{int((reward > 0).sum())} with reward > 0, " if sparse else ""
+    unchanged = f"\n{history.learner}'s " + ", ".join(flat) + " (not drawn)" if flat else ""
     fig.suptitle(
         title
         or f"Learning curves ({history.learner}): {len(history)} trials, {counted}"
-        f"{int(success.sum())} passing the success test",
+        f"{int(success.sum())} passing the success test{unchanged}",
         fontsize=11,
     )
     return fig

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from itertools import pairwise
-from typing import TYPE_CHECKING, Any, Literal, get_args
+from typing import TYPE_CHECKING, Any, Literal, Protocol, get_args
 
 import numpy as np
 
@@ -21,11 +21,13 @@ from striatal.viz.canvas import new_figure
 __all__ = [
     "BASELINE_NAMES",
     "LEGEND_PLACES",
+    "ProfileCurve",
     "arm_label",
     "arm_labels",
     "curve_points",
     "legend_overlap",
     "performance_profiles",
+    "sweep_title",
 ]
 
 if TYPE_CHECKING:
@@ -33,7 +35,27 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from matplotlib.legend import Legend
 
-    from striatal.experiments.profiles import Profile
+
+class ProfileCurve(Protocol):
+    """What a profile line is drawn from (a :class:`striatal.experiments.profiles.Profile`):
+    ``budget`` (k,) ascending, ``solved`` (k,) the fraction of ``runs`` seeds solved within
+    it, ``low``/``high`` (k,) its band; ``arm`` names it, ``successes`` of ``runs`` solved."""
+
+    @property
+    def arm(self) -> str: ...
+    @property
+    def runs(self) -> int: ...
+    @property
+    def successes(self) -> int: ...
+    @property
+    def budget(self) -> np.ndarray: ...
+    @property
+    def solved(self) -> np.ndarray: ...
+    @property
+    def low(self) -> np.ndarray: ...
+    @property
+    def high(self) -> np.ndarray: ...
+
 
 #: Readable names of the baseline methods of ``striatal sweep --baselines``.
 BASELINE_NAMES: Mapping[str, str] = {
@@ -98,7 +120,7 @@ def arm_labels(arms: Sequence[tuple[str, str, Mapping[str, Any] | None]]) -> lis
     ]
 
 
-def curve_points(ax: Axes, profiles: Sequence[Profile], spacing: float = 2.0) -> np.ndarray:
+def curve_points(ax: Axes, profiles: Sequence[ProfileCurve], spacing: float = 2.0) -> np.ndarray:
     """(n, 2) display coordinates [px] along every step line of ``profiles`` drawn on
     ``ax``, risers included, at most ``spacing`` px apart."""
     chunks = []
@@ -120,8 +142,44 @@ def legend_overlap(legend: Legend, points: np.ndarray, pad: float = 2.0) -> int:
     return int(np.count_nonzero((x >= box.x0) & (x <= box.x1) & (y >= box.y0) & (y <= box.y1)))
 
 
+def sweep_title(settings: Mapping[str, Any]) -> str:
+    """The setting of a sweep in a few words, from its sweep.json ``settings``: learner,
+    W(0), seeds and root, budget and success test (``pgpe learner from random W(0): 100 seeds
+    (root 0), at most 300 trials, success on the mean policy``); "" without settings."""
+    arms = settings.get("arms")
+    learners = sorted(
+        {
+            a["config"]["learner"]
+            for a in arms.values()
+            if isinstance(a, Mapping)
+            and a.get("method") == "learn"
+            and isinstance(a.get("config"), Mapping)
+            and isinstance(a["config"].get("learner"), str)
+        }
+        if isinstance(arms, Mapping)
+        else ()
+    )
+    if not learners or "seeds" not in settings:
+        return ""
+    inits = settings.get("inits") or ["chapter"]
+    start = " and ".join("the chapter's W(0)" if i == "chapter" else "random W(0)" for i in inits)
+    root = settings.get("root_seed", 0)
+    who = f"{' and '.join(learners)} learner{'s' if len(learners) > 1 else ''}"
+    parts = [f"{who} from {start}: {settings['seeds']} seeds (root {root})"]
+    if "max_trials" in settings:
+        parts.append(f"at most {settings['max_trials']} trials")
+    on = settings.get("success_on")
+    if on == "mean":
+        parts.append("success on the mean policy")
+    elif on == "noisy":
+        parts.append("success on the noisy trial")
+    if settings.get("robust"):
+        parts.append("robust stop rule")
+    return ", ".join(parts)
+
+
 def performance_profiles(
-    profiles: Sequence[Profile],
+    profiles: Sequence[ProfileCurve],
     *,
     xlabel: str,
     labels: Sequence[str] | None = None,

@@ -23,16 +23,19 @@ __all__ = [
     "POSE_GAP",
     "ROW_HEIGHT",
     "ROW_SECONDS",
+    "SETTLED_BAND",
     "SNAPSHOT_EVERY",
     "SWINGUP_COLOUR",
     "VIEW_LIMIT",
     "Figure5Parts",
     "display_theta",
+    "drawn_snapshots",
     "figure5",
     "figure5_caption",
     "final_upright",
     "gains_title",
     "pole_tip",
+    "settled_from",
     "snapshot_indices",
     "snapshot_layout",
 ]
@@ -56,6 +59,9 @@ MAX_SNAPSHOTS = 10_000
 #: Runs whose cart leaves |x| <= VIEW_LIMIT [m] (a runaway, e.g. the printed balancing sign)
 #: are drawn clipped to that window, so the part before the runaway stays readable.
 VIEW_LIMIT = 15.0
+#: A pole balancing within this angle [rad] of the upright it ends at, from some time to
+#: the end of the run, has settled: Figure 5 draws no snapshot rows after that.
+SETTLED_BAND = 0.05
 SWINGUP_COLOUR = "tab:orange"
 BALANCING_COLOUR = "tab:blue"
 
@@ -94,6 +100,35 @@ def final_upright(theta: np.ndarray) -> float:
     sane = np.nonzero(np.isfinite(theta) & (np.abs(theta) <= VIEW_LIMIT))[0]
     last = theta[sane[-1]] if len(sane) else 0.0
     return float(2.0 * np.pi * np.round(last / (2.0 * np.pi)))
+
+
+def settled_from(traj: Trajectory, band: float = SETTLED_BAND) -> float | None:
+    """The time [s] from which the pole stays balancing (balancing controller in charge)
+    within ``band`` rad of the upright it ends at (:func:`final_upright`) to the end of
+    the run; None when the run does not end so."""
+    theta = display_theta(traj)
+    off = ~np.isfinite(theta) | (np.abs(theta - final_upright(theta)) > band)
+    off |= traj.column("mode") < 0.5
+    if off[-1]:
+        return None
+    moved = np.nonzero(off)[0]
+    return float(traj.t[moved[-1] + 1]) if len(moved) else float(traj.t[0])
+
+
+def drawn_snapshots(traj: Trajectory, every: float = SNAPSHOT_EVERY) -> tuple[np.ndarray, float]:
+    """(row indices, end [s]) of the snapshots Figure 5 draws: those of
+    :func:`snapshot_indices` up to the end of the :data:`ROW_SECONDS` row in which the
+    pole settles (:func:`settled_from`), when that leaves out at least one whole row;
+    else all of them, ``end`` the run's last time."""
+    idx = snapshot_indices(traj, every)
+    t_end = float(traj.t[-1])
+    settled = settled_from(traj)
+    if settled is None:
+        return idx, t_end
+    end = ROW_SECONDS * max(1, math.ceil(settled / ROW_SECONDS - 1e-9))
+    if end > t_end - ROW_SECONDS + 1e-9:
+        return idx, t_end
+    return idx[traj.t[idx] <= end + 1e-9], end
 
 
 def snapshot_layout(
@@ -142,7 +177,16 @@ def figure5_caption(traj: Trajectory, *, every: float = SNAPSHOT_EVERY) -> str:
     """The caption of Figure 5 for ``traj``: the run's parameters and how to read the panels."""
     ctrl = traj.controller
     o = traj.outcome
-    n = len(snapshot_indices(traj, every))
+    idx, end = drawn_snapshots(traj, every)
+    n = len(idx)
+    t_end = float(traj.t[-1])
+    upto, rest = "", ""
+    if end < t_end:
+        upto = f" up to {end:g} s"
+        rest = (
+            f"; from {end:g} s to {t_end:g} s it stays balanced within {SETTLED_BAND:g} rad "
+            "of upright, not drawn"
+        )
     switches = ", ".join(f"{s:.2f}" for s in traj.switch_times[:6])
     if len(traj.switch_times) > 6:
         switches += f" ... ({len(traj.switch_times)} in all)"
@@ -153,7 +197,8 @@ def figure5_caption(traj: Trajectory, *, every: float = SNAPSHOT_EVERY) -> str:
         + f"; θ(0) = {traj.sim.theta0:g} rad, dt = {traj.sim.dt:g} s; "
         f"success test at {traj.sim.duration:g} s: {'passed' if o.success else 'failed'}"
         + (" (numerical fault: the state blew up)" if o.fault else "")
-        + f". Top: the pole every {every:g} s ({n} poses), one row per {ROW_SECONDS:g} s, "
+        + f". Top: the pole every {every:g} s{upto} ({n} poses{rest}), one row per "
+        f"{ROW_SECONDS:g} s, "
         "time running left to right; orange while the swing-up controller acts (eq 23), "
         "blue while balancing (eq 22); each pose is drawn at its own place in the row, "
         "the cart's position is in the third panel. Second: the path of the pole tip "
@@ -174,7 +219,8 @@ def figure5(
 
     Top: a stick figure of the pole every ``every`` seconds, in rows of
     :data:`ROW_SECONDS` (:func:`snapshot_layout`), orange while the swing-up
-    controller acts, blue while balancing. Second: the path of the pole tip
+    controller acts, blue while balancing, up to the row in which the pole settles
+    (:func:`drawn_snapshots`; a note says so). Second: the path of the pole tip
     (x + l sin theta, l cos theta). Third: x(t). Bottom: theta(t) (see
     :func:`display_theta`) with +-theta_c about the final upright. The switch times
     are vertical lines in the last two. The title is short; the parameters of the
@@ -188,12 +234,12 @@ def figure5(
     theta = traj.column("theta")
     mode = traj.column("mode")
     l = traj.plant.length
-    idx = snapshot_indices(traj, every)
+    idx, end = drawn_snapshots(traj, every)
     row, slot = snapshot_layout(t[idx], every, ROW_SECONDS)
     n_rows = int(row.max()) + 1
     width_poses = float(slot.max()) * POSE_GAP + 2.4
 
-    snap_height = 12.2 * n_rows * ROW_HEIGHT / width_poses
+    snap_height = 12.2 * (n_rows * ROW_HEIGHT + (0.8 if end < t[-1] else 0.0)) / width_poses
     fig = new_figure(13.0, snap_height + 8.2)
     ax_snap, ax_xy, ax_x, ax_th = fig.subplots(
         4, 1, height_ratios=[snap_height, 3.2, 1.9, 2.1], gridspec_kw={"hspace": 0.08}
@@ -223,8 +269,22 @@ def figure5(
             fontsize=9,
             color="0.25",
         )
+    bottom = -(n_rows - 1) * ROW_HEIGHT * l - 1.15 * l
+    if end < t[-1]:
+        ax_snap.text(
+            0.0,
+            bottom - 0.1 * l,
+            f"{end:g}–{t[-1]:g} s: the pole stays balanced within {SETTLED_BAND:g} rad of "
+            "upright (not drawn; the panels below show the whole run)",
+            ha="left",
+            va="top",
+            fontsize=9,
+            color="0.25",
+            gid="settled_note",
+        )
+        bottom -= 0.8 * l
     ax_snap.set_xlim(-1.2 * l, float(slot.max()) * POSE_GAP * l + 1.2 * l)
-    ax_snap.set_ylim(-(n_rows - 1) * ROW_HEIGHT * l - 1.15 * l, 1.3 * l)
+    ax_snap.set_ylim(bottom, 1.3 * l)
     ax_snap.set_aspect("equal", adjustable="box")
     ax_snap.set_xticks([])
     ax_snap.set_yticks([])
