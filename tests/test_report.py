@@ -209,3 +209,25 @@ def test_report_of_a_run_and_of_two_sweeps(folders: dict[str, Path], cli) -> Non
 def test_report_refuses_a_page_that_is_not_html(folders: dict[str, Path], cli) -> None:
     code, _, err = cli("report", str(folders["sweep"]), "--out", str(folders["sweep"] / "r.png"))
     assert code == 2 and "HTML" in err
+
+
+def test_titles_name_the_setting_of_each_sweep() -> None:
+    from striatal.viz.profiles import sweep_title, sweeps_title
+
+    def settings(learner: str, inits: list[str], **more: object) -> dict[str, object]:
+        arms = {"learner": {"method": "learn", "config": {"learner": learner}}}
+        return {"arms": arms, "seeds": 100, "root_seed": 1, "inits": inits, **more}
+
+    pgpe = settings("pgpe", ["random"], max_trials=300, success_on="mean")
+    assert sweep_title(pgpe) == (
+        "pgpe learner from random W(0): 100 seeds (root 1), at most 300 trials, "
+        "success on the mean policy"
+    )
+    chapter = settings("chapter", ["random"], max_trials=300, success_on="mean")
+    assert sweeps_title([pgpe, chapter]).startswith("pgpe and chapter learners from random")
+    other = settings("chapter", ["chapter", "random"], robust="...")
+    assert sweeps_title([pgpe, other]).splitlines()[1] == (
+        "chapter learner from the chapter's W(0) and random W(0): 100 seeds (root 1), "
+        "robust stop rule"
+    )
+    assert sweep_title({}) == "" and sweeps_title([{}]) == ""
