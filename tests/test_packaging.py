@@ -55,6 +55,8 @@ def metadata(tmp_path_factory: pytest.TempPathFactory) -> email.message.Message:
         (name,) = [n for n in zf.namelist() if n.endswith(".dist-info/METADATA")]
         text = zf.read(name).decode()
         assert any(n.endswith(".dist-info/licenses/LICENSE") for n in zf.namelist())
+        # the report's template is package data: striatal report works from the wheel
+        assert "striatal/reports/templates/report.html.j2" in zf.namelist()
     return email.parser.Parser().parsestr(text)
 
 
