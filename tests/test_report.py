@@ -28,7 +28,9 @@ def folders(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """A small sweep (3 seeds, learner and control), a second one on random W(0), and a
     short training run, each in its folder."""
     root = tmp_path_factory.mktemp("report")
-    striatal.sweep(seeds=3, max_trials=25, eval_draws=0, out=root / "sweep")
+    made = striatal.sweep(seeds=3, max_trials=25, eval_draws=0, out=root / "sweep")
+    assert isinstance(made, Sweep) and (made.ran, made.skipped) == (6, 0)
+    assert made.folder == root / "sweep" and len(made.runs) == 6
     striatal.sweep(seeds=3, init="random", max_trials=25, eval_draws=0, out=root / "random")
     striatal.train(max_trials=25, seed=1, out=root / "train")
     return {"sweep": root / "sweep", "random": root / "random", "train": root / "train"}
@@ -231,3 +233,24 @@ def test_titles_name_the_setting_of_each_sweep() -> None:
         "robust stop rule"
     )
     assert sweep_title({}) == "" and sweeps_title([{}]) == ""
+
+
+def test_without_mathjax_one_line_names_the_extra(
+    folders: dict[str, Path], cli, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import sys
+
+    from striatal.errors import StriatalError
+    from striatal.reports.assets import mathjax_script
+
+    mathjax_script.cache_clear()
+    monkeypatch.setitem(sys.modules, "mathjax", None)
+    try:
+        with pytest.raises(StriatalError, match=r"striatal\[report\]"):
+            mathjax_script()
+        out = folders["sweep"].parent / "none.html"
+        code, _, err = cli("report", str(folders["sweep"]), "--out", str(out))
+        assert code == 2 and "[report]" in err and len(err.strip().splitlines()) == 1
+        assert not out.exists()
+    finally:
+        mathjax_script.cache_clear()
