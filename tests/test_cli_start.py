@@ -133,7 +133,7 @@ def test_forked_workers_say_it_once_in_all(tmp_path: Path) -> None:
 
 def test_the_commands_that_run_the_kernel_announce_its_compile() -> None:
     quiet = {name for name, c in COMMANDS.items() if not c.compiles}
-    assert quiet == {"compare", "curves", "profile", "switch-figure", "interpret"}
+    assert quiet == {"compare", "curves", "profile", "report", "switch-figure", "interpret"}
     assert jit.NOTICE.count("\n") == 1 and jit.NOTICE.endswith("\n")
 
 

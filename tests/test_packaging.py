@@ -55,6 +55,8 @@ def metadata(tmp_path_factory: pytest.TempPathFactory) -> email.message.Message:
         (name,) = [n for n in zf.namelist() if n.endswith(".dist-info/METADATA")]
         text = zf.read(name).decode()
         assert any(n.endswith(".dist-info/licenses/LICENSE") for n in zf.namelist())
+        # the report's template is package data: striatal report works from the wheel
+        assert "striatal/reports/templates/report.html.j2" in zf.namelist()
     return email.parser.Parser().parsestr(text)
 
 
@@ -62,7 +64,10 @@ def test_description_reads_on_its_own(metadata: email.message.Message) -> None:
     """No relative links or images (they break on an index page), no make targets first."""
     assert metadata["Description-Content-Type"] == "text/markdown"
     body = metadata.get_payload()
-    assert isinstance(body, str) and "pip install striatal" in body
+    assert isinstance(body, str)
+    # what works: a clone or a wheel built from it; the package is on no index
+    assert "pip install -e ." in body and "python -m build --wheel" in body
+    assert "not published" in body
     targets = re.findall(r"\]\(([^)]*)\)", body) + re.findall(r"<img[^>]*src=\"([^\"]*)\"", body)
     relative = [t for t in targets if not re.match(r"https?://", t)]
     assert relative == [], relative

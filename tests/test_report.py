@@ -28,7 +28,9 @@ def folders(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """A small sweep (3 seeds, learner and control), a second one on random W(0), and a
     short training run, each in its folder."""
     root = tmp_path_factory.mktemp("report")
-    striatal.sweep(seeds=3, max_trials=25, eval_draws=0, out=root / "sweep")
+    made = striatal.sweep(seeds=3, max_trials=25, eval_draws=0, out=root / "sweep")
+    assert isinstance(made, Sweep) and (made.ran, made.skipped) == (6, 0)
+    assert made.folder == root / "sweep" and len(made.runs) == 6
     striatal.sweep(seeds=3, init="random", max_trials=25, eval_draws=0, out=root / "random")
     striatal.train(max_trials=25, seed=1, out=root / "train")
     return {"sweep": root / "sweep", "random": root / "random", "train": root / "train"}
@@ -209,3 +211,46 @@ def test_report_of_a_run_and_of_two_sweeps(folders: dict[str, Path], cli) -> Non
 def test_report_refuses_a_page_that_is_not_html(folders: dict[str, Path], cli) -> None:
     code, _, err = cli("report", str(folders["sweep"]), "--out", str(folders["sweep"] / "r.png"))
     assert code == 2 and "HTML" in err
+
+
+def test_titles_name_the_setting_of_each_sweep() -> None:
+    from striatal.viz.profiles import sweep_title, sweeps_title
+
+    def settings(learner: str, inits: list[str], **more: object) -> dict[str, object]:
+        arms = {"learner": {"method": "learn", "config": {"learner": learner}}}
+        return {"arms": arms, "seeds": 100, "root_seed": 1, "inits": inits, **more}
+
+    pgpe = settings("pgpe", ["random"], max_trials=300, success_on="mean")
+    assert sweep_title(pgpe) == (
+        "pgpe learner from random W(0): 100 seeds (root 1), at most 300 trials, "
+        "success on the mean policy"
+    )
+    chapter = settings("chapter", ["random"], max_trials=300, success_on="mean")
+    assert sweeps_title([pgpe, chapter]).startswith("pgpe and chapter learners from random")
+    other = settings("chapter", ["chapter", "random"], robust="...")
+    assert sweeps_title([pgpe, other]).splitlines()[1] == (
+        "chapter learner from the chapter's W(0) and random W(0): 100 seeds (root 1), "
+        "robust stop rule"
+    )
+    assert sweep_title({}) == "" and sweeps_title([{}]) == ""
+
+
+def test_without_mathjax_one_line_names_the_extra(
+    folders: dict[str, Path], cli, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import sys
+
+    from striatal.errors import StriatalError
+    from striatal.reports.assets import mathjax_script
+
+    mathjax_script.cache_clear()
+    monkeypatch.setitem(sys.modules, "mathjax", None)
+    try:
+        with pytest.raises(StriatalError, match=r"striatal\[report\]"):
+            mathjax_script()
+        out = folders["sweep"].parent / "none.html"
+        code, _, err = cli("report", str(folders["sweep"]), "--out", str(out))
+        assert code == 2 and "[report]" in err and len(err.strip().splitlines()) == 1
+        assert not out.exists()
+    finally:
+        mathjax_script.cache_clear()

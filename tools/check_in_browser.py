@@ -42,7 +42,7 @@ FLAGS = (
     "--host-resolver-rules=MAP * ~NOTFOUND , EXCLUDE 127.0.0.1",
 )
 #: Pages of the site that hold maths: each must show some, typeset.
-MATHS_PAGES = ("paper-notes/",)
+MATHS_PAGES = ("paper-notes/", "results/", "figures/", "neural/", "ablation/")
 
 #: Resolves with "ok" once MathJax has typeset the page (or at once where it is absent).
 WAIT_FOR_MATHS = """

@@ -60,13 +60,11 @@ def _arm_specs(folder: Path) -> dict[str, Any]:
 
 
 def _title(folders: list[Path]) -> str | None:
-    """The setting of each sweep (:func:`striatal.viz.profiles.sweep_title`), one line
-    each, the same line once; None when no sweep records its settings."""
-    from striatal.viz.profiles import sweep_title
+    """The setting of the sweeps (:func:`striatal.viz.profiles.sweeps_title`); None when
+    no sweep records its settings."""
+    from striatal.viz.profiles import sweeps_title
 
-    titles = [sweep_title(_settings(f)) for f in folders]
-    lines = list(dict.fromkeys(t for t in titles if t))
-    return "\n".join(lines) if lines else None
+    return sweeps_title([_settings(f) for f in folders]) or None
 
 
 def _labels(folders: list[Path], profiles: list[Profile]) -> list[str]:

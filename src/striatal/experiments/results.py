@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -87,20 +88,16 @@ class Sweep:
     folder: Path | None = None
     ran: int = 0
     skipped: int = 0
-    _arms: tuple[ArmResult, ...] = field(default=(), repr=False, compare=False)
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "_arms", tuple(ArmResult.of(a) for a in self.summary["arms"]))
 
     @property
     def runs(self) -> list[dict[str, Any]]:
         """One row per run, as runs.csv holds them (the same list as ``rows``)."""
         return self.rows
 
-    @property
+    @cached_property
     def arms(self) -> tuple[ArmResult, ...]:
         """Every (arm, init): learner arm(s), the no-learning control, baselines."""
-        return self._arms
+        return tuple(ArmResult.of(a) for a in self.summary["arms"])
 
     @property
     def settings(self) -> dict[str, Any]:

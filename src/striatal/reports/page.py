@@ -315,7 +315,7 @@ def _comparison_figure(sources: Sequence[Source]) -> str | None:
     if len(sweeps) < 2:
         return None
     from striatal.experiments.profiles import choose_x
-    from striatal.viz.profiles import arm_labels, performance_profiles, sweep_title
+    from striatal.viz.profiles import arm_labels, performance_profiles, sweeps_title
 
     columns = [c for c in X_LABELS if all(c in sw.runs[0] for _, sw in sweeps)]
     column, _ = choose_x(columns, None)
@@ -330,7 +330,7 @@ def _comparison_figure(sources: Sequence[Source]) -> str | None:
         f"{n}, {p.init} init" if p.init else n
         for n, p in zip(arm_labels(triples), profiles, strict=True)
     ]
-    title = "\n".join(dict.fromkeys(sweep_title(sw.settings) or s.name for s, sw in sweeps))
+    title = sweeps_title([sw.settings for _, sw in sweeps]) or None
     fig = performance_profiles(profiles, xlabel=X_LABELS[column], labels=labels, title=title)
     return png_data_uri(fig)
 

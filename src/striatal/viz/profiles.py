@@ -8,6 +8,7 @@ no place inside is free.
 
 from __future__ import annotations
 
+import textwrap
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from itertools import pairwise
@@ -28,6 +29,7 @@ __all__ = [
     "legend_overlap",
     "performance_profiles",
     "sweep_title",
+    "sweeps_title",
 ]
 
 if TYPE_CHECKING:
@@ -178,6 +180,18 @@ def sweep_title(settings: Mapping[str, Any]) -> str:
     return ", ".join(parts)
 
 
+def sweeps_title(settings: Sequence[Mapping[str, Any]]) -> str:
+    """The settings of several sweeps in one title: ``pgpe and chapter learners from
+    random W(0): ...`` when they differ only in the learner, else one line each
+    (:func:`sweep_title`; a line that repeats is given once)."""
+    titles = list(dict.fromkeys(t for t in (sweep_title(s) for s in settings) if t))
+    heads = [t.partition(" learner from ")[0] for t in titles]
+    rests = {t.partition(" learner from ")[2] for t in titles}
+    if len(titles) > 1 and len(rests) == 1 and all(" learner from " in t for t in titles):
+        return f"{' and '.join(heads)} learners from {rests.pop()}"
+    return "\n".join(titles)
+
+
 def performance_profiles(
     profiles: Sequence[ProfileCurve],
     *,
@@ -215,7 +229,9 @@ def performance_profiles(
     ax.set_xlabel(xlabel)
     ax.set_ylabel("fraction of seeds solved within budget")
     ax.grid(True, color="0.9", lw=0.5)
-    ax.set_title(title or "Performance profiles (bands: pointwise Wilson 95 %)", fontsize=11)
+    text = title or "Performance profiles (bands: pointwise Wilson 95 %)"
+    lines = [w for line in text.splitlines() for w in textwrap.wrap(line, 95) or [""]]
+    ax.set_title("\n".join(lines), fontsize=10)
     legend = ax.legend(loc=LEGEND_PLACES[0], fontsize=9, framealpha=0.9)
     fig.canvas.draw()
     points = curve_points(ax, profiles)
