@@ -355,7 +355,7 @@ def test_command_line_wins_over_the_file(
         ("seeds = 2\nfoo = 1\n", "unknown option 'foo'"),
         ("print-config = true\n", "unknown option 'print-config'"),
         ("[plant]\nlength = 2\n", "[plant] is a table"),
-        ('seeds = "many"\n', "invalid int value: 'many'"),
+        ('seeds = "many"\n', "seeds must be a number, not the text 'many'"),
         ("no-control = 1\n", "no-control must be true or false"),
         ("seeds = true\n", "seeds takes a value"),
         ("seeds = [1, 2]\n", "seeds takes one value"),

@@ -22,7 +22,9 @@ in use.
 from __future__ import annotations
 
 import contextlib
+import csv
 import hashlib
+import io
 import json
 import math
 from collections.abc import Iterator, Mapping, Sequence
@@ -36,7 +38,6 @@ from striatal.io.files import (
     atomic_write_text,
     csv_text,
     path_lock,
-    read_csv,
     read_json,
     read_text,
     write_json,
@@ -370,10 +371,14 @@ def read_history(path: str | Path, *, learner: str | None = None) -> History:
     from the columns (sigma: chapter or rpe; explore: pgpe).
     """
     p = Path(path)
-    rows = read_csv(p, what="history")
-    if not rows:
-        raise DataFileError(f"history {p} has no trials")
-    columns = tuple(rows[0].keys())
+    # row by row, never a dict per row: a 255 MB history takes its numbers' memory only
+    reader = csv.reader(io.StringIO(read_text(p, what="history"), newline=""))
+    try:
+        columns = tuple(next(reader, ()))
+    except csv.Error as exc:
+        raise DataFileError(f"history {p} cannot be read as CSV: {exc}") from None
+    if len(set(columns)) != len(columns):
+        raise DataFileError(f"history {p} names a column twice")
     reward_kind = "sparse"
     settings = _sibling_settings(p)
     if settings is not None:
@@ -392,11 +397,27 @@ def read_history(path: str | Path, *, learner: str | None = None) -> History:
             raise DataFileError(f"history {p} lacks the column {c}")
     out: list[tuple[float, ...]] = []
     kinds = [schema.HISTORY_CELLS.get(c, "finite") for c in columns]
-    for line, row in enumerate(rows, start=2):
-        values = []
-        for c, kind in zip(columns, kinds, strict=True):
-            values.append(_history_cell(row.get(c), c, kind, f"history {p} line {line}"))
-        out.append(tuple(values))
+    # a cell that repeats (a flag, a count, a reward) is one float object, not one per row
+    seen: dict[tuple[str, str], float] = {}
+    try:
+        for line, row in enumerate(reader, start=2):
+            if len(row) != len(columns):
+                raise DataFileError(
+                    f"history {p} line {line}: {len(row)} cells, expected {len(columns)}"
+                )
+            values = []
+            for cell, c, kind in zip(row, columns, kinds, strict=True):
+                v = seen.get((kind, cell)) if kind in ("flag", "count") else None
+                if v is None:
+                    v = _history_cell(cell, c, kind, f"history {p} line {line}")
+                    if kind in ("flag", "count") and len(seen) < 4096:
+                        seen[kind, cell] = v
+                values.append(v)
+            out.append(tuple(values))
+    except csv.Error as exc:
+        raise DataFileError(f"history {p} cannot be read as CSV: {exc}") from None
+    if not out:
+        raise DataFileError(f"history {p} has no trials")
     trial = columns.index("trial")
     numbers = [int(r[trial]) for r in out]
     if numbers != list(range(numbers[0], numbers[0] + len(numbers))):
