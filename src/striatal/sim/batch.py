@@ -26,25 +26,20 @@ from __future__ import annotations
 import functools
 import time
 from collections.abc import Callable, Generator, Sequence
-from dataclasses import dataclass, field
 from typing import Any, Literal, ParamSpec, TypeVar
 
 import numba
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Plant, Simulation
+from striatal.params import CHAPTER_HARDWARE
 from striatal.sim import kernel
-from striatal.sim.learned import LearnedPlant
 from striatal.sim.noise import row_parts, run_parts
 from striatal.sim.rollout import (
-    Protocol,
-    SensorNoise,
     TrialOutcome,
+    TrialRequest,
     action_draws,
     batch_args,
-    noise_arrays,
-    run_trial,
 )
 
 __all__ = [
@@ -69,72 +64,6 @@ BATCH_ENGINES: tuple[str, ...] = ("batch", "simd")
 CHUNK = 2
 #: From this many normals in one round, generators fill their rows on threads.
 PARALLEL_NORMALS = 50_000
-
-
-@dataclass(frozen=True, eq=False)
-class TrialRequest:
-    """One trial of the protocol: the arguments of :func:`striatal.sim.rollout.run_trial`.
-
-    By default the mean policy (``rng`` None), no trace; ``trace`` (6,) is updated in
-    place when the trial runs, as ``run_trial`` does.
-    """
-
-    plant: Plant
-    controller: Controller
-    sim: Simulation
-    protocol: Protocol
-    rng: np.random.Generator | None = None
-    trace: np.ndarray = field(default_factory=lambda: np.zeros(N_GAINS))
-    gamma: float = 0.0
-    gains: np.ndarray | None = None
-    action_every: int = 1
-    chapter_eligibility: bool = False
-    model: Plant | None = None
-    sensor: SensorNoise = field(default_factory=SensorNoise)
-    mean_policy: bool = False
-    hardware: Hardware = CHAPTER_HARDWARE
-
-    def run(self) -> TrialOutcome:
-        """The trial on the scalar kernel."""
-        return run_trial(
-            self.plant,
-            self.controller,
-            self.sim,
-            protocol=self.protocol,
-            trace=self.trace,
-            gamma=self.gamma,
-            rng=self.rng,
-            gains=self.gains,
-            action_every=self.action_every,
-            chapter_eligibility=self.chapter_eligibility,
-            model=self.model,
-            sensor=self.sensor,
-            mean_policy=self.mean_policy,
-            hardware=self.hardware,
-        )
-
-    @property
-    def draws_actions(self) -> bool:
-        return self.rng is not None and not self.mean_policy
-
-    def batch_key(self) -> tuple[Any, ...] | None:
-        """What a batched kernel call shares with this trial; None if it runs alone
-        (sensor noise: the batch kernel has none; a learned plant: it takes none)."""
-        if self.sensor.active or isinstance(self.plant, LearnedPlant):
-            return None
-        c = self.controller
-        return (
-            self.plant,
-            (c.balance_sign, c.switch, c.inhibition),
-            self.sim,
-            self.protocol,
-            self.action_every,
-            self.chapter_eligibility,
-            self.gamma,
-            self.model,
-            self.hardware,
-            self.draws_actions,
-        )
 
 
 def driven(steps: Callable[P, Steps[T]]) -> Callable[P, T]:
@@ -170,7 +99,7 @@ def run_requests(
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
     outcomes: list[TrialOutcome | None] = [None] * len(requests)
-    groups: dict[tuple[Any, ...], list[int]] = {}
+    groups: dict[tuple[object, ...], list[int]] = {}
     noise: dict[int, np.ndarray] = {}
     keys = [r.batch_key() for r in requests]
     if any(key is None for key in keys):
@@ -179,49 +108,56 @@ def run_requests(
             if key is None:
                 outcomes[i] = r.run()
                 continue
-            noise[i] = noise_arrays(r.sim, r.action_every, r.rng, r.sensor, r.mean_policy)[0]
+            noise[i] = r.noise()[0]
             groups.setdefault(key, []).append(i)
     else:
         for i, key in enumerate(keys):
             groups.setdefault(key, []).append(i)  # type: ignore[arg-type]
         noise = _draw_noise(requests)
     for members in groups.values():
-        first = requests[members[0]]
-        gains = np.array(
-            [
-                requests[i].controller.gains if requests[i].gains is None else requests[i].gains
-                for i in members
-            ],
-            dtype=float,
-        )
-        theta_c = np.array([requests[i].controller.theta_c for i in members], dtype=float)
-        traces = np.array([requests[i].trace for i in members], dtype=float)
+        group = [requests[i] for i in members]
+        first = group[0]
         args = batch_args(
-            first.plant,
-            first.controller,
-            first.sim,
-            protocol=first.protocol,
-            gains=gains,
-            theta_c=theta_c,
-            noise=np.array([noise[i] for i in members]) if first.draws_actions else None,
-            model=first.model,
-            action_every=first.action_every,
-            chapter_eligibility=first.chapter_eligibility,
-            gamma=first.gamma,
-            traces=traces,
-            hardware=first.hardware,
+            group, np.array([noise[i] for i in members]) if first.draws_actions else None
         )
-        simd = engine == "simd" and first.hardware == CHAPTER_HARDWARE
+        critic = None if first.online is None else _critics(group)
         old = numba.set_parallel_chunksize(CHUNK)
         try:
-            (kernel.run_trials_lockstep if simd else kernel.run_trials_batch)(*args)
+            if critic is not None:
+                kernel.run_online_trials_batch(*args[:7], critic, args.outs)
+            elif engine == "simd" and first.hardware == CHAPTER_HARDWARE:
+                kernel.run_trials_lockstep(*args)
+            else:
+                kernel.run_trials_batch(*args)
         finally:
             numba.set_parallel_chunksize(old)
-        out = args[-1]
-        for j, i in enumerate(members):
-            requests[i].trace[:] = traces[j]
-            outcomes[i] = TrialOutcome.from_row(out[j], first.sim)
+        for j, (i, r) in enumerate(zip(members, group, strict=True)):
+            r.trace[:] = args.learning.trace[j]
+            if critic is not None and r.online is not None:
+                o = r.online
+                for mine, rows in (
+                    (o.critic, critic.weights),
+                    (o.critic_trace, critic.trace),
+                    (o.stats, critic.stats),
+                    (o.square, critic.square),
+                    (o.gains_end, critic.gains_end),
+                ):
+                    mine[:] = rows[j]
+            outcomes[i] = TrialOutcome.from_row(args.outs[j], first.sim)
     return outcomes  # type: ignore[return-value]
+
+
+def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
+    """The critics of a group of online trials (shared rates), stacked (B, ...)."""
+    learnings = [r.online for r in group if r.online is not None]
+    first = learnings[0]
+    return first.args(group[0].protocol.check_x)._replace(
+        weights=np.array([o.critic for o in learnings]),
+        trace=np.array([o.critic_trace for o in learnings]),
+        stats=np.array([o.stats for o in learnings]),
+        square=np.array([o.square for o in learnings]),
+        gains_end=np.array([o.gains_end for o in learnings]),
+    )
 
 
 def _draw_noise(requests: Sequence[TrialRequest]) -> dict[int, np.ndarray]:

@@ -42,7 +42,7 @@ class Gains(NamedTuple):
     """
 
     W: np.ndarray
-    theta_c: Any
+    theta_c: Any  # float, or (B,) for the batch kernels
 
 
 class ControlArgs(NamedTuple):
