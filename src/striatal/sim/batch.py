@@ -26,6 +26,7 @@ from __future__ import annotations
 import functools
 import time
 from collections.abc import Callable, Generator, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Literal, ParamSpec, TypeVar
 
 import numba
@@ -44,6 +45,7 @@ from striatal.sim.rollout import (
 
 __all__ = [
     "BATCH_ENGINES",
+    "LANES",
     "Lockstep",
     "Steps",
     "TrialRequest",
@@ -64,6 +66,9 @@ BATCH_ENGINES: tuple[str, ...] = ("batch", "simd")
 CHUNK = 2
 #: From this many normals in one round, generators fill their rows on threads.
 PARALLEL_NORMALS = 50_000
+#: The groups of generators :class:`Lockstep` runs in turn (one group's trials on the
+#: kernel while the main thread advances the others).
+LANES = 2
 
 
 def driven(steps: Callable[P, Steps[T]]) -> Callable[P, T]:
@@ -191,9 +196,18 @@ class Lockstep:
     """Many :data:`Steps` advanced together: each round, the requests of every unfinished
     one run in batched kernel calls (:func:`run_requests`).
 
+    The generators are split into :data:`LANES` groups that take turns: while one
+    group's trials run (their noise drawn and the kernel called on a worker thread, the
+    kernels releasing the GIL), the main thread advances the other group's generators
+    with the outcomes of its last call (their Python: the rules' plans and updates, the
+    success tests). The kernel's threads and the runs' Python then overlap instead of
+    taking turns. A generator is always in the same group, so its trials, and the order
+    in which its generator draws their noise, are what they would be alone.
+
     :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value.
     ``seconds[i]``: the wall time spent on generator i, its own Python plus an even
-    share of each kernel call it was in.
+    share of each kernel call it was in (the two overlap, so the sum over the
+    generators can exceed the wall time of :meth:`run`, at most twice).
     """
 
     def __init__(
@@ -211,26 +225,49 @@ class Lockstep:
         finally:
             self.seconds[i] += time.perf_counter() - t0
 
+    def _call(self, pending: dict[int, list[TrialRequest]]) -> _Call:
+        """Run the requests of ``pending`` (on the worker thread): their outcomes by
+        generator, each generator's share of the call's wall time added."""
+        order = list(pending)
+        flat = [r for i in order for r in pending[i]]
+        t0 = time.perf_counter()
+        outcomes = run_requests(flat, self.engine)
+        share = (time.perf_counter() - t0) / max(len(flat), 1)
+        out: dict[int, list[TrialOutcome]] = {}
+        at = 0
+        for i in order:
+            n = len(pending[i])
+            self.seconds[i] += share * n
+            out[i], at = outcomes[at : at + n], at + n
+        return out
+
     def run(self) -> Generator[tuple[int, Any], None, None]:
-        pending: dict[int, list[TrialRequest]] = {}
+        lanes: list[dict[int, list[TrialRequest]]] = [{} for _ in range(LANES)]
         for i in range(len(self.steps)):
             try:
-                pending[i] = self._advance(i, None)
+                lanes[i % LANES][i] = self._advance(i, None)
             except StopIteration as stop:
                 yield i, stop.value
-        while pending:
-            order = list(pending)
-            flat = [r for i in order for r in pending[i]]
-            t0 = time.perf_counter()
-            outcomes = run_requests(flat, self.engine)
-            share = (time.perf_counter() - t0) / max(len(flat), 1)
-            at = 0
-            for i in order:
-                n = len(pending[i])
-                self.seconds[i] += share * n
-                mine, at = outcomes[at : at + n], at + n
-                try:
-                    pending[i] = self._advance(i, mine)
-                except StopIteration as stop:
-                    del pending[i]
-                    yield i, stop.value
+        worker = ThreadPoolExecutor(1, thread_name_prefix="lockstep")
+        try:
+            calls: list[Future[_Call] | None] = [
+                worker.submit(self._call, lane) if lane else None for lane in lanes
+            ]
+            while any(call is not None for call in calls):
+                for g, call in enumerate(calls):
+                    if call is None:
+                        continue
+                    # the other lanes' kernel calls run meanwhile
+                    pending: dict[int, list[TrialRequest]] = {}
+                    for i, mine in call.result().items():
+                        try:
+                            pending[i] = self._advance(i, mine)
+                        except StopIteration as stop:
+                            yield i, stop.value
+                    calls[g] = worker.submit(self._call, pending) if pending else None
+        finally:
+            worker.shutdown(wait=True, cancel_futures=True)
+
+
+#: The outcomes of one lane's kernel calls, by generator.
+_Call = dict[int, list[TrialOutcome]]

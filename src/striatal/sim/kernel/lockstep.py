@@ -279,7 +279,7 @@ def _lockstep_block(
                 learning.trace[b, i] = S[_F_D0 + i, j]
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@njit(cache=True, parallel=True, nogil=True, error_model="numpy")
 def run_trials_lockstep(
     states0: np.ndarray,
     gains: Gains,

@@ -307,7 +307,7 @@ def run_online_trial(
     write_summary(out, status, reward, end_step, x, x_dot, theta, theta_dot, tally)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def run_online_trials_batch(
     states0: np.ndarray,
     gains: Gains,

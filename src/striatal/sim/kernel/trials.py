@@ -535,7 +535,7 @@ def trial_loop(step: Callable[..., State], dynamics: int | LearnedArgs, args: Tr
     write_summary(buffers.out, status, reward, end_step, x, x_dot, theta, theta_dot, tally)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def run_trials_batch(
     states0: np.ndarray,
     gains: Gains,
