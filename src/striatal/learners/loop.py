@@ -174,6 +174,11 @@ def nominal_checked(config: LearnerConfig) -> bool:
     )
 
 
+#: The seed of a generator whose state is set right after (not the OS's entropy: a run
+#: restores its generator every trial).
+_BLANK = np.random.SeedSequence(0)
+
+
 def learning_steps(
     state: LearnerState,
     plant: Plant,
@@ -192,7 +197,7 @@ def learning_steps(
     """
     rule = rule_of(config)
     context = TrialContext(plant, template, sim, protocol, config.hardware, config.action_every)
-    rng = np.random.default_rng()
+    rng = np.random.Generator(np.random.PCG64(_BLANK))
     rng.bit_generator.state = state.rng_state
     plan = rule.plan(state, config, rng, context)
     judging = rule.judging

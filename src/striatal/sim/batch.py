@@ -131,7 +131,9 @@ def run_requests(
             if critic is not None:
                 kernel.run_online_trials_batch(*args[:7], critic, args.outs)
             elif engine == "simd" and first.hardware == CHAPTER_HARDWARE:
-                kernel.run_trials_lockstep(*args)
+                # a block per thread when the trials are few
+                block = -(-len(group) // numba.get_num_threads())
+                kernel.run_trials_lockstep(*args, block)
             else:
                 kernel.run_trials_batch(*args)
         finally:
