@@ -33,7 +33,7 @@ import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation, SuccessTest
-from striatal.sim.batch import TrialRequest
+from striatal.sim.batch import Steps, TrialRequest, driven
 from striatal.sim.rollout import NO_PROTOCOL, SensorNoise, simulate
 
 __all__ = [
@@ -47,10 +47,12 @@ __all__ = [
     "StopCheck",
     "check_robust",
     "family_check",
+    "family_check_steps",
     "nominal_is_the_case",
     "robust_hardware",
     "run_case",
     "stop_check",
+    "stop_check_steps",
 ]
 
 #: The chapter's final time T_f [s] of the robust test.
@@ -290,12 +292,12 @@ def _case_request(
     )
 
 
-def _until_failure(requests: Iterable[tuple[str, TrialRequest]]) -> StopCheck:
-    """Run the named requests in order up to the first that fails its success test at
-    T_f, every run and its simulated seconds counted."""
+def _until_failure(requests: Iterable[tuple[str, TrialRequest]]) -> Steps[StopCheck]:
+    """Run the named requests in order (each yielded) up to the first that fails its
+    success test at T_f, every run and its simulated seconds counted."""
     runs, seconds = 0, 0.0
     for name, request in requests:
-        outcome = request.run()
+        (outcome,) = yield [request]
         runs += 1
         seconds += outcome.ended_at
         if not outcome.success:
@@ -303,7 +305,7 @@ def _until_failure(requests: Iterable[tuple[str, TrialRequest]]) -> StopCheck:
     return StopCheck(True, runs, seconds)
 
 
-def stop_check(
+def stop_check_steps(
     controller: Controller,
     plant: Plant,
     dt: float,
@@ -311,36 +313,43 @@ def stop_check(
     gains: np.ndarray | None = None,
     nominal_passed: bool = False,
     hardware: Hardware = ROBUST_HARDWARE,
-) -> StopCheck:
+) -> Steps[StopCheck]:
     """Is ``controller`` (with ``gains`` if given: a learner's guarded W) robust?
 
     Runs the cases of :data:`ROBUST_CASES` in :data:`STOP_ORDER`, mean policy, 60 s,
     ``hardware`` (force held), the controller keeping ``plant`` as its model, and stops
     at the first failure. ``nominal_passed``: the caller's own success test already was
     the nominal case (:func:`nominal_is_the_case`) and it passed; it is not run again.
-    The verdict equals :func:`check_robust`'s ``robust``.
+    The verdict equals :func:`check_robust`'s ``robust``. Its runs are yielded
+    (:data:`striatal.sim.batch.Steps`); :func:`stop_check` runs them.
     """
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
     cases = [ROBUST_CASES[i] for i in STOP_ORDER]
-    return _until_failure(
-        (
-            case.name,
-            _case_request(
-                controller,
-                W,
-                case,
-                case.plant(plant),
-                plant,
-                dt,
-                hardware,
-            ),
+    return (
+        yield from _until_failure(
+            (
+                case.name,
+                _case_request(
+                    controller,
+                    W,
+                    case,
+                    case.plant(plant),
+                    plant,
+                    dt,
+                    hardware,
+                ),
+            )
+            for case in cases
+            if not (nominal_passed and case == ROBUST_CASES[0])
         )
-        for case in cases
-        if not (nominal_passed and case == ROBUST_CASES[0])
     )
 
 
-def family_check(
+#: :func:`stop_check_steps` run to its end on the scalar kernel.
+stop_check = driven(stop_check_steps)
+
+
+def family_check_steps(
     controller: Controller,
     plants: tuple[Plant, ...],
     dt: float,
@@ -348,7 +357,7 @@ def family_check(
     model: Plant | None = None,
     gains: np.ndarray | None = None,
     hardware: Hardware = ROBUST_HARDWARE,
-) -> StopCheck:
+) -> Steps[StopCheck]:
     """The robust stop rule on each plant of ``plants`` (a family a model cannot rule
     out), stopping at the first failure, every run counted. ``model`` None: each plant
     is believed exactly and :func:`stop_check`'s cases run around it (its corners
@@ -358,7 +367,9 @@ def family_check(
     if model is None:
         runs, seconds = 0, 0.0
         for plant in plants:
-            verdict = stop_check(controller, plant, dt, gains=gains, hardware=hardware)
+            verdict = yield from stop_check_steps(
+                controller, plant, dt, gains=gains, hardware=hardware
+            )
             runs += verdict.simulations
             seconds += verdict.simulated_seconds
             if not verdict.robust:
@@ -366,8 +377,17 @@ def family_check(
         return StopCheck(True, runs, seconds)
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
     starts = [c for c in ROBUST_CASES if c.pole_mass == 1.0 and c.length == 1.0]
-    return _until_failure(
-        (f"plant {k}, {case.name}", _case_request(controller, W, case, plant, model, dt, hardware))
-        for k, plant in enumerate(plants)
-        for case in starts
+    return (
+        yield from _until_failure(
+            (
+                f"plant {k}, {case.name}",
+                _case_request(controller, W, case, plant, model, dt, hardware),
+            )
+            for k, plant in enumerate(plants)
+            for case in starts
+        )
     )
+
+
+#: :func:`family_check_steps` run to its end on the scalar kernel.
+family_check = driven(family_check_steps)
