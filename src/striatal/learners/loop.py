@@ -217,11 +217,9 @@ def learning_steps(
     simulations, seconds = 1, outcome.ended_at
     if judging.candidate:
         # the controller the trial ran (e.g. pgpe's perturbed p') is the one judged
-        W = np.asarray(plan.W, dtype=float)
-        controller = replace(template, theta_c=plan.theta_c)
+        W, theta_c = np.asarray(plan.W, dtype=float), plan.theta_c
     else:
-        W = np.array(state.W, dtype=float)
-        controller = replace(template, theta_c=state.theta_c)
+        W, theta_c = np.array(state.W, dtype=float), state.theta_c
     success = True
     for check in success_checks(config):
         if not success:
@@ -232,7 +230,7 @@ def learning_steps(
         if check == "robustness set":
             nominal = nominal_checked(config) and nominal_is_the_case(sim, config.action_every)
             verdict = yield from stop_check_steps(
-                controller,
+                replace(template, theta_c=theta_c),
                 plant,
                 sim.dt,
                 gains=W,
@@ -254,13 +252,14 @@ def learning_steps(
             (rerun,) = yield [
                 TrialRequest(
                     true_plant_i,
-                    controller,
+                    template,
                     sim,
                     protocol,
                     gains=W,
                     action_every=config.action_every,
                     model=model_i,
                     hardware=context.hardware,
+                    theta_c=theta_c,
                 )
             ]
             simulations += 1
