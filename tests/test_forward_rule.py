@@ -239,7 +239,8 @@ def test_the_generic_model_without_scikit_learn_is_refused_before_any_trial(
     ):
         default_config("forward", forward_model="generic")
     with pytest.raises(
-        ParameterError, match="forward_model must be 'structured' or 'generic', got 'neural'"
+        ParameterError,
+        match="forward_model must be 'structured', 'generic' or 'conditioned', got 'neural'",
     ):
         default_config("forward", forward_model="neural")
     with pytest.raises(ParameterError, match="does not use forward_model"):

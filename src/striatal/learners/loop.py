@@ -251,6 +251,7 @@ def learning_steps(
                 gains=W,
                 nominal_passed=nominal,
                 hardware=hardware,
+                record=rule.check_recorder(plan),
             )
             simulations += verdict.simulations
             seconds += verdict.simulated_seconds

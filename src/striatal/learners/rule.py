@@ -23,6 +23,7 @@ from striatal.errors import ParameterError
 from striatal.learners.config import LearnerConfig
 from striatal.learners.state import LearnerState, Memory
 from striatal.params import Plant
+from striatal.sim.robust import CheckRecorder
 from striatal.sim.rollout import TrialOutcome
 
 __all__ = ["LOOP_OPTIONS", "Rule", "Trial", "TrialPlan", "Update"]
@@ -169,6 +170,12 @@ class Rule:
         self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
     ) -> TrialPlan:
         raise NotImplementedError
+
+    def check_recorder(self, plan: TrialPlan) -> CheckRecorder | None:
+        """Where the robustness set's runs of ``plan``'s candidate go, recorded with their
+        plant factors (a rule that learns from its checks, which the loop counts as
+        always); None (the default): not recorded."""
+        return None
 
     def run(self, config: LearnerConfig, plan: TrialPlan, trial: Mapping[str, Any]) -> TrialOutcome:
         """Run ``plan``'s trial (rules with :attr:`runs_trial` only); ``trial``: the loop's

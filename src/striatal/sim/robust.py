@@ -25,8 +25,8 @@ counting every run.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
-from dataclasses import dataclass, fields
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -34,7 +34,11 @@ import numpy as np
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation, SuccessTest
 from striatal.sim.batch import TrialRequest
-from striatal.sim.rollout import NO_PROTOCOL, SensorNoise, simulate
+from striatal.sim.rollout import NO_PROTOCOL, SensorNoise, recorded_trial, simulate
+
+#: Called with each run of a check: the case's (pole mass factor, length factor) and the
+#: run's recorded rows (kernel.TRAJ_COLUMNS), for a learner that learns from its checks.
+CheckRecorder = Callable[[tuple[float, float], np.ndarray], None]
 
 __all__ = [
     "ROBUST_CASES",
@@ -42,6 +46,7 @@ __all__ = [
     "ROBUST_HARDWARE",
     "STOP_ORDER",
     "CaseResult",
+    "CheckRecorder",
     "Perturbation",
     "RobustReport",
     "StopCheck",
@@ -59,9 +64,9 @@ ROBUST_DURATION = 60.0
 
 @dataclass(frozen=True)
 class Perturbation:
-    """What a run changes from the nominal one: the true plant's pole mass and length
-    factors (the controller keeps its nominal model), the start (at rest) and Gaussian
-    sensor noise on the x and theta the controller sees (stds in m and rad).
+    """What a run changes from the nominal one: the true plant's pole mass, length and
+    cart mass factors (the controller keeps its nominal model), the start (at rest) and
+    Gaussian sensor noise on the x and theta the controller sees (stds in m and rad).
 
     The one perturbation model of the project: the robustness set's cases
     (:data:`ROBUST_CASES`) and the conditions of ``striatal robustness``
@@ -75,10 +80,14 @@ class Perturbation:
     x0: float = 0.0
     x_std: float = 0.0
     theta_std: float = 0.0
+    cart_mass: float = 1.0
 
     def plant(self, nominal: Plant) -> Plant:
-        """The true plant: ``nominal`` with its pole mass and length scaled."""
-        return nominal.scaled(pole_mass=self.pole_mass, length=self.length)
+        """The true plant: ``nominal`` with its pole mass, length and cart mass scaled."""
+        plant = nominal.scaled(pole_mass=self.pole_mass, length=self.length)
+        if self.cart_mass == 1.0:
+            return plant
+        return replace(plant, cart_mass=plant.cart_mass * self.cart_mass)
 
     def sim(self, **kwargs: Any) -> Simulation:
         """A trial from this start (``kwargs``: the other fields of the Simulation)."""
@@ -121,6 +130,7 @@ class CaseResult:
             "case": self.case.name,
             "pole_mass_factor": self.case.pole_mass,
             "length_factor": self.case.length,
+            "cart_mass_factor": self.case.cart_mass,
             "theta0": self.case.theta0,
             "x0": self.case.x0,
             "success": self.success,
@@ -290,12 +300,22 @@ def _case_request(
     )
 
 
-def _until_failure(requests: Iterable[tuple[str, TrialRequest]]) -> StopCheck:
+def _until_failure(
+    requests: Iterable[tuple[str, TrialRequest, tuple[float, float]]],
+    record: CheckRecorder | None = None,
+) -> StopCheck:
     """Run the named requests in order up to the first that fails its success test at
-    T_f, every run and its simulated seconds counted."""
+    T_f, every run and its simulated seconds counted. With ``record``, each run is
+    recorded (the same outcome) and handed to it with its plant factors."""
     runs, seconds = 0, 0.0
-    for name, request in requests:
-        outcome = request.run()
+    for name, request, factors in requests:
+        if record is None:
+            outcome = request.run()
+        else:
+            outcome, rows = recorded_trial(
+                **{f.name: getattr(request, f.name) for f in fields(request)}
+            )
+            record(factors, rows)
         runs += 1
         seconds += outcome.ended_at
         if not outcome.success:
@@ -311,6 +331,7 @@ def stop_check(
     gains: np.ndarray | None = None,
     nominal_passed: bool = False,
     hardware: Hardware = ROBUST_HARDWARE,
+    record: CheckRecorder | None = None,
 ) -> StopCheck:
     """Is ``controller`` (with ``gains`` if given: a learner's guarded W) robust?
 
@@ -318,26 +339,21 @@ def stop_check(
     ``hardware`` (force held), the controller keeping ``plant`` as its model, and stops
     at the first failure. ``nominal_passed``: the caller's own success test already was
     the nominal case (:func:`nominal_is_the_case`) and it passed; it is not run again.
-    The verdict equals :func:`check_robust`'s ``robust``.
+    The verdict equals :func:`check_robust`'s ``robust``. ``record``: handed every run
+    recorded, with its case's (pole mass, length) factors.
     """
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
     cases = [ROBUST_CASES[i] for i in STOP_ORDER]
-    return _until_failure(
+    runs = (
         (
             case.name,
-            _case_request(
-                controller,
-                W,
-                case,
-                case.plant(plant),
-                plant,
-                dt,
-                hardware,
-            ),
+            _case_request(controller, W, case, case.plant(plant), plant, dt, hardware),
+            (case.pole_mass, case.length),
         )
         for case in cases
         if not (nominal_passed and case == ROBUST_CASES[0])
     )
+    return _until_failure(runs, record)
 
 
 def family_check(
@@ -367,7 +383,11 @@ def family_check(
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
     starts = [c for c in ROBUST_CASES if c.pole_mass == 1.0 and c.length == 1.0]
     return _until_failure(
-        (f"plant {k}, {case.name}", _case_request(controller, W, case, plant, model, dt, hardware))
+        (
+            f"plant {k}, {case.name}",
+            _case_request(controller, W, case, plant, model, dt, hardware),
+            (1.0, 1.0),
+        )
         for k, plant in enumerate(plants)
         for case in starts
     )
