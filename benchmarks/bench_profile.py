@@ -49,15 +49,9 @@ def main() -> None:
         "bench.run_scalar_trial (noise drawn + kernel)": lambda: bench.run_scalar_trial(
             setup, rng, out
         ),
-        "rollout.run_trial (dataclass wrapper, noise drawn)": lambda: rollout.run_trial(
-            plant,
-            controller,
-            sim,
-            protocol=rollout.Protocol(),
-            trace=np.zeros(6),
-            gamma=bench.TRACE_GAMMA,
-            rng=rng,
-        ),
+        "rollout.TrialRequest.run (dataclass wrapper, noise drawn)": lambda: rollout.TrialRequest(
+            plant, controller, sim, rollout.Protocol(), gamma=bench.TRACE_GAMMA, rng=rng
+        ).run(),
     }
     for name, fn in rows.items():
         t = best_seconds(fn)

@@ -74,7 +74,7 @@ def online_trial():
             alpha=0.001, beta=0.001, discount=0.99, critic_decay=0.9, max_step=1.0,
             w1_floor=1e-3, check_x=protocol.check_x, weights=np.zeros(online.N_FEATURES),
             trace=np.zeros(online.N_FEATURES), stats=np.zeros(online.N_STATS),
-            normalise=False, square_rate=0.001, square=np.zeros(1),
+            normalise=False, square_rate=0.001, square=np.zeros(1), gains_end=np.zeros(6),
         )
         online.run_online_trial(
             state0, gains._replace(W=W), plant, control, protocol,

@@ -28,7 +28,7 @@ from striatal.cli import main
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plant, Simulation
 from striatal.sim import bench, kernel
-from striatal.sim.rollout import Protocol, batch_args, trial_args
+from striatal.sim.rollout import Protocol, TrialRequest, batch_args
 
 SIM = Simulation(duration=35.0)  # past the 30-s check of eq 24
 PROTOCOL = Protocol()
@@ -38,20 +38,15 @@ def _positive_finite(x: object) -> bool:
     return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) and x > 0
 
 
+def _request(state0: np.ndarray, W: np.ndarray, theta_c: float) -> TrialRequest:
+    controller = Controller(theta_c=float(theta_c))
+    return TrialRequest(Plant(), controller, SIM, PROTOCOL, gains=W, state0=state0, gamma=0.999)
+
+
 def _scalar(
     state0: np.ndarray, W: np.ndarray, theta_c: float, noise: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    args = trial_args(
-        Plant(),
-        Controller(),
-        SIM,
-        protocol=PROTOCOL,
-        noise=noise,
-        gains=W,
-        theta_c=theta_c,
-        state0=state0,
-        gamma=0.999,
-    )
+    args = _request(state0, W, theta_c).args(noise)
     kernel.run_trial(*args)
     return args[-1].out, args[-2].trace
 
@@ -59,17 +54,7 @@ def _scalar(
 def _batch(
     states0: np.ndarray, W: np.ndarray, theta_c: np.ndarray, noise: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    args = batch_args(
-        Plant(),
-        Controller(),
-        SIM,
-        protocol=PROTOCOL,
-        gains=W,
-        theta_c=theta_c,
-        noise=noise,
-        states0=states0,
-        gamma=0.999,
-    )
+    args = batch_args([_request(states0[b], W[b], theta_c[b]) for b in range(len(W))], noise)
     kernel.run_trials_batch(*args)
     return args[-1], args[-2].trace
 

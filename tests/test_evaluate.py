@@ -22,7 +22,7 @@ from striatal.params import (
     Plant,
     Simulation,
 )
-from striatal.sim.rollout import Protocol, run_trial, simulate
+from striatal.sim.rollout import Protocol, TrialRequest, run_trial, simulate
 
 SHORT = Simulation(duration=40.0)
 
@@ -33,7 +33,11 @@ def test_counts_the_learners_success_test_on_the_same_draws(plant: Plant) -> Non
     res = pass_probability(plant, ctrl, SHORT, Protocol(), 25, seed=3)
     rng = np.random.default_rng(3)
     outcomes = [
-        run_trial(plant, ctrl, SHORT, protocol=Protocol(), trace=np.zeros(6), gamma=0.0, rng=rng)
+        run_trial(
+            TrialRequest(
+                plant, ctrl, SHORT, protocol=Protocol(), trace=np.zeros(6), gamma=0.0, rng=rng
+            )
+        )
         for _ in range(25)
     ]
     assert res.passes == sum(o.success for o in outcomes)

@@ -28,7 +28,7 @@ class Calls:
         self.real = self.imagined = 0
         self.real_steps = 0
         self.dreaming = False
-        run_trial, imagine = kernel.run_trial, forward.imagine
+        run_trial, imagine = kernel.run_trial, forward.imagine_steps
 
         def counted(*args: Any) -> Any:
             out = run_trial(*args)
@@ -42,12 +42,12 @@ class Calls:
         def dreaming(*args: Any, **kwargs: Any) -> Any:
             self.dreaming = True
             try:
-                return imagine(*args, **kwargs)
+                return (yield from imagine(*args, **kwargs))
             finally:
                 self.dreaming = False
 
         monkeypatch.setattr(kernel, "run_trial", counted)
-        monkeypatch.setattr(forward, "imagine", dreaming)
+        monkeypatch.setattr(forward, "imagine_steps", dreaming)
 
 
 def start(seed: int) -> Controller:

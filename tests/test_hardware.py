@@ -21,7 +21,14 @@ from striatal.params import CHAPTER_HARDWARE, Controller, Hardware, Plant, Simul
 from striatal.sim import kernel
 from striatal.sim.control import mean_action
 from striatal.sim.dynamics import force, force_level_accelerations
-from striatal.sim.rollout import NO_PROTOCOL, Protocol, batch_args, run_trial, simulate
+from striatal.sim.rollout import (
+    NO_PROTOCOL,
+    Protocol,
+    TrialRequest,
+    batch_args,
+    run_trial,
+    simulate,
+)
 
 
 def _force_level_run(
@@ -160,14 +167,16 @@ def test_a_trial_that_leaves_the_track_ends_there_as_a_track_failure() -> None:
     assert np.all(np.abs(traj.column("x")[:-1]) <= 4.0)
     # in the protocol it earns the failure reward
     o2 = run_trial(
-        plant,
-        controller,
-        sim,
-        protocol=Protocol(),
-        trace=np.zeros(6),
-        gamma=0.0,
-        rng=None,
-        hardware=Hardware(track=4.0),
+        TrialRequest(
+            plant,
+            controller,
+            sim,
+            protocol=Protocol(),
+            trace=np.zeros(6),
+            gamma=0.0,
+            rng=None,
+            hardware=Hardware(track=4.0),
+        )
     )
     assert o2.reward == Protocol().reward_failure and o2.end_reason == "track"
     # and a wide enough track changes nothing
@@ -214,15 +223,7 @@ def test_hardware_validation() -> None:
 def test_lockstep_refuses_the_force_hold_the_limit_and_the_track() -> None:
     sim = Simulation(duration=1.0)
     for hw in (Hardware(hold="force"), Hardware(max_force=5.0), Hardware(track=1.0)):
-        args = batch_args(
-            Plant(),
-            Controller(),
-            sim,
-            protocol=NO_PROTOCOL,
-            gains=np.tile(Controller().gains, (2, 1)),
-            theta_c=np.full(2, Controller().theta_c),
-            hardware=hw,
-        )
+        args = batch_args([TrialRequest(Plant(), Controller(), sim, NO_PROTOCOL, hardware=hw)] * 2)
         with pytest.raises(ValueError, match="run_trials_batch"):
             kernel.run_trials_lockstep(*args)
         kernel.run_trials_batch(*args)  # the batch kernel runs them

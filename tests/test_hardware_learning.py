@@ -3,7 +3,7 @@
 
 Every simulation of the run (its trials, the success checks, the robust stop rule,
 the re-checks after it, the searches of a sweep) gets the run's hardware (checked by
-monkeypatching ``trial_args``, through which every kernel call passes); a 0.5-m
+monkeypatching ``plant_args``, through which every kernel call passes); a 0.5-m
 track ends trials by the track; resume keeps the limits; a run without them keeps its
 run id of before; bad values are one line and exit 2.
 """
@@ -24,8 +24,7 @@ from striatal.errors import ParameterError
 from striatal.experiments import baselines
 from striatal.learners import LearnerConfig, default_config, learn
 from striatal.params import Controller, Hardware, Plant, Simulation
-from striatal.sim import batch as batch_module
-from striatal.sim import online, rollout
+from striatal.sim import rollout
 
 #: Run ids of ``striatal.train(learner="pgpe", init="random", seed=0, max_trials=1)``
 #: and of the same with ``robust=True``, computed on main before the limits existed.
@@ -35,16 +34,15 @@ ID_BEFORE_ROBUST = "1d2dfd8188bf4ccc"
 
 @pytest.fixture
 def hardwares(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[Hardware]]:
-    """The hardware of every kernel call (all go through ``trial_args``)."""
+    """The hardware of every kernel call (all go through ``plant_args``)."""
     seen: list[Hardware] = []
-    real = rollout.trial_args
+    real = rollout.plant_args
 
     def noting(*args: Any, **kwargs: Any) -> Any:
-        seen.append(kwargs.get("hardware", rollout.CHAPTER_HARDWARE))
+        seen.append(args[3] if len(args) > 3 else kwargs["hardware"])
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(rollout, "trial_args", noting)
-    monkeypatch.setattr(online, "trial_args", noting)
+    monkeypatch.setattr(rollout, "plant_args", noting)
     yield seen
 
 
@@ -116,14 +114,14 @@ def test_the_ac_online_trial_holds_u_under_the_runs_limits(hardwares: list[Hardw
 
 def test_a_half_metre_track_ends_trials_by_the_track(monkeypatch: pytest.MonkeyPatch) -> None:
     outcomes: list[Any] = []
-    real = batch_module.run_trial
+    real = rollout.TrialRequest.run
 
-    def noting(*args: Any, **kwargs: Any) -> Any:
-        o = real(*args, **kwargs)
+    def noting(request: rollout.TrialRequest) -> Any:
+        o = real(request)
         outcomes.append(o)
         return o
 
-    monkeypatch.setattr(batch_module, "run_trial", noting)
+    monkeypatch.setattr(rollout.TrialRequest, "run", noting)
     config = default_config("chapter", max_trials=4, track=0.5)
     result = learn(Plant(), Controller(), config, seed=0)
     ends = [o.end_reason for o in outcomes]

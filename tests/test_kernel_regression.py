@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from striatal.params import CHAPTER_INITIAL_W, Controller, Plant, Simulation
-from striatal.sim.rollout import Protocol, SensorNoise, run_trial, simulate
+from striatal.sim.rollout import Protocol, SensorNoise, TrialRequest, run_trial, simulate
 
 
 def _hex(values: object) -> list[str]:
@@ -57,15 +57,17 @@ def test_failing_trial_and_its_trace_are_pinned() -> None:
     """Soft switch, printed e1, an action every 2 steps: fails eq 25 at 60 s."""
     trace = np.zeros(6)
     o = run_trial(
-        Plant(),
-        Controller(CHAPTER_INITIAL_W, 0.6, switch="soft"),
-        Simulation(),
-        protocol=Protocol(),
-        trace=trace,
-        gamma=0.995,
-        rng=np.random.default_rng(9),
-        chapter_eligibility=True,
-        action_every=2,
+        TrialRequest(
+            Plant(),
+            Controller(CHAPTER_INITIAL_W, 0.6, switch="soft"),
+            Simulation(),
+            protocol=Protocol(),
+            trace=trace,
+            gamma=0.995,
+            rng=np.random.default_rng(9),
+            chapter_eligibility=True,
+            action_every=2,
+        )
     )
     assert (o.reward, o.early, o.fault, o.ended_at) == (-5.0, False, False, 60.0)
     assert _hex(trace) == [
@@ -90,14 +92,16 @@ def test_early_end_at_the_check_is_pinned() -> None:
     W[3] = 0.0
     trace = np.zeros(6)
     o = run_trial(
-        Plant(),
-        Controller(CHAPTER_INITIAL_W, 0.6),
-        Simulation(),
-        protocol=Protocol(),
-        trace=trace,
-        gamma=0.999,
-        rng=np.random.default_rng(0),
-        gains=W,
+        TrialRequest(
+            Plant(),
+            Controller(CHAPTER_INITIAL_W, 0.6),
+            Simulation(),
+            protocol=Protocol(),
+            trace=trace,
+            gamma=0.999,
+            rng=np.random.default_rng(0),
+            gains=W,
+        )
     )
     assert (o.reward, o.early, o.fault, o.ended_at) == (-5.0, True, False, 30.0)
     assert float(o.max_abs_x).hex() == "0x1.47c5d26785a37p-2"
@@ -123,14 +127,16 @@ def test_fault_is_pinned() -> None:
     W[4] = 1.0e4
     trace = np.zeros(6)
     o = run_trial(
-        Plant(),
-        Controller(CHAPTER_INITIAL_W, 0.6),
-        Simulation(),
-        protocol=Protocol(),
-        trace=trace,
-        gamma=0.999,
-        rng=np.random.default_rng(1),
-        gains=W,
+        TrialRequest(
+            Plant(),
+            Controller(CHAPTER_INITIAL_W, 0.6),
+            Simulation(),
+            protocol=Protocol(),
+            trace=trace,
+            gamma=0.999,
+            rng=np.random.default_rng(1),
+            gains=W,
+        )
     )
     assert (o.reward, o.early, o.fault) == (-5.0, False, True)
     assert float(o.ended_at).hex() == "0x1.999999999999ap-5"

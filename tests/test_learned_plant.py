@@ -159,24 +159,19 @@ def test_a_learned_plant_refuses_what_it_cannot_be() -> None:
     with pytest.raises(ParameterError, match="cannot be scaled"):
         plant.scaled(pole_mass=0.8)
     with pytest.raises(ParameterError, match="physical plants only"):
-        batch_args(
-            plant,
-            FINAL,
-            Simulation(),
-            protocol=Protocol(),
-            gains=np.zeros((2, 6)),
-            theta_c=np.zeros(2),
-        )
+        batch_args([TrialRequest(plant, FINAL, Simulation(), Protocol())] * 2)
     request = TrialRequest(plant, FINAL, Simulation(duration=1.0), NO_PROTOCOL)
     assert request.batch_key() is None
     assert request.run() == run_trial(
-        plant,
-        FINAL,
-        Simulation(duration=1.0),
-        protocol=NO_PROTOCOL,
-        trace=np.zeros(6),
-        gamma=0.0,
-        rng=None,
+        TrialRequest(
+            plant,
+            FINAL,
+            Simulation(duration=1.0),
+            protocol=NO_PROTOCOL,
+            trace=np.zeros(6),
+            gamma=0.0,
+            rng=None,
+        )
     )
     with pytest.raises(ParameterError, match="needs LearnedDynamics"):
         LearnedPlant()

@@ -23,6 +23,7 @@ from striatal.learners import LearnerConfig, initial_state, learning_step
 from striatal.learners import learn as train
 from striatal.learners.common import SHAPED_WEIGHTS
 from striatal.learners.pgpe import PGPE as PGPE_RULE
+from striatal.learners.rule import TrialContext
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -134,7 +135,8 @@ def test_pgpe_update_equals_its_formula() -> None:
     assert b1 == rec1.reward
     rng = np.random.default_rng()
     rng.bit_generator.state = s1.rng_state
-    eps = PGPE_RULE.plan(s1, cfg, rng, plant).scratch["eps"]
+    context = TrialContext(plant, RANDOM_START, sim, protocol, cfg.hardware)
+    eps = PGPE_RULE.plan(s1, cfg, rng, context).scratch["eps"]
     s2, rec2 = learning_step(s1, plant, RANDOM_START, sim, protocol, cfg)
     delta = rec2.reward - b1
     factor = delta / math.sqrt((1 - cfg.rpe_rate) * square1 + cfg.rpe_rate * delta**2)
@@ -342,7 +344,7 @@ def test_a_rule_registered_by_the_recipe_runs_in_the_shared_loop(
         history_columns = ("best",)
         memory_names = ("best",)
 
-        def plan(self, state, config, rng, plant):  # type: ignore[no-untyped-def]
+        def plan(self, state, config, rng, context):  # type: ignore[no-untyped-def]
             c = pick(HillConfig, config)
             W = np.array(state.W)
             eps = np.zeros(6)
@@ -351,16 +353,13 @@ def test_a_rule_registered_by_the_recipe_runs_in_the_shared_loop(
                 W=W + eps, theta_c=state.theta_c, trace=np.zeros(6), gamma=0.0, rng=None
             )
 
-        def update(self, state, config, trial):  # type: ignore[no-untyped-def]
+        def update(self, state, config, trial, context):  # type: ignore[no-untyped-def]
             plan, reward, success = trial.plan, trial.reward, trial.success
             best = state.get("best")[0] if state.get("best") else -math.inf
             keep = not success and config.alpha > 0 and reward > best
             W = tuple(float(w) for w in plan.W) if keep else state.W
-            return learners.Update(W, state.theta_c, (("best", (max(best, reward),)),))
-
-        def extra(self, state, plan):  # type: ignore[no-untyped-def]
-            best = state.get("best")
-            return (("best", best[0] if best else math.nan),)
+            extra = (("best", best if state.get("best") else math.nan),)
+            return learners.Update(W, state.theta_c, (("best", (max(best, reward),)),), extra)
 
     monkeypatch.setitem(learners.RULES, "hill", HillClimb())
     cfg = learners.default_config("hill", max_trials=6)

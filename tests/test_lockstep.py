@@ -14,13 +14,14 @@ libm results are reproducible bit for bit.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plant, Simulation
 from striatal.sim import kernel
-from striatal.sim.rollout import Protocol, batch_args, trial_args
+from striatal.sim.rollout import Protocol, TrialRequest, batch_args
 
 SIM = Simulation(duration=35.0)  # past the 30-s check of eq 24
 EXACT = [kernel.OUT_REWARD, kernel.OUT_END_STEP, kernel.OUT_FAULT, kernel.OUT_EARLY]
@@ -76,32 +77,13 @@ def _compare(
     n_draws = -(-SIM.n_steps // action_every)
     noise = np.random.default_rng(7).standard_normal((B, n_draws)) if stochastic else None
     traces0 = np.random.default_rng(3).normal(0.0, 0.1, (B, 6))
-    args = batch_args(
-        Plant(),
-        controller,
-        SIM,
-        protocol=Protocol(),
-        gains=W,
-        theta_c=theta_c,
-        noise=noise,
-        states0=states0,
-        model=model,
-        action_every=action_every,
-        chapter_eligibility=chapter_eligibility,
-        gamma=0.999,
-        traces=traces0.copy(),
-    )
-    kernel.run_trials_lockstep(*args)
-    outs, traces = args[-1], args[-2].trace
-    for b in range(B):
-        one = trial_args(
+    requests = [
+        TrialRequest(
             Plant(),
-            controller,
+            replace(controller, theta_c=theta_c[b]),
             SIM,
-            protocol=Protocol(),
-            noise=None if noise is None else noise[b],
+            Protocol(),
             gains=W[b],
-            theta_c=theta_c[b],
             state0=states0[b],
             model=model,
             action_every=action_every,
@@ -109,6 +91,13 @@ def _compare(
             gamma=0.999,
             trace=traces0[b].copy(),
         )
+        for b in range(B)
+    ]
+    args = batch_args(requests, noise)
+    kernel.run_trials_lockstep(*args)
+    outs, traces = args[-1], args[-2].trace
+    for b in range(B):
+        one = requests[b].args(None if noise is None else noise[b])
         kernel.run_trial(*one)
         out, trace = one[-1].out, one[-2].trace
         np.testing.assert_array_equal(outs[b, EXACT], out[EXACT], err_msg=f"row {b}")

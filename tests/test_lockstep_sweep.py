@@ -109,7 +109,9 @@ def test_rows_come_as_runs_finish_and_share_the_wall_time() -> None:
     assert [r["trials"] for r in rows[1:]] == [15] * (len(rows) - 1)
     wall = sum(r["wall_seconds"] for r in rows)
     assert all(r["wall_seconds"] > 0 for r in rows)
-    assert 0.5 * elapsed < wall <= elapsed
+    # the runs' Python and the kernel calls overlap (Lockstep's lanes): each is counted
+    # once, so the sum lies between half the wall time and twice it
+    assert 0.5 * elapsed < wall <= 2.0 * elapsed
 
 
 def test_the_batch_sweep_resumes_a_cut_sweep_of_either_engine(tmp_path: Path) -> None:

@@ -19,8 +19,7 @@ from striatal.params import (
     Plant,
     Simulation,
 )
-from striatal.sim import batch
-from striatal.sim.rollout import Protocol
+from striatal.sim.rollout import Protocol, TrialRequest
 
 SHORT = Simulation(duration=10.0)
 DOC = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"
@@ -64,13 +63,13 @@ class Count:
 
     def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
         self.n = 0
-        real = batch.run_trial
+        real = TrialRequest.run
 
-        def counted(*args: Any, **kwargs: Any) -> Any:
+        def counted(request: TrialRequest) -> Any:
             self.n += 1
-            return real(*args, **kwargs)
+            return real(request)
 
-        monkeypatch.setattr(batch, "run_trial", counted)
+        monkeypatch.setattr(TrialRequest, "run", counted)
 
 
 @pytest.mark.parametrize(
@@ -114,10 +113,11 @@ def test_a_rule_that_judges_its_candidate_must_plan_it_noise_free(
     before the trial runs."""
     from striatal.learners import loop
     from striatal.learners.chapter import ChapterRule
+    from striatal.learners.rule import Judging
 
     class Noisy(ChapterRule):
         name = "noisy-candidate"
-        judges_candidate = True
+        judging = Judging("candidate")
 
     monkeypatch.setitem(loop.RULES, "noisy-candidate", Noisy())
     config = default_config("chapter", max_trials=1, success_on="mean")

@@ -24,7 +24,7 @@ from striatal.params import (
     Simulation,
 )
 from striatal.sim import kernel, online
-from striatal.sim.rollout import Protocol, run_trial, simulate
+from striatal.sim.rollout import OnlineLearning, Protocol, TrialRequest, run_trial, simulate
 
 RANDOM_W = (0.55, -0.06, 0.39, 0.63, 0.08, 0.03)
 RANDOM_START = Controller(RANDOM_W, 0.6)
@@ -48,23 +48,33 @@ def _online(
 ) -> tuple[online.OnlineTrial, np.ndarray, np.ndarray]:
     trace = np.zeros(6)
     v = np.zeros(online.N_FEATURES) if critic is None else critic
-    result = online.online_trial(
-        Plant(),
-        Controller(W, theta_c),
-        sim,
-        protocol=Protocol(),
-        rng=None if seed is None else np.random.default_rng(seed),
-        gains=np.array(W),
-        trace=trace,
-        gamma=gamma,
-        critic=v,
-        critic_trace=np.zeros(online.N_FEATURES),
+    square = kwargs.pop("square", None)
+    learning = OnlineLearning(
         alpha=alpha,
         beta=beta,
         discount=discount,
         critic_decay=critic_decay,
         max_step=max_step,
-        **kwargs,  # type: ignore[arg-type]
+        w1_floor=kwargs.pop("w1_floor", 1e-3),  # type: ignore[arg-type]
+        normalise=kwargs.pop("normalise", False),  # type: ignore[arg-type]
+        square_rate=kwargs.pop("square_rate", 0.001),  # type: ignore[arg-type]
+        critic=v,
+        critic_trace=np.zeros(online.N_FEATURES),
+        square=np.zeros(1) if square is None else square,  # type: ignore[arg-type]
+    )
+    result = online.online_trial(
+        TrialRequest(
+            Plant(),
+            Controller(W, theta_c),
+            sim,
+            Protocol(),
+            rng=None if seed is None else np.random.default_rng(seed),
+            gains=np.array(W),
+            trace=trace,
+            gamma=gamma,
+            online=learning,
+            **kwargs,  # type: ignore[arg-type]
+        )
     )
     return result, trace, v
 
@@ -97,15 +107,17 @@ def test_with_zero_rates_the_online_trial_is_the_kernels_bit_for_bit(
     sim = Simulation()
     trace = np.zeros(6)
     want = run_trial(
-        Plant(),
-        Controller(W, theta_c),
-        sim,
-        protocol=Protocol(),
-        trace=trace,
-        gamma=0.99,
-        rng=None if seed is None else np.random.default_rng(seed),
-        gains=np.array(W),
-        **options,  # type: ignore[arg-type]
+        TrialRequest(
+            Plant(),
+            Controller(W, theta_c),
+            sim,
+            protocol=Protocol(),
+            trace=trace,
+            gamma=0.99,
+            rng=None if seed is None else np.random.default_rng(seed),
+            gains=np.array(W),
+            **options,  # type: ignore[arg-type]
+        )
     )
     got, got_trace, _ = _online(W, theta_c, sim, seed, **options)
     assert got.outcome == want

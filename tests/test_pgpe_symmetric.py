@@ -11,6 +11,7 @@ import pytest
 from striatal.errors import ParameterError
 from striatal.learners import LearnerState, default_config, initial_state, learning_step
 from striatal.learners.pgpe import PGPE
+from striatal.learners.rule import TrialContext
 from striatal.params import Controller, Plant, Simulation
 from striatal.sim.rollout import Protocol
 
@@ -24,10 +25,10 @@ def _steps(config, n, state=None):  # type: ignore[no-untyped-def]
         plan_state = state
         rng = np.random.default_rng()
         rng.bit_generator.state = state.rng_state
-        plan = PGPE.plan(state, config, rng, Plant())
-        state, record = learning_step(
-            state, Plant(), Controller(gains=W0, theta_c=0.6), Simulation(), Protocol(), config
-        )
+        template = Controller(gains=W0, theta_c=0.6)
+        context = TrialContext(Plant(), template, Simulation(), Protocol(), config.hardware)
+        plan = PGPE.plan(state, config, rng, context)
+        state, record = learning_step(state, Plant(), template, Simulation(), Protocol(), config)
         out.append((plan_state, plan, state, record))
     return out
 

@@ -11,7 +11,7 @@ from striatal.params import CHAPTER_FINAL_W, CHAPTER_INITIAL_W, Controller, Plan
 from striatal.sim import kernel
 from striatal.sim.policy import eligibilities, log_prob_of, rescaling
 from striatal.sim.reference import reference_trial
-from striatal.sim.rollout import Protocol, run_trial, trial_args
+from striatal.sim.rollout import Protocol, TrialRequest, run_trial
 
 
 def fd_score(
@@ -75,16 +75,9 @@ def test_kernel_eligibility_trace_equals_reference(plant: Plant) -> None:
             plant, c, sim, Protocol(), noise, 0.995, trace0, chapter_form=chapter_form
         )
         trace = trace0.copy()
-        args = trial_args(
-            plant,
-            c,
-            sim,
-            protocol=Protocol(),
-            noise=noise,
-            chapter_eligibility=chapter_form,
-            gamma=0.995,
-            trace=trace,
-        )
+        args = TrialRequest(
+            plant, c, sim, Protocol(), chapter_eligibility=chapter_form, gamma=0.995, trace=trace
+        ).args(noise)
         kernel.run_trial(*args)
         out = args[-1].out
         assert out[kernel.OUT_REWARD] == ref[0]
@@ -102,13 +95,15 @@ def test_same_noise_same_trial(plant: Plant) -> None:
     for _ in range(2):
         trace = np.zeros(6)
         o = run_trial(
-            plant,
-            c,
-            sim,
-            protocol=Protocol(),
-            trace=trace,
-            gamma=0.99,
-            rng=np.random.default_rng(11),
+            TrialRequest(
+                plant,
+                c,
+                sim,
+                protocol=Protocol(),
+                trace=trace,
+                gamma=0.99,
+                rng=np.random.default_rng(11),
+            )
         )
         results.append((o, trace.copy()))
     assert results[0][0] == results[1][0]

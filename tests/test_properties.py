@@ -33,7 +33,7 @@ from striatal.io.files import read_csv, read_json
 from striatal.learners import LearnerConfig
 from striatal.learners.chapter import gain_update
 from striatal.params import MAX_STEPS, Controller, Plant, Simulation, check_seed
-from striatal.sim.rollout import Protocol, SensorNoise, run_trial, simulate
+from striatal.sim.rollout import Protocol, SensorNoise, TrialRequest, run_trial, simulate
 
 N = int(os.environ.get("STRIATAL_HYPOTHESIS_EXAMPLES", "0"))
 PROFILE = settings(
@@ -113,17 +113,19 @@ def test_valid_inputs_give_finite_outputs_or_a_fault(
         sensor = SensorNoise()
     trace = np.zeros(6)
     o = run_trial(
-        plant,
-        controller,
-        sim,
-        protocol=Protocol(check_time=sim.duration / 2),
-        trace=trace,
-        gamma=gamma,
-        rng=rng,
-        action_every=action_every,
-        chapter_eligibility=chapter_eligibility,
-        model=model,
-        sensor=sensor,
+        TrialRequest(
+            plant,
+            controller,
+            sim,
+            protocol=Protocol(check_time=sim.duration / 2),
+            trace=trace,
+            gamma=gamma,
+            rng=rng,
+            action_every=action_every,
+            chapter_eligibility=chapter_eligibility,
+            model=model,
+            sensor=sensor,
+        )
     )
     assert o.reward in (10.0, -5.0)
     assert 0.0 <= o.ended_at <= sim.n_steps * sim.dt

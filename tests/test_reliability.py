@@ -43,7 +43,7 @@ from striatal.io.files import read_json
 from striatal.learners import LearnerConfig, initial_state, learning_step
 from striatal.learners.chapter import gain_update
 from striatal.params import CHAPTER_INITIAL_W, Controller, Plant, Simulation
-from striatal.sim.rollout import Protocol, SensorNoise, run_trial
+from striatal.sim.rollout import Protocol, SensorNoise, TrialRequest, run_trial
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "reliability.md"
@@ -418,14 +418,16 @@ def kernel_blow_up(tmp: Path) -> tuple[bool, str]:
     W = np.full(6, 1e300)
     trace = np.zeros(6)
     o = run_trial(
-        Plant(),
-        Controller(CHAPTER_INITIAL_W, 0.6),
-        Simulation(),
-        protocol=Protocol(),
-        trace=trace,
-        gamma=0.999,
-        rng=np.random.default_rng(0),
-        gains=W,
+        TrialRequest(
+            Plant(),
+            Controller(CHAPTER_INITIAL_W, 0.6),
+            Simulation(),
+            protocol=Protocol(),
+            trace=trace,
+            gamma=0.999,
+            rng=np.random.default_rng(0),
+            gains=W,
+        )
     )
     ok = o.fault and o.reward == -5.0 and not o.success
     return ok, (

@@ -34,7 +34,7 @@ from striatal.sim.robust import (
     run_case,
     stop_check,
 )
-from striatal.sim.rollout import Protocol, run_trial
+from striatal.sim.rollout import Protocol, TrialRequest, run_trial
 
 DT = 0.01
 #: A controller pgpe learned with ``--robust`` (train --learner pgpe --robust --init
@@ -124,14 +124,16 @@ def test_a_passing_protocol_trial_with_the_force_held_is_the_nominal_case(index:
     trial that passes under it ends exactly where the case (no check) ends."""
     c = _controllers()[index]
     trial = run_trial(
-        Plant(),
-        c,
-        Simulation(),
-        protocol=Protocol(),
-        trace=np.zeros(6),
-        gamma=0.0,
-        rng=None,
-        hardware=ROBUST_HARDWARE,
+        TrialRequest(
+            Plant(),
+            c,
+            Simulation(),
+            protocol=Protocol(),
+            trace=np.zeros(6),
+            gamma=0.0,
+            rng=None,
+            hardware=ROBUST_HARDWARE,
+        )
     )
     case = run_case(c, ROBUST_CASES[0])
     if trial.success:

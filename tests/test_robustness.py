@@ -14,7 +14,14 @@ from striatal.errors import ParameterError
 from striatal.experiments.robustness import CONDITIONS, controller_groups, evaluate
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
 from striatal.sim.robust import Perturbation
-from striatal.sim.rollout import Protocol, SensorNoise, TrialOutcome, run_trial, simulate
+from striatal.sim.rollout import (
+    Protocol,
+    SensorNoise,
+    TrialOutcome,
+    TrialRequest,
+    run_trial,
+    simulate,
+)
 
 FINAL = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
 
@@ -30,16 +37,18 @@ def mean_policy_trial(
 ) -> TrialOutcome:
     """The trial robustness.evaluate runs: the rollout's mean-policy trial, no wrapper."""
     return run_trial(
-        plant,
-        controller,
-        sim,
-        protocol=protocol,
-        trace=np.zeros(6),
-        gamma=0.0,
-        rng=rng,
-        model=model,
-        sensor=sensor,
-        mean_policy=True,
+        TrialRequest(
+            plant,
+            controller,
+            sim,
+            protocol=protocol,
+            trace=np.zeros(6),
+            gamma=0.0,
+            rng=rng,
+            model=model,
+            sensor=sensor,
+            mean_policy=True,
+        )
     )
 
 

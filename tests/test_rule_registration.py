@@ -39,23 +39,21 @@ class HillRule(Rule):
     memory_names = ("best",)
     history_columns = ("step",)
 
-    def plan(self, state, config, rng, plant):
+    def plan(self, state, config, rng, context):
         step = config.alpha * rng.standard_normal(6)
         W = np.array(state.W) + step
         W[0] = max(W[0], 0.1)
         return TrialPlan(W=W, theta_c=state.theta_c, trace=np.zeros(6), gamma=0.0, rng=rng,
                          scratch={"step": step})
 
-    def update(self, state, config, trial):
+    def update(self, state, config, trial, context):
         plan, reward, success = trial.plan, trial.reward, trial.success
         best = dict(state.memory).get("best")
+        extra = (("step", float(abs(plan.scratch["step"]).sum())),)
         if success or (best is not None and reward <= best[0]):
-            return Update(W=state.W, theta_c=state.theta_c, memory=state.memory)
+            return Update(W=state.W, theta_c=state.theta_c, memory=state.memory, extra=extra)
         return Update(W=tuple(float(w) for w in plan.W), theta_c=state.theta_c,
-                      memory=(("best", (float(reward),)),))
-
-    def extra(self, state, plan):
-        return (("step", float(abs(plan.scratch["step"]).sum())),)
+                      memory=(("best", (float(reward),)),), extra=extra)
 
 
 HILL = HillRule()

@@ -86,10 +86,11 @@ from striatal.params import (
     Plant,
     Simulation,
 )
+from striatal.sim.batch import Steps, driven
 from striatal.sim.control import balancing_gain_matrix
 from striatal.sim.dynamics import linearization
-from striatal.sim.robust import nominal_is_the_case, robust_hardware, stop_check
-from striatal.sim.rollout import Protocol, recorded_trial, run_trial
+from striatal.sim.robust import nominal_is_the_case, robust_hardware, stop_check_steps
+from striatal.sim.rollout import Protocol, TrialRequest
 
 __all__ = [
     "BASELINES",
@@ -100,11 +101,14 @@ __all__ = [
     "Budget",
     "LqrFit",
     "cmaes",
+    "cmaes_steps",
     "fixed_controller",
+    "fixed_controller_steps",
     "lqr_controller",
     "lqr_fit",
     "lqr_gain",
     "random_search",
+    "random_search_steps",
 ]
 
 
@@ -217,66 +221,47 @@ def _trial(
     budget: Budget,
     rng: np.random.Generator,
     shaped: bool = False,
-) -> tuple[bool, float, float, int]:
+) -> Steps[tuple[bool, float, float, int]]:
     """(success, shaped score or nan, simulated seconds, simulations) of one 60-s trial
-    of p; with ``budget.robust`` the force held and, when the trial passes, the robust
-    stop rule's runs (module docstring) added to the seconds and simulations."""
+    of p, yielded; with ``budget.robust`` the force held and, when the trial passes, the
+    robust stop rule's runs (module docstring) added to the seconds and simulations."""
     success_on, robust, hardware = budget.success_on, budget.robust, budget.hardware
     if hardware is None:
         hardware = robust_hardware() if robust else CHAPTER_HARDWARE
-    ok, score, seconds = _one_trial(plant, template, sim, p, success_on, rng, shaped, hardware)
+    controller = template.with_gains(template.gains, float(p[6]))
+    W = np.array(p[:N_GAINS], dtype=float)
+    (outcome,) = yield [
+        TrialRequest(
+            plant,
+            controller,
+            sim,
+            Protocol(),
+            rng=rng if success_on == "noisy" else None,
+            gains=W,
+            hardware=hardware,
+            record=shaped,
+        )
+    ]
+    score = math.nan
+    if shaped:
+        assert outcome.rows is not None
+        score = shaped_reward(outcome.rows, outcome, plant, sim, Protocol())
+    ok, seconds = outcome.success, outcome.ended_at
     if not (robust and ok):
         return ok, score, seconds, 1
-    verdict = stop_check(
-        template.with_gains(template.gains, float(p[6])),
+    verdict = yield from stop_check_steps(
+        controller,
         plant,
         sim.dt,
-        gains=np.array(p[:N_GAINS], dtype=float),
+        gains=W,
         nominal_passed=success_on == "mean" and nominal_is_the_case(sim),
         hardware=hardware,
     )
     return verdict.robust, score, seconds + verdict.simulated_seconds, 1 + verdict.simulations
 
 
-def _one_trial(
-    plant: Plant,
-    template: Controller,
-    sim: Simulation,
-    p: np.ndarray,
-    success_on: SuccessOn,
-    rng: np.random.Generator,
-    shaped: bool,
-    hardware: Hardware,
-) -> tuple[bool, float, float]:
-    controller = template.with_gains(template.gains, float(p[6]))
-    W = np.array(p[:N_GAINS], dtype=float)
-    noise = rng if success_on == "noisy" else None
-    if shaped:
-        outcome, data = recorded_trial(
-            plant,
-            controller,
-            sim,
-            protocol=Protocol(),
-            gains=W,
-            rng=noise,
-            trace=np.zeros(N_GAINS),
-            gamma=0.0,
-            hardware=hardware,
-        )
-        score = shaped_reward(data, outcome, plant, sim, Protocol())
-        return outcome.success, score, outcome.ended_at
-    outcome = run_trial(
-        plant,
-        controller,
-        sim,
-        protocol=Protocol(),
-        trace=np.zeros(N_GAINS),
-        gamma=0.0,
-        rng=noise,
-        gains=W,
-        hardware=hardware,
-    )
-    return outcome.success, math.nan, outcome.ended_at
+#: What a baseline's search returns (success, trials, W, theta_c, simulations, ...).
+Found = dict[str, Any]
 
 
 def _result(
@@ -294,7 +279,7 @@ def _result(
     }
 
 
-def fixed_controller(
+def fixed_controller_steps(
     plant: Plant,
     template: Controller,
     sim: Simulation,
@@ -302,14 +287,14 @@ def fixed_controller(
     theta_c: float,
     seed: int,
     budget: Budget,
-) -> dict[str, Any]:
+) -> Steps[Found]:
     """Trials of a fixed (W, theta_c) until one passes (lqr, hand)."""
     p = np.array([*W, theta_c])
     rng = np.random.default_rng(seed)
     tries = budget.max_trials if budget.success_on == "noisy" else 1
     seconds, runs = 0.0, 0
     for trial in range(1, tries + 1):
-        ok, _, t, n = _trial(plant, template, sim, p, budget, rng)
+        ok, _, t, n = yield from _trial(plant, template, sim, p, budget, rng)
         seconds, runs = seconds + t, runs + n
         if ok:
             return _result(True, trial, p, seconds, runs)
@@ -319,13 +304,13 @@ def fixed_controller(
     return _result(False, budget.max_trials, p, seconds, runs)
 
 
-def random_search(
+def random_search_steps(
     plant: Plant,
     template: Controller,
     sim: Simulation,
     seed: int,
     budget: Budget,
-) -> dict[str, Any]:
+) -> Steps[Found]:
     """Uniform draws of (W1..W6, theta_c) from RANDOM_BOX, one trial each."""
     draw = np.random.default_rng([seed, 3])
     rng = np.random.default_rng(seed)
@@ -335,14 +320,14 @@ def random_search(
     for trial in range(1, budget.max_trials + 1):
         if trial > 1:
             p = draw.uniform(low, high)
-        ok, _, t, n = _trial(plant, template, sim, p, budget, rng)
+        ok, _, t, n = yield from _trial(plant, template, sim, p, budget, rng)
         seconds, runs = seconds + t, runs + n
         if ok:
             return _result(True, trial, p, seconds, runs)
     return _result(False, budget.max_trials, p, seconds, runs)
 
 
-def cmaes(
+def cmaes_steps(
     plant: Plant,
     template: Controller,
     sim: Simulation,
@@ -351,7 +336,7 @@ def cmaes(
     seed: int,
     budget: Budget,
     sigma0: float = 1.0,
-) -> dict[str, Any]:
+) -> Steps[Found]:
     """IPOP-CMA-ES over (W1..W6, theta_c) from (W0, theta_c0) on minus the shaped reward.
 
     ``restarts`` in the result: how many times the search restarted with a doubled
@@ -385,7 +370,9 @@ def cmaes(
             for x in candidates:
                 trials += 1
                 p = np.clip(np.array(x), lower, upper)
-                ok, score, t, n = _trial(plant, template, sim, p, budget, rng, shaped=True)
+                ok, score, t, n = yield from _trial(
+                    plant, template, sim, p, budget, rng, shaped=True
+                )
                 seconds, runs = seconds + t, runs + n
                 if ok:
                     return _result(
@@ -403,33 +390,46 @@ def cmaes(
     return _result(False, max_trials, p, seconds, runs, restarts=restarts - 1, popsize=popsize)
 
 
-#: What a baseline's search returns (success, trials, W, theta_c, simulations, ...).
-Found = dict[str, Any]
 Config = LearnerConfig  # (short, so that each search's signature fits one line)
 
 
-def _lqr(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
+#: :func:`fixed_controller_steps` run on the scalar kernel.
+fixed_controller = driven(fixed_controller_steps)
+#: :func:`random_search_steps` run on the scalar kernel.
+random_search = driven(random_search_steps)
+#: :func:`cmaes_steps` run on the scalar kernel.
+cmaes = driven(cmaes_steps)
+
+
+def _lqr(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Steps[Found]:
     W, theta_c = lqr_controller(plant)
-    return fixed_controller(plant, template, sim, W, theta_c, seed, Budget.of(c))
+    return (yield from fixed_controller_steps(plant, template, sim, W, theta_c, seed, Budget.of(c)))
 
 
-def _hand(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
+def _hand(
+    plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config
+) -> Steps[Found]:
     W, theta_c = CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C
-    return fixed_controller(plant, template, sim, W, theta_c, seed, Budget.of(c))
+    return (yield from fixed_controller_steps(plant, template, sim, W, theta_c, seed, Budget.of(c)))
 
 
-def _random(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
-    return random_search(plant, template, sim, seed, Budget.of(c))
+def _random(
+    plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config
+) -> Steps[Found]:
+    return (yield from random_search_steps(plant, template, sim, seed, Budget.of(c)))
 
 
-def _cmaes(plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config) -> Found:
+def _cmaes(
+    plant: Plant, template: Controller, sim: Simulation, seed: int, c: Config
+) -> Steps[Found]:
     W0, theta_c0 = template.gains, template.theta_c
-    return cmaes(plant, template, sim, W0, theta_c0, seed, Budget.of(c))
+    return (yield from cmaes_steps(plant, template, sim, W0, theta_c0, seed, Budget.of(c)))
 
 
 #: A baseline arm's search from ``template`` (its W(0) and theta_c(0)) under ``config``'s
-#: budget and stop rule: success, trials, W, theta_c, simulations, simulated_seconds.
-Search = Callable[[Plant, Controller, Simulation, int, LearnerConfig], Found]
+#: budget and stop rule, its trials yielded: success, trials, W, theta_c, simulations,
+#: simulated_seconds.
+Search = Callable[[Plant, Controller, Simulation, int, LearnerConfig], Steps[Found]]
 #: The baselines by name, in the order of ``--baselines``' help.
 SEARCHES: dict[str, Search] = {"lqr": _lqr, "hand": _hand, "random": _random, "cmaes": _cmaes}
 BASELINES: tuple[str, ...] = tuple(SEARCHES)

@@ -5,11 +5,12 @@ as its own :func:`striatal.experiments.runner.run_one`. Here every run of the sw
 the same code, :func:`striatal.experiments.runner.run_steps` (the rule's own plan and
 update, the loop's success test, the evaluation), advanced together by
 :class:`striatal.sim.batch.Lockstep`: each round, the trials that the unfinished runs
-ask for (their learning trial, a success test's noise-free rerun, the evaluation's
-draws) run in batched kernel calls, and a run's row is yielded as soon as it is
-finished, so the sweep writes it to runs.csv and a rerun skips it. Trials that need
-more than a kernel summary (a recorded trial for the shaped reward, a rule's own trial,
-the robustness set, a baseline's search) run inside their run, one by one.
+ask for (their learning trial, a success test's noise-free rerun, the robustness set,
+a rule's own simulations such as ac's online trial and forward's imagined learning, a
+baseline's candidates, the evaluation's draws) run in batched kernel calls, and a run's
+row is yielded as soon as it is finished, so the sweep writes it to runs.csv and a
+rerun skips it. The trials no batch kernel takes (recorded ones, for the shaped reward
+or forward's model; those on a learned plant) run one by one on the scalar kernel.
 
 ``--engine batch``: :func:`striatal.sim.kernel.run_trials_batch`,
 a parallel loop over the scalar kernel that equals it bit for bit; every run draws its
@@ -26,8 +27,9 @@ of the same experiment: the arms' success rates agree within their intervals
 (tests/test_lockstep_sweep.py, docs/performance.md), a given run's row need not.
 
 ``wall_seconds`` of a row is its share of the engine's time: its run's own Python plus
-an even share of each batched call it was in, so the rows of a sweep sum to about its
-wall time.
+an even share of each batched call it was in. The runs' Python and the kernel calls
+overlap (:class:`striatal.sim.batch.Lockstep`'s lanes), so the rows of a sweep sum to
+between its wall time and twice it.
 """
 
 from __future__ import annotations

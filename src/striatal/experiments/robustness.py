@@ -21,7 +21,7 @@ from striatal.errors import DataFileError, ParameterError
 from striatal.io.rundir import result_of
 from striatal.params import N_GAINS, Controller, Plant, check_seed
 from striatal.sim.robust import Perturbation, run_case
-from striatal.sim.rollout import Protocol, run_trial
+from striatal.sim.rollout import Protocol, TrialRequest
 
 __all__ = [
     "CONDITIONS",
@@ -197,18 +197,16 @@ def evaluate(
     for controller, ss in zip(controllers, streams, strict=True):
         rng = np.random.default_rng(ss)
         for _ in range(n):
-            o = run_trial(
+            o = TrialRequest(
                 plant,
                 controller,
                 sim,
-                protocol=protocol,
-                trace=np.zeros(N_GAINS),
-                gamma=0.0,
+                protocol,
                 rng=rng,
                 model=nominal,
                 sensor=condition.sensor,
                 mean_policy=True,
-            )
+            ).run()
             success += o.success
             balanced += o.reward == protocol.reward_success
     total = n * len(controllers)

@@ -125,15 +125,15 @@ def learning_run_steps(
 
 
 def search(spec: RunSpec, W0: tuple[float, ...]) -> Steps[dict[str, Any]]:
-    """What the arm of ``spec`` finds from W(0) = ``W0``: a learning run (its trials
-    yielded) or a baseline (run here)."""
+    """What the arm of ``spec`` finds from W(0) = ``W0``: a learning run or a baseline's
+    search, its trials yielded."""
     template = spec.template.with_gains(W0, spec.template.theta_c)
     cfg = spec.config
     if spec.method == "learn":
         return (yield from learning_run_steps(spec.plant, template, cfg, spec.seed, spec.sim))
     search = baselines.SEARCHES.get(spec.method)
     if search is not None:
-        return search(spec.plant, template, spec.sim, spec.seed, cfg)
+        return (yield from search(spec.plant, template, spec.sim, spec.seed, cfg))
     raise ParameterError(f"unknown method {spec.method!r}; choose from {', '.join(METHODS)}")
 
 

@@ -41,7 +41,7 @@ from striatal.learners.loop import (
     register,
     rule_of,
 )
-from striatal.learners.rule import Rule, Trial, TrialPlan, Update
+from striatal.learners.rule import Judging, Rule, Trial, TrialContext, TrialPlan, Update
 from striatal.learners.state import History, LearnerState, TrialRecord
 
 __all__ = [
@@ -49,10 +49,12 @@ __all__ = [
     "RULES",
     "W1_FLOOR",
     "History",
+    "Judging",
     "LearnerConfig",
     "LearnerState",
     "Rule",
     "Trial",
+    "TrialContext",
     "TrialPlan",
     "TrialRecord",
     "Update",

@@ -12,8 +12,9 @@ eligibility trace D of eq 3 (the Gaussian policy of eq 5), and the critic,
 v <- v + beta delta(t) z(t). With ``normalise`` the actor's factor is delta over its
 running rms (mean square tracked at ``rpe_rate`` per step, carried across trials, memory
 "rpe_square"), so that alpha does not depend on the reward's scale. W changes within the
-trial; the compiled loop is
-:func:`striatal.sim.online.run_online_trial`, on the kernel's functions.
+trial (the plan's :class:`~striatal.sim.rollout.OnlineLearning`); the compiled loop is
+:func:`striatal.sim.kernel.run_online_trial`, on the kernel's functions, and the
+trial is yielded like any other, so the batch engines batch it.
 
 Between trials: the critic v carries over; theta_c follows eq 21 (``theta_c_rule``)
 as in the chapter; D is reset (or carried, ``reset_trace``). The success test
@@ -27,29 +28,19 @@ same exploring trials with the same critic as the learning run's first trial.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
-from typing import Any
 
 import numpy as np
 
-from striatal.learners.chapter import PolicyConfig, finite_trace, policy_plan
+from striatal.learners.chapter import PolicyConfig, finite_trace, policy_plan, policy_sigma
 from striatal.learners.common import theta_c_rule
 from striatal.learners.config import LearnerConfig, pick
-from striatal.learners.rule import Rule, Trial, TrialPlan, Update
+from striatal.learners.rule import Rule, Trial, TrialContext, TrialPlan, Update
 from striatal.learners.state import LearnerState
-from striatal.params import Plant
-from striatal.sim.kernel import sigma_of
-from striatal.sim.online import (
-    N_FEATURES,
-    N_STATS,
-    STAT_N,
-    STAT_RETURN,
-    STAT_SUM_DELTA,
-    online_trial,
-)
-from striatal.sim.rollout import TrialOutcome
+from striatal.sim.batch import Steps
+from striatal.sim.kernel import N_FEATURES, STAT_N, STAT_RETURN, STAT_SUM_DELTA
+from striatal.sim.rollout import OnlineLearning, TrialOutcome
 
 __all__ = ["AC", "AcConfig", "AcRule", "initial_critic"]
 
@@ -100,77 +91,61 @@ class AcRule(Rule):
     control_also = "the critic still learns (it is not part of the controller)"
     history_columns = ("sigma", "return", "mean_delta", "critic_norm")
     memory_names = ("critic", "trace", "rpe_square")
-    runs_trial = True
 
     def plan(
-        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
+        self,
+        state: LearnerState,
+        config: LearnerConfig,
+        rng: np.random.Generator,
+        context: TrialContext,
     ) -> TrialPlan:
-        base = policy_plan(state, config, rng)
-        return TrialPlan(
-            W=base.W,
-            theta_c=base.theta_c,
-            trace=base.trace,
-            gamma=base.gamma,
-            rng=base.rng,
-            eligibility=base.eligibility,
-            scratch={
-                "critic": initial_critic(state),
-                "critic_trace": np.zeros(N_FEATURES),
-                "W_end": base.W.copy(),
-                "stats": np.zeros(N_STATS),
-                "square": np.array(state.get("rpe_square") or (0.0,), dtype=float),
-            },
-        )
-
-    def run(self, config: LearnerConfig, plan: TrialPlan, trial: Mapping[str, Any]) -> TrialOutcome:
-        """The online trial (:func:`striatal.sim.online.online_trial`); the gains at its end
-        and its statistics go to the plan's scratch, the critic is updated there."""
+        """:func:`policy_plan` with the online learning of the trial: the critic carried
+        over, a fresh critic trace, the running mean square of delta."""
         c = pick(AcConfig, config)
-        result = online_trial(
-            trial["plant"],
-            trial["controller"],
-            trial["sim"],
-            protocol=trial["protocol"],
-            rng=plan.rng,
-            gains=plan.W,
-            trace=plan.trace,
-            gamma=plan.gamma,
-            critic=plan.scratch["critic"],
-            critic_trace=plan.scratch["critic_trace"],
+        online = OnlineLearning(
             alpha=c.alpha,
             beta=c.critic_rate,
             discount=c.td_discount,
             critic_decay=c.critic_decay,
             max_step=c.max_step,
             w1_floor=c.w1_floor,
-            action_every=trial["action_every"],
-            chapter_eligibility=plan.eligibility == "chapter",
-            model=trial["model"],
-            # u held, as ever; the run's force limit and track apply
-            hardware=replace(trial["hardware"], hold="u"),
             normalise=c.normalise,
             square_rate=c.rpe_rate,
-            square=plan.scratch["square"],
+            critic=initial_critic(state),
+            critic_trace=np.zeros(N_FEATURES),
+            square=np.array(state.get("rpe_square") or (0.0,), dtype=float),
         )
-        np.copyto(plan.scratch["W_end"], result.W)
-        np.copyto(plan.scratch["stats"], result.stats)
-        return result.outcome
+        return replace(policy_plan(state, config, rng), online=online)
 
-    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
+    def run(
+        self, config: LearnerConfig, plan: TrialPlan, context: TrialContext
+    ) -> Steps[TrialOutcome]:
+        """The online trial, with u held (as ever) under the run's force limit and track."""
+        held = replace(context, hardware=replace(context.hardware, hold="u"))
+        (outcome,) = yield [held.request(plan)]
+        return outcome
+
+    def update(
+        self, state: LearnerState, config: LearnerConfig, trial: Trial, context: TrialContext
+    ) -> Update:
         plan, outcome, success = trial.plan, trial.outcome, trial.success
+        online = plan.online
+        assert online is not None
         c = pick(AcConfig, config)
         W, theta_c = np.array(state.W, dtype=float), state.theta_c
         if not success:
-            end = plan.scratch["W_end"]
+            end = online.gains_end
             if np.all(np.isfinite(end)):
                 W = end
             theta_c = theta_c_rule(outcome, state.theta_c, c.theta_c_rule)
-        critic = plan.scratch["critic"]
+        critic = online.critic
         if not np.all(np.isfinite(critic)):
             critic = initial_critic(state)
-        square = plan.scratch["square"]
+        square = online.square
         if not np.all(np.isfinite(square)):
             square = np.array(state.get("rpe_square") or (0.0,))
+        stats = online.stats
+        n = stats[STAT_N]
         return Update(
             W=tuple(float(w) for w in W),
             theta_c=float(theta_c),
@@ -179,18 +154,14 @@ class AcRule(Rule):
                 ("trace", finite_trace(plan.trace)),
                 ("rpe_square", (float(square[0]),)),
             ),
-        )
-
-    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
-        """sigma of eq 5 at the trial's start; the trial's return sum r_k, mean TD error
-        and the critic's |v| after it (0 for a trial with no TD step)."""
-        stats = plan.scratch["stats"]
-        n = stats[STAT_N]
-        return (
-            ("sigma", float(sigma_of(plan.W[5]))),
-            ("return", float(stats[STAT_RETURN])),
-            ("mean_delta", float(stats[STAT_SUM_DELTA] / n) if n > 0 else 0.0),
-            ("critic_norm", float(np.linalg.norm(plan.scratch["critic"]))),
+            # sigma of eq 5 at the trial's start; the trial's return sum r_k, mean TD
+            # error and the critic's |v| after it (0 for a trial with no TD step)
+            extra=(
+                policy_sigma(plan),
+                ("return", float(stats[STAT_RETURN])),
+                ("mean_delta", float(stats[STAT_SUM_DELTA] / n) if n > 0 else 0.0),
+                ("critic_norm", float(np.linalg.norm(online.critic))),
+            ),
         )
 
 

@@ -16,10 +16,10 @@ from types import MappingProxyType
 import numpy as np
 
 from striatal.learners.common import theta_c_rule
-from striatal.learners.config import Eligibility, LearnerConfig, ThetaCRule, pick
-from striatal.learners.rule import Rule, Trial, TrialPlan, Update
+from striatal.learners.config import Eligibility, Eq21Rule, LearnerConfig, pick
+from striatal.learners.rule import Rule, Trial, TrialContext, TrialPlan, Update
 from striatal.learners.state import LearnerState
-from striatal.params import N_GAINS, Plant
+from striatal.params import N_GAINS
 from striatal.sim.kernel import sigma_of
 
 __all__ = [
@@ -31,6 +31,7 @@ __all__ = [
     "chapter_gain_update",
     "gain_update",
     "policy_plan",
+    "policy_sigma",
     "policy_trace",
 ]
 
@@ -44,7 +45,7 @@ class PolicyConfig:
     gamma: float
     reset_trace: bool
     eligibility: Eligibility
-    theta_c_rule: ThetaCRule
+    theta_c_rule: Eq21Rule
     max_step: float
     w1_floor: float
 
@@ -126,6 +127,12 @@ def finite_trace(trace: np.ndarray) -> tuple[float, ...]:
     return tuple(float(v) for v in trace)
 
 
+def policy_sigma(plan: TrialPlan) -> tuple[str, float]:
+    """The history column ("sigma", the policy std of eq 5 the trial explored with,
+    :func:`striatal.sim.kernel.sigma_of` of its W6)."""
+    return ("sigma", float(sigma_of(plan.W[5])))
+
+
 class PolicyRule(Rule):
     """A rule that explores per step with the Gaussian policy of eq 5 (chapter, rpe):
     the plan is :func:`policy_plan`, the history column its sigma."""
@@ -133,13 +140,13 @@ class PolicyRule(Rule):
     history_columns = ("sigma",)
 
     def plan(
-        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
+        self,
+        state: LearnerState,
+        config: LearnerConfig,
+        rng: np.random.Generator,
+        context: TrialContext,
     ) -> TrialPlan:
         return policy_plan(state, config, rng)
-
-    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
-        """sigma = exp(W6)-like policy std of eq 5 (:func:`striatal.sim.kernel.sigma_of`)."""
-        return (("sigma", float(sigma_of(plan.W[5]))),)
 
 
 class ChapterRule(PolicyRule):
@@ -157,7 +164,9 @@ class ChapterRule(PolicyRule):
     memory_names = ("trace",)
     raw_reward_signal = True
 
-    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
+    def update(
+        self, state: LearnerState, config: LearnerConfig, trial: Trial, context: TrialContext
+    ) -> Update:
         plan, outcome, reward, success = trial.plan, trial.outcome, trial.reward, trial.success
         c = pick(ChapterConfig, config)
         W, theta_c = plan.W, state.theta_c
@@ -168,6 +177,7 @@ class ChapterRule(PolicyRule):
             W=tuple(float(w) for w in W),
             theta_c=float(theta_c),
             memory=(("trace", finite_trace(plan.trace)),),
+            extra=(policy_sigma(plan),),
         )
 
 

@@ -22,6 +22,7 @@ __all__ = [
     "STORED_ALWAYS",
     "W1_FLOOR",
     "Eligibility",
+    "Eq21Rule",
     "ForwardModel",
     "LearnerConfig",
     "RewardKind",
@@ -38,7 +39,11 @@ __all__ = [
 ]
 
 SuccessOn = Literal["noisy", "mean"]
-ThetaCRule = Literal["swingup", "trial", "clamped", "fixed", "learned"]
+#: The readings of eq 21's theta_c rule (every rule that keeps theta_c out of its update).
+Eq21Rule = Literal["swingup", "trial", "clamped", "fixed"]
+#: ... and "learned": theta_c perturbed and updated with the gains (a rule whose config
+#: field takes it: pgpe).
+ThetaCRule = Literal[Eq21Rule, "learned"]
 Eligibility = Literal["score", "chapter"]
 RewardKind = Literal["sparse", "shaped"]
 ForwardModel = Literal["structured", "generic", "conditioned"]

@@ -8,17 +8,17 @@ let the rule update, record the
 history row and build the next state. Every simulated trial is counted in
 ``LearnerState.simulations`` (and its simulated time in ``simulated_seconds``):
 the learning trial and each success check that needs a trial of its own. A rule
-with ``judges_candidate`` (pgpe) is judged on the controller its trial ran; when
-that trial already was the noise-free run on the nominal plant, it is the check.
+that judges its candidate (``Rule.judging``: pgpe, forward) is judged on the controller
+its trial ran; when that trial already was the noise-free run on the nominal plant, it is the check.
 With ``config.robust`` (any rule) every trial and check holds the motor force
 (``striatal.sim.robust.ROBUST_HARDWARE``), the jitter corners are not checked, and a
 controller that passes the success test must also pass the robustness set
 (:func:`striatal.sim.robust.stop_check`, each of its runs counted; the nominal case is
 not rerun when the success test's noise-free nominal run already was it). With a
 jittered plant, a rule judged on its noise-free candidate is first filtered by its
-own trial on that plant (no nominal rerun); the set then decides. A rule that runs its
-trial itself (``runs_trial``: ac's online loop, ``striatal.sim.online``) runs it with u
-held even then; its success checks and the set hold the force. ``config.max_force``
+own trial on that plant (no nominal rerun); the set then decides. ac's online trial
+(``striatal.sim.online``) runs with u held even then; its success checks and the set
+hold the force. ``config.max_force``
 and ``config.track`` (:attr:`LearnerConfig.hardware`) apply to every trial, check and
 case of the set.
 :func:`learn` repeats it until success or ``max_trials``.
@@ -41,12 +41,12 @@ from striatal.learners.common import shaped_reward as shaped_reward
 from striatal.learners.config import LearnerConfig
 from striatal.learners.pgpe import PGPE
 from striatal.learners.rpe import RPE
-from striatal.learners.rule import Rule, Trial, Update
+from striatal.learners.rule import Rule, Trial, TrialContext, Update
 from striatal.learners.state import LearnerState, TrialRecord
 from striatal.params import Controller, Plant, Simulation
-from striatal.sim.batch import Steps, TrialRequest, drive, driven
-from striatal.sim.robust import nominal_is_the_case, stop_check
-from striatal.sim.rollout import Protocol, recorded_trial
+from striatal.sim.batch import Steps, drive, driven
+from striatal.sim.robust import nominal_is_the_case, stop_check_steps
+from striatal.sim.rollout import Protocol, TrialRequest
 
 __all__ = [
     "RULES",
@@ -130,14 +130,14 @@ def _finite(update: Update, state: LearnerState) -> Update:
     memory = tuple(
         (k, v if all(math.isfinite(x) for x in v) else old.get(k, ())) for k, v in update.memory
     )
-    return Update(W=W, theta_c=theta_c, memory=memory)
+    return Update(W=W, theta_c=theta_c, memory=memory, extra=update.extra)
 
 
 #: The checks of the success test, by name: what each runs. :func:`success_checks` says
 #: which a config applies, in order; the first that fails ends the test (docs/architecture.md).
 CHECKS: dict[str, str] = {
     "trial": "the trial itself: the noisy trial (success_on noisy), or the noise-free run "
-    "of the candidate a rule that judges_candidate ran (its own plant)",
+    "of the candidate a rule that judges its candidate ran (its own plant)",
     "rerun": "a noise-free run of the judged controller on the nominal plant",
     "jitter corners": "noise-free runs on the four corners of plant_jitter (pole mass and "
     "length scaled by 1 +- plant_jitter), the controller believing in the nominal plant",
@@ -152,7 +152,7 @@ def success_checks(config: LearnerConfig) -> tuple[str, ...]:
     rule = rule_of(config)
     if config.success_on == "noisy":
         checks: tuple[str, ...] = ("trial",)
-    elif rule.judges_candidate and (config.plant_jitter == 0.0 or config.robust):
+    elif rule.judging.candidate and (config.plant_jitter == 0.0 or config.robust):
         # its trial is the noise-free run of the judged controller (on a jittered plant
         # with robust: a first filter, the robustness set decides)
         checks = ("trial",)
@@ -174,6 +174,11 @@ def nominal_checked(config: LearnerConfig) -> bool:
     )
 
 
+#: The seed of a generator whose state is set right after (not the OS's entropy: a run
+#: restores its generator every trial).
+_BLANK = np.random.SeedSequence(0)
+
+
 def learning_steps(
     state: LearnerState,
     plant: Plant,
@@ -186,49 +191,31 @@ def learning_steps(
 
     Pure: the same state gives the same result. ``template`` carries the readings
     (balance sign, switch, inhibition); its gains are replaced by the state's. As
-    :data:`striatal.sim.batch.Steps`: the learning trial and the success test's noise-free
-    trials are yielded as requests (:func:`learning_step` runs them on the scalar
-    kernel); the trials that need more than the summary (a recorded trial, a rule's own
-    trial, the robustness set) run here.
+    :data:`striatal.sim.batch.Steps`: every simulation is yielded as a request (the
+    learning trial, the rule's own ones, the success test's trials and the robustness
+    set); :func:`learning_step` runs them on the scalar kernel.
     """
     rule = rule_of(config)
-    rng = np.random.default_rng()
+    context = TrialContext(plant, template, sim, protocol, config.hardware, config.action_every)
+    rng = np.random.Generator(np.random.PCG64(_BLANK))
     rng.bit_generator.state = state.rng_state
-    plan = rule.plan(state, config, rng, plant)
-    if rule.judges_candidate and plan.rng is not None:
+    plan = rule.plan(state, config, rng, context)
+    judging = rule.judging
+    if judging.candidate and plan.rng is not None:
         raise ParameterError(
             f"learner {rule.name!r} judges its candidate, so its trials must be noise-free "
             "(TrialPlan.rng None)"
         )
-    true_plant = plan.plant or plant
-    model = plant if plan.plant is not None else None
-    trial_controller = replace(template, theta_c=plan.theta_c)
-    hardware = config.hardware
-    kwargs = dict(
-        plant=true_plant,
-        controller=trial_controller,
-        sim=sim,
-        protocol=protocol,
-        gains=plan.W,
-        rng=plan.rng,
-        trace=plan.trace,
-        gamma=plan.gamma,
-        action_every=config.action_every,
-        chapter_eligibility=plan.eligibility == "chapter",
-        model=model,
-        hardware=hardware,
-    )
-    if rule.runs_trial:
-        outcome = rule.run(config, plan, kwargs)
-        reward = outcome.reward
-    elif config.reward == "shaped":
-        outcome, data = recorded_trial(**kwargs)  # type: ignore[arg-type]
-        reward = shaped_reward(data, outcome, true_plant, sim, protocol)
-    else:
-        (outcome,) = yield [TrialRequest(**kwargs)]  # type: ignore[arg-type]
-        reward = outcome.reward
+    shaped = config.reward == "shaped"
+    if shaped and not plan.record:
+        plan = replace(plan, record=True)
+    outcome = yield from rule.run(config, plan, context)
+    reward = outcome.reward
+    if shaped:
+        assert outcome.rows is not None
+        reward = shaped_reward(outcome.rows, outcome, plan.plant or plant, sim, protocol)
     simulations, seconds = 1, outcome.ended_at
-    if rule.judges_candidate:
+    if judging.candidate:
         # the controller the trial ran (e.g. pgpe's perturbed p') is the one judged
         W = np.asarray(plan.W, dtype=float)
         controller = replace(template, theta_c=plan.theta_c)
@@ -236,6 +223,7 @@ def learning_steps(
         W = np.array(state.W, dtype=float)
         controller = replace(template, theta_c=state.theta_c)
     success = True
+    checks: tuple[tuple[tuple[float, float], np.ndarray], ...] = ()
     for check in success_checks(config):
         if not success:
             break
@@ -244,15 +232,16 @@ def learning_steps(
             continue
         if check == "robustness set":
             nominal = nominal_checked(config) and nominal_is_the_case(sim, config.action_every)
-            verdict = stop_check(
+            verdict = yield from stop_check_steps(
                 controller,
                 plant,
                 sim.dt,
                 gains=W,
                 nominal_passed=nominal,
-                hardware=hardware,
-                record=rule.check_recorder(plan),
+                hardware=context.hardware,
+                record=plan.record_checks,
             )
+            checks = verdict.recorded
             simulations += verdict.simulations
             seconds += verdict.simulated_seconds
             success = verdict.robust
@@ -274,13 +263,15 @@ def learning_steps(
                     gains=W,
                     action_every=config.action_every,
                     model=model_i,
-                    hardware=hardware,
+                    hardware=context.hardware,
                 )
             ]
             simulations += 1
             seconds += rerun.ended_at
             success = rerun.success
-    update = _finite(rule.update(state, config, Trial(plan, outcome, reward, success)), state)
+    trial = Trial(plan, outcome, reward, success, checks)
+    update = yield from rule.update_steps(state, config, trial, context)
+    update = _finite(update, state)
     record = TrialRecord(
         trial=state.trials_done + 1,
         reward=reward,
@@ -291,7 +282,7 @@ def learning_steps(
         success=success,
         fault=outcome.fault,
         early=outcome.early,
-        extra=rule.extra(state, plan),
+        extra=update.extra,
     )
     new_state = LearnerState(
         trials_done=state.trials_done + 1,

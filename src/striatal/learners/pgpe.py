@@ -29,7 +29,7 @@ without learning.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from types import MappingProxyType
 
 import numpy as np
@@ -44,9 +44,9 @@ from striatal.learners.common import (
     three_factor_update,
 )
 from striatal.learners.config import LearnerConfig, RewardKind, ThetaCRule, pick
-from striatal.learners.rule import Rule, Trial, TrialPlan, Update
+from striatal.learners.rule import Judging, Rule, Trial, TrialContext, TrialPlan, Update
 from striatal.learners.state import LearnerState
-from striatal.params import N_GAINS, Plant
+from striatal.params import N_GAINS
 from striatal.sim import kernel
 
 __all__ = [
@@ -145,9 +145,7 @@ class PgpeRule(Rule):
     control = MappingProxyType({"alpha": 0.0, "sigma_rate": 0.0})
     history_columns = ("explore",)
     memory_names = ("explore", "reward_mean", "rpe_square", "pair_z", "pair_reward", "pair_scale")
-    learns_theta_c = True
-    judges_candidate = True
-    mean_policy_only = "acts with the mean policy of perturbed gains"
+    judging = Judging("candidate", mean_policy_only="acts with the mean policy of perturbed gains")
     control_text = (
         "the same perturbations around W(0) with the same spreads and no update, judged "
         "like the learner on the candidate each trial ran"
@@ -162,9 +160,14 @@ class PgpeRule(Rule):
         check_decay(config.alpha, config.decay)
 
     def plan(
-        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
+        self,
+        state: LearnerState,
+        config: LearnerConfig,
+        rng: np.random.Generator,
+        context: TrialContext,
     ) -> TrialPlan:
         c = pick(PgpeConfig, config)
+        plant = context.plant
         learn_theta_c = c.theta_c_rule == "learned"
         p = np.array([*state.W[:5], state.theta_c])
         s = np.array(state.get("explore")) if state.get("explore") else initial_explore(c.explore)
@@ -192,11 +195,15 @@ class PgpeRule(Rule):
             scratch={"p": p, "eps": p_trial - p, "s": s, "z": z, "scale": scale},
         )
 
-    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
+    def update(
+        self, state: LearnerState, config: LearnerConfig, trial: Trial, context: TrialContext
+    ) -> Update:
         plan, outcome, reward, success = trial.plan, trial.outcome, trial.reward, trial.success
         c = pick(PgpeConfig, config)
         if c.symmetric:
-            return self._symmetric_update(state, c, plan, reward, success)
+            return replace(
+                self._symmetric_update(state, c, plan, reward, success), extra=_explore(plan)
+            )
         p, eps, s, z = (plan.scratch[k] for k in ("p", "eps", "s", "z"))
         factor, b, square = prediction_error(state, reward, c.rpe_rate, c.normalise)
         # on success: the candidate p' the trial ran and passed, exactly as it ran
@@ -217,6 +224,7 @@ class PgpeRule(Rule):
                 ("explore", tuple(float(v) for v in new_s)),
                 *baseline_memory(state, b, square),
             ),
+            extra=_explore(plan),
         )
 
     def _symmetric_update(
@@ -265,9 +273,10 @@ class PgpeRule(Rule):
             memory=memory,
         )
 
-    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
-        """explore: the exploration std s of W1..W5 used in this trial."""
-        return (("explore", float(plan.scratch["s"][0])),)
+
+def _explore(plan: TrialPlan) -> tuple[tuple[str, float]]:
+    """The history column: explore, the exploration std s of W1..W5 used in the trial."""
+    return (("explore", float(plan.scratch["s"][0])),)
 
 
 PGPE = PgpeRule()

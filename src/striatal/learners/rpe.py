@@ -15,7 +15,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from striatal.learners.chapter import PolicyConfig, PolicyRule, finite_trace
+from striatal.learners.chapter import PolicyConfig, PolicyRule, finite_trace, policy_sigma
 from striatal.learners.common import (
     baseline_memory,
     check_decay,
@@ -24,7 +24,7 @@ from striatal.learners.common import (
     three_factor_update,
 )
 from striatal.learners.config import LearnerConfig, RewardKind, pick
-from striatal.learners.rule import Trial, Update
+from striatal.learners.rule import Trial, TrialContext, Update
 from striatal.learners.state import LearnerState
 
 __all__ = ["RPE", "RpeConfig", "RpeRule"]
@@ -65,7 +65,9 @@ class RpeRule(PolicyRule):
         c = pick(RpeConfig, config)
         check_decay(c.rate, c.decay)
 
-    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
+    def update(
+        self, state: LearnerState, config: LearnerConfig, trial: Trial, context: TrialContext
+    ) -> Update:
         plan, outcome, reward, success = trial.plan, trial.outcome, trial.reward, trial.success
         c = pick(RpeConfig, config)
         factor, b, square = prediction_error(state, reward, c.rpe_rate, c.normalise)
@@ -80,6 +82,7 @@ class RpeRule(PolicyRule):
             W=tuple(float(w) for w in W),
             theta_c=float(theta_c),
             memory=(("trace", finite_trace(plan.trace)), *baseline_memory(state, b, square)),
+            extra=(policy_sigma(plan),),
         )
 
 

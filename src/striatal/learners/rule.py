@@ -2,31 +2,45 @@
 
 A rule is an object with a name, the :class:`LearnerConfig` fields it reads
 (``options``: its small frozen config), its tuned preset, its no-learning
-control, its own history columns and memory, and two functions: :meth:`Rule.plan`
-(the trial's gains, threshold, noise and trace, drawn before the trial) and
-:meth:`Rule.update` (the new W, theta_c and memory after it). The loop does the
-rest: restore the generator, run the trial, score it, test success, record the
-row and build the next :class:`LearnerState`. docs/architecture.md has the recipe
-for adding a rule.
+control, its own history columns and memory, how its success test judges it
+(:class:`Judging`), and two functions: :meth:`Rule.plan` (the trial's gains,
+threshold, noise and trace, drawn before the trial) and :meth:`Rule.update` (the
+new W, theta_c, memory and history columns after it). Both get the run's
+:class:`TrialContext` (the plant believed, the simulation, the protocol, the
+hardware). A rule that needs simulations of its own yields them as
+:class:`~striatal.sim.rollout.TrialRequest` (:meth:`Rule.run`, :meth:`Rule.update_steps`,
+``yield from``), so that every engine runs, and batches, them. The loop does the rest:
+restore the generator, run the trial, score it, test success, record the row and
+build the next :class:`LearnerState`. docs/architecture.md has the recipe for adding
+a rule.
 """
 
 from __future__ import annotations
 
+import typing
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from types import MappingProxyType
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.learners.config import LearnerConfig
 from striatal.learners.state import LearnerState, Memory
-from striatal.params import Plant
-from striatal.sim.robust import CheckRecorder
-from striatal.sim.rollout import TrialOutcome
+from striatal.params import Controller, Hardware, Plant, Simulation
+from striatal.sim.batch import Steps
+from striatal.sim.rollout import OnlineLearning, Protocol, TrialOutcome, TrialRequest
 
-__all__ = ["LOOP_OPTIONS", "Rule", "Trial", "TrialPlan", "Update"]
+__all__ = [
+    "LOOP_OPTIONS",
+    "Judging",
+    "Rule",
+    "Trial",
+    "TrialContext",
+    "TrialPlan",
+    "Update",
+]
 
 #: LearnerConfig fields the loop itself reads, whatever the rule.
 LOOP_OPTIONS = (
@@ -48,7 +62,10 @@ class TrialPlan:
     eligibility trace D the kernel updates in place (eq 3) with discount ``gamma``;
     ``rng``: the policy noise of eq 5 (None: the mean policy); ``plant``: the true
     plant of this trial when it differs from the nominal one the controller believes
-    in (None: the nominal plant); ``scratch``: the rule's own numbers for its update.
+    in (None: the nominal plant); ``record``: the outcome carries the trial's rows (a
+    rule that learns from the trajectory), ``record_checks``: so do the robustness
+    set's runs of the judged controller (:attr:`Trial.checks`); ``online``: the gains
+    learn within the trial (ac); ``scratch``: the rule's own numbers for its update.
     """
 
     W: np.ndarray
@@ -58,27 +75,91 @@ class TrialPlan:
     rng: np.random.Generator | None
     eligibility: str = "score"
     plant: Plant | None = None
+    record: bool = False
+    online: OnlineLearning | None = None
     scratch: Mapping[str, np.ndarray] = field(default_factory=dict)
+    record_checks: bool = False
+
+
+@dataclass(frozen=True)
+class TrialContext:
+    """What a run's trials share, handed to the rule's :meth:`Rule.plan`, :meth:`Rule.run`
+    and :meth:`Rule.update`: the nominal ``plant`` the controller believes in, the
+    controller ``template`` (its readings: balance sign, switch, inhibition), the
+    simulation, the protocol (eqs 24-25), the ``hardware`` of every trial and the
+    action rate (``action_every`` steps an action is held)."""
+
+    plant: Plant
+    template: Controller
+    sim: Simulation
+    protocol: Protocol
+    hardware: Hardware
+    action_every: int = 1
+
+    def request(self, plan: TrialPlan) -> TrialRequest:
+        """The trial ``plan`` asks for: on its plant (the controller believing the nominal
+        one), with its gains, threshold, noise, trace and recording."""
+        return TrialRequest(
+            self.plant if plan.plant is None else plan.plant,
+            replace(self.template, theta_c=plan.theta_c),
+            self.sim,
+            self.protocol,
+            rng=plan.rng,
+            trace=plan.trace,
+            gamma=plan.gamma,
+            gains=plan.W,
+            action_every=self.action_every,
+            chapter_eligibility=plan.eligibility == "chapter",
+            model=None if plan.plant is None else self.plant,
+            hardware=self.hardware,
+            record=plan.record,
+            online=plan.online,
+        )
 
 
 @dataclass(frozen=True)
 class Trial:
     """A trial as the loop hands it to :meth:`Rule.update`: the plan it ran, its outcome,
-    its reward (eqs 24-25, or the shaped reward) and the success test's verdict."""
+    its reward (eqs 24-25, or the shaped reward) and the success test's verdict; with
+    the plan's ``record_checks``, ``checks``: the robustness set's runs (each run's true
+    plant's pole mass and length factors, and its rows), counted by the loop as always."""
 
     plan: TrialPlan
     outcome: TrialOutcome
     reward: float
     success: bool
+    checks: tuple[tuple[tuple[float, float], np.ndarray], ...] = ()
 
 
 @dataclass(frozen=True)
 class Update:
-    """The rule's answer after a trial: the next W, theta_c and memory."""
+    """The rule's answer after a trial: the next W, theta_c and memory, and the values of
+    its history columns for this trial (``extra``: (name, value) in the order of
+    :attr:`Rule.history_columns`)."""
 
     W: tuple[float, ...]
     theta_c: float
     memory: Memory
+    extra: tuple[tuple[str, float], ...] = ()
+
+
+@dataclass(frozen=True)
+class Judging:
+    """How a rule's success test judges it (:func:`striatal.learners.loop.success_checks`).
+
+    ``controller``: "state" judges the state's mean W and theta_c; "candidate" the
+    controller the trial ran (the plan's W and theta_c: pgpe's perturbed p', forward's
+    real trial), whose trial must then be noise-free, and on success :meth:`Rule.update`
+    must return it. ``mean_policy_only``: why the test can only be judged on the mean
+    policy (the rule's trials act with it); empty: success_on "noisy" is taken too.
+    """
+
+    controller: Literal["state", "candidate"] = "state"
+    mean_policy_only: str = ""
+
+    @property
+    def candidate(self) -> bool:
+        return self.controller == "candidate"
 
 
 class Rule:
@@ -88,7 +169,9 @@ class Rule:
     name: ClassVar[str]
     #: One line for ``--help`` and the docs.
     summary: ClassVar[str]
-    #: The rule's own frozen config (a dataclass whose fields are LearnerConfig fields).
+    #: The rule's own frozen config (a dataclass whose fields are LearnerConfig fields;
+    #: a field typed with a narrower Literal than LearnerConfig's says which values the
+    #: rule takes: e.g. only pgpe's theta_c_rule takes "learned").
     config_type: ClassVar[type]
     #: The tuned preset: LearnerConfig fields changed from their defaults (docs/ablation.md).
     preset: ClassVar[Mapping[str, Any]] = MappingProxyType({})
@@ -112,21 +195,12 @@ class Rule:
     history_columns: ClassVar[tuple[str, ...]] = ()
     #: The entries the rule keeps in ``LearnerState.memory``.
     memory_names: ClassVar[tuple[str, ...]] = ()
-    #: Whether theta_c_rule "learned" (theta_c perturbed and updated with the gains) applies.
-    learns_theta_c: ClassVar[bool] = False
-    #: Whether the success test (success_on "mean") judges the controller the trial ran
-    #: (the plan's W and theta_c: pgpe's candidate p') rather than the state's mean W.
-    #: Then, on success, :meth:`update` must return the plan's W and theta_c.
-    judges_candidate: ClassVar[bool] = False
-    #: Why the rule's success test can only be judged on the mean policy (its trials act
-    #: with it); empty: the rule also takes success_on "noisy".
-    mean_policy_only: ClassVar[str] = ""
+    #: How the success test judges the rule.
+    judging: ClassVar[Judging] = Judging()
     #: Whether the rule's dopamine-like signal is the raw reward of eqs 24-25 (the
-    #: chapter's), so that splitting its updates by the reward's sign reads bursts and dips.
+    #: chapter's), so that splitting its updates by the reward's sign reads bursts and dips
+    #: (``striatal interpret``).
     raw_reward_signal: ClassVar[bool] = False
-    #: Whether the rule runs its trial itself (:meth:`run`): a rule that changes W within
-    #: the trial (ac). Otherwise the loop runs the plan with :mod:`striatal.sim.rollout`.
-    runs_trial: ClassVar[bool] = False
 
     @property
     def options(self) -> tuple[str, ...]:
@@ -134,7 +208,8 @@ class Rule:
         return (*LOOP_OPTIONS, *(f.name for f in fields(self.config_type)))
 
     def check(self, config: LearnerConfig) -> None:
-        """ParameterError if ``config`` sets a field this rule does not read, or a bad mix."""
+        """ParameterError if ``config`` sets a field this rule does not read, a value its
+        config's type does not take, or a bad mix."""
         default = LearnerConfig()
         unused = [
             f.name
@@ -146,15 +221,18 @@ class Rule:
                 f"learner {self.name!r} does not use {', '.join(unused)} "
                 f"(it reads: {', '.join(o for o in self.options if o != 'learner')})"
             )
-        if self.mean_policy_only and config.success_on != "mean":
+        for name, kind in typing.get_type_hints(self.config_type).items():
+            taken = typing.get_args(kind) if typing.get_origin(kind) is Literal else None
+            value = getattr(config, name)
+            if taken is not None and value not in taken:
+                raise ParameterError(
+                    f"learner {self.name!r} does not take {name} {value!r} "
+                    f"(it takes: {', '.join(map(str, taken))})"
+                )
+        if self.judging.mean_policy_only and config.success_on != "mean":
             raise ParameterError(
-                f"learner {self.name!r} {self.mean_policy_only}: its success test is judged "
-                "on the mean policy (success_on 'mean')"
-            )
-        if config.theta_c_rule == "learned" and not self.learns_theta_c:
-            raise ParameterError(
-                "theta_c_rule 'learned' (theta_c perturbed and updated with the gains) "
-                f"needs a learner that learns it (pgpe), not {self.name!r}"
+                f"learner {self.name!r} {self.judging.mean_policy_only}: its success test is "
+                "judged on the mean policy (success_on 'mean')"
             )
 
     def tuning_root_of(self, config: LearnerConfig) -> int | None:
@@ -167,33 +245,42 @@ class Rule:
         return replace(config, **self.control)
 
     def plan(
-        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
+        self,
+        state: LearnerState,
+        config: LearnerConfig,
+        rng: np.random.Generator,
+        context: TrialContext,
     ) -> TrialPlan:
+        """The trial to run from ``state``, drawing from ``rng``."""
         raise NotImplementedError
 
-    def check_recorder(self, plan: TrialPlan) -> CheckRecorder | None:
-        """Where the robustness set's runs of ``plan``'s candidate go, recorded with their
-        plant factors (a rule that learns from its checks, which the loop counts as
-        always); None (the default): not recorded."""
-        return None
+    def run(
+        self, config: LearnerConfig, plan: TrialPlan, context: TrialContext
+    ) -> Steps[TrialOutcome]:
+        """The trial of ``plan``, yielded as one request (:meth:`TrialContext.request`); its
+        outcome. A rule whose trial differs (ac: u held whatever the run's motor)
+        overrides it, and yields what it runs."""
+        (outcome,) = yield [context.request(plan)]
+        return outcome
 
-    def run(self, config: LearnerConfig, plan: TrialPlan, trial: Mapping[str, Any]) -> TrialOutcome:
-        """Run ``plan``'s trial (rules with :attr:`runs_trial` only); ``trial``: the loop's
-        keyword arguments of :func:`striatal.sim.rollout.run_trial` (plant, controller, sim,
-        protocol, gains, rng, trace, gamma, action_every, chapter_eligibility, model). The
-        trial's sparse reward (eqs 24-25) is the outcome's."""
+    def update(
+        self, state: LearnerState, config: LearnerConfig, trial: Trial, context: TrialContext
+    ) -> Update:
+        """The next W, theta_c and memory and the trial's history columns; with
+        ``success`` W and theta_c must stay (or, judging its candidate, become the
+        plan's: the controller judged)."""
         raise NotImplementedError
 
-    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
-        """The next W, theta_c and memory; with ``success`` W and theta_c must stay
-        (or, with :attr:`judges_candidate`, become the plan's: the controller judged)."""
-        raise NotImplementedError
+    def update_steps(
+        self, state: LearnerState, config: LearnerConfig, trial: Trial, context: TrialContext
+    ) -> Steps[Update]:
+        """:meth:`update` as :data:`striatal.sim.batch.Steps`: a rule that needs simulations
+        to update (forward's imagined learning) overrides this and yields them
+        (``yield from``); the default runs none."""
+        return self.update(state, config, trial, context)
+        yield  # a generator: the loop runs every rule's update with ``yield from``
 
     def imagined(self, state: LearnerState) -> tuple[int, float]:
         """The trials run so far on a model rather than the plant, and their simulated
         seconds: counted apart from ``LearnerState.simulations`` (none for most rules)."""
         return 0, 0.0
-
-    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
-        """Values of :attr:`history_columns` for the trial run from ``state``."""
-        return ()

@@ -26,29 +26,26 @@ from __future__ import annotations
 import functools
 import time
 from collections.abc import Callable, Generator, Sequence
-from dataclasses import dataclass, field
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Literal, ParamSpec, TypeVar
 
 import numba
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.params import CHAPTER_HARDWARE, N_GAINS, Controller, Hardware, Plant, Simulation
+from striatal.params import CHAPTER_HARDWARE
 from striatal.sim import kernel
-from striatal.sim.learned import LearnedPlant
 from striatal.sim.noise import row_parts, run_parts
 from striatal.sim.rollout import (
-    Protocol,
-    SensorNoise,
     TrialOutcome,
+    TrialRequest,
     action_draws,
     batch_args,
-    noise_arrays,
-    run_trial,
 )
 
 __all__ = [
     "BATCH_ENGINES",
+    "LANES",
     "Lockstep",
     "Steps",
     "TrialRequest",
@@ -69,72 +66,9 @@ BATCH_ENGINES: tuple[str, ...] = ("batch", "simd")
 CHUNK = 2
 #: From this many normals in one round, generators fill their rows on threads.
 PARALLEL_NORMALS = 50_000
-
-
-@dataclass(frozen=True, eq=False)
-class TrialRequest:
-    """One trial of the protocol: the arguments of :func:`striatal.sim.rollout.run_trial`.
-
-    By default the mean policy (``rng`` None), no trace; ``trace`` (6,) is updated in
-    place when the trial runs, as ``run_trial`` does.
-    """
-
-    plant: Plant
-    controller: Controller
-    sim: Simulation
-    protocol: Protocol
-    rng: np.random.Generator | None = None
-    trace: np.ndarray = field(default_factory=lambda: np.zeros(N_GAINS))
-    gamma: float = 0.0
-    gains: np.ndarray | None = None
-    action_every: int = 1
-    chapter_eligibility: bool = False
-    model: Plant | None = None
-    sensor: SensorNoise = field(default_factory=SensorNoise)
-    mean_policy: bool = False
-    hardware: Hardware = CHAPTER_HARDWARE
-
-    def run(self) -> TrialOutcome:
-        """The trial on the scalar kernel."""
-        return run_trial(
-            self.plant,
-            self.controller,
-            self.sim,
-            protocol=self.protocol,
-            trace=self.trace,
-            gamma=self.gamma,
-            rng=self.rng,
-            gains=self.gains,
-            action_every=self.action_every,
-            chapter_eligibility=self.chapter_eligibility,
-            model=self.model,
-            sensor=self.sensor,
-            mean_policy=self.mean_policy,
-            hardware=self.hardware,
-        )
-
-    @property
-    def draws_actions(self) -> bool:
-        return self.rng is not None and not self.mean_policy
-
-    def batch_key(self) -> tuple[Any, ...] | None:
-        """What a batched kernel call shares with this trial; None if it runs alone
-        (sensor noise: the batch kernel has none; a learned plant: it takes none)."""
-        if self.sensor.active or isinstance(self.plant, LearnedPlant):
-            return None
-        c = self.controller
-        return (
-            self.plant,
-            (c.balance_sign, c.switch, c.inhibition),
-            self.sim,
-            self.protocol,
-            self.action_every,
-            self.chapter_eligibility,
-            self.gamma,
-            self.model,
-            self.hardware,
-            self.draws_actions,
-        )
+#: The groups of generators :class:`Lockstep` runs in turn (one group's trials on the
+#: kernel while the main thread advances the others).
+LANES = 2
 
 
 def driven(steps: Callable[P, Steps[T]]) -> Callable[P, T]:
@@ -170,7 +104,7 @@ def run_requests(
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
     outcomes: list[TrialOutcome | None] = [None] * len(requests)
-    groups: dict[tuple[Any, ...], list[int]] = {}
+    groups: dict[tuple[object, ...], list[int]] = {}
     noise: dict[int, np.ndarray] = {}
     keys = [r.batch_key() for r in requests]
     if any(key is None for key in keys):
@@ -179,49 +113,58 @@ def run_requests(
             if key is None:
                 outcomes[i] = r.run()
                 continue
-            noise[i] = noise_arrays(r.sim, r.action_every, r.rng, r.sensor, r.mean_policy)[0]
+            noise[i] = r.noise()[0]
             groups.setdefault(key, []).append(i)
     else:
         for i, key in enumerate(keys):
             groups.setdefault(key, []).append(i)  # type: ignore[arg-type]
         noise = _draw_noise(requests)
     for members in groups.values():
-        first = requests[members[0]]
-        gains = np.array(
-            [
-                requests[i].controller.gains if requests[i].gains is None else requests[i].gains
-                for i in members
-            ],
-            dtype=float,
-        )
-        theta_c = np.array([requests[i].controller.theta_c for i in members], dtype=float)
-        traces = np.array([requests[i].trace for i in members], dtype=float)
+        group = [requests[i] for i in members]
+        first = group[0]
         args = batch_args(
-            first.plant,
-            first.controller,
-            first.sim,
-            protocol=first.protocol,
-            gains=gains,
-            theta_c=theta_c,
-            noise=np.array([noise[i] for i in members]) if first.draws_actions else None,
-            model=first.model,
-            action_every=first.action_every,
-            chapter_eligibility=first.chapter_eligibility,
-            gamma=first.gamma,
-            traces=traces,
-            hardware=first.hardware,
+            group, np.array([noise[i] for i in members]) if first.draws_actions else None
         )
-        simd = engine == "simd" and first.hardware == CHAPTER_HARDWARE
+        critic = None if first.online is None else _critics(group)
         old = numba.set_parallel_chunksize(CHUNK)
         try:
-            (kernel.run_trials_lockstep if simd else kernel.run_trials_batch)(*args)
+            if critic is not None:
+                kernel.run_online_trials_batch(*args[:7], critic, args.outs)
+            elif engine == "simd" and first.hardware == CHAPTER_HARDWARE:
+                # a block per thread when the trials are few
+                block = -(-len(group) // numba.get_num_threads())
+                kernel.run_trials_lockstep(*args, block)
+            else:
+                kernel.run_trials_batch(*args)
         finally:
             numba.set_parallel_chunksize(old)
-        out = args[-1]
-        for j, i in enumerate(members):
-            requests[i].trace[:] = traces[j]
-            outcomes[i] = TrialOutcome.from_row(out[j], first.sim)
+        for j, (i, r) in enumerate(zip(members, group, strict=True)):
+            r.trace[:] = args.learning.trace[j]
+            if critic is not None and r.online is not None:
+                o = r.online
+                for mine, rows in (
+                    (o.critic, critic.weights),
+                    (o.critic_trace, critic.trace),
+                    (o.stats, critic.stats),
+                    (o.square, critic.square),
+                    (o.gains_end, critic.gains_end),
+                ):
+                    mine[:] = rows[j]
+            outcomes[i] = TrialOutcome.from_row(args.outs[j], first.sim)
     return outcomes  # type: ignore[return-value]
+
+
+def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
+    """The critics of a group of online trials (shared rates), stacked (B, ...)."""
+    learnings = [r.online for r in group if r.online is not None]
+    first = learnings[0]
+    return first.args(group[0].protocol.check_x)._replace(
+        weights=np.array([o.critic for o in learnings]),
+        trace=np.array([o.critic_trace for o in learnings]),
+        stats=np.array([o.stats for o in learnings]),
+        square=np.array([o.square for o in learnings]),
+        gains_end=np.array([o.gains_end for o in learnings]),
+    )
 
 
 def _draw_noise(requests: Sequence[TrialRequest]) -> dict[int, np.ndarray]:
@@ -255,9 +198,18 @@ class Lockstep:
     """Many :data:`Steps` advanced together: each round, the requests of every unfinished
     one run in batched kernel calls (:func:`run_requests`).
 
+    The generators are split into :data:`LANES` groups that take turns: while one
+    group's trials run (their noise drawn and the kernel called on a worker thread, the
+    kernels releasing the GIL), the main thread advances the other group's generators
+    with the outcomes of its last call (their Python: the rules' plans and updates, the
+    success tests). The kernel's threads and the runs' Python then overlap instead of
+    taking turns. A generator is always in the same group, so its trials, and the order
+    in which its generator draws their noise, are what they would be alone.
+
     :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value.
     ``seconds[i]``: the wall time spent on generator i, its own Python plus an even
-    share of each kernel call it was in.
+    share of each kernel call it was in (the two overlap, so the sum over the
+    generators can exceed the wall time of :meth:`run`, at most twice).
     """
 
     def __init__(
@@ -275,26 +227,49 @@ class Lockstep:
         finally:
             self.seconds[i] += time.perf_counter() - t0
 
+    def _call(self, pending: dict[int, list[TrialRequest]]) -> _Call:
+        """Run the requests of ``pending`` (on the worker thread): their outcomes by
+        generator, each generator's share of the call's wall time added."""
+        order = list(pending)
+        flat = [r for i in order for r in pending[i]]
+        t0 = time.perf_counter()
+        outcomes = run_requests(flat, self.engine)
+        share = (time.perf_counter() - t0) / max(len(flat), 1)
+        out: dict[int, list[TrialOutcome]] = {}
+        at = 0
+        for i in order:
+            n = len(pending[i])
+            self.seconds[i] += share * n
+            out[i], at = outcomes[at : at + n], at + n
+        return out
+
     def run(self) -> Generator[tuple[int, Any], None, None]:
-        pending: dict[int, list[TrialRequest]] = {}
+        lanes: list[dict[int, list[TrialRequest]]] = [{} for _ in range(LANES)]
         for i in range(len(self.steps)):
             try:
-                pending[i] = self._advance(i, None)
+                lanes[i % LANES][i] = self._advance(i, None)
             except StopIteration as stop:
                 yield i, stop.value
-        while pending:
-            order = list(pending)
-            flat = [r for i in order for r in pending[i]]
-            t0 = time.perf_counter()
-            outcomes = run_requests(flat, self.engine)
-            share = (time.perf_counter() - t0) / max(len(flat), 1)
-            at = 0
-            for i in order:
-                n = len(pending[i])
-                self.seconds[i] += share * n
-                mine, at = outcomes[at : at + n], at + n
-                try:
-                    pending[i] = self._advance(i, mine)
-                except StopIteration as stop:
-                    del pending[i]
-                    yield i, stop.value
+        worker = ThreadPoolExecutor(1, thread_name_prefix="lockstep")
+        try:
+            calls: list[Future[_Call] | None] = [
+                worker.submit(self._call, lane) if lane else None for lane in lanes
+            ]
+            while any(call is not None for call in calls):
+                for g, call in enumerate(calls):
+                    if call is None:
+                        continue
+                    # the other lanes' kernel calls run meanwhile
+                    pending: dict[int, list[TrialRequest]] = {}
+                    for i, mine in call.result().items():
+                        try:
+                            pending[i] = self._advance(i, mine)
+                        except StopIteration as stop:
+                            yield i, stop.value
+                    calls[g] = worker.submit(self._call, pending) if pending else None
+        finally:
+            worker.shutdown(wait=True, cancel_futures=True)
+
+
+#: The outcomes of one lane's kernel calls, by generator.
+_Call = dict[int, list[TrialOutcome]]

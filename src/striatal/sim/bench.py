@@ -47,14 +47,15 @@ class TrialSetup:
     sim: Simulation
     protocol: Protocol
     controller: Controller
-    args: rollout.TrialArgs
+    args: kernel.TrialArgs
 
     @classmethod
     def chapter(cls, duration: float, dt: float, *, check: bool = True) -> TrialSetup:
         sim = Simulation(duration=duration, dt=dt)
         protocol = Protocol() if check else Protocol(check_time=-1.0)
         controller = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
-        args = rollout.trial_args(Plant(), controller, sim, protocol=protocol, gamma=TRACE_GAMMA)
+        request = rollout.TrialRequest(Plant(), controller, sim, protocol, gamma=TRACE_GAMMA)
+        args = request.args(np.empty(0), np.empty((0, 2)))
         return cls(sim=sim, protocol=protocol, controller=controller, args=args)
 
     @property
@@ -99,16 +100,10 @@ def run_batch_trials(
     """
     B = batch_size
     noise = batch_normals(rng, B, setup.n_steps) if stochastic else np.empty((B, 0))
-    args = rollout.batch_args(
-        Plant(),
-        setup.controller,
-        setup.sim,
-        protocol=setup.protocol,
-        gains=np.tile(setup.controller.gains, (B, 1)),
-        theta_c=np.full(B, setup.controller.theta_c),
-        noise=noise,
-        gamma=TRACE_GAMMA,
+    request = rollout.TrialRequest(
+        Plant(), setup.controller, setup.sim, setup.protocol, gamma=TRACE_GAMMA
     )
+    args = rollout.batch_args([request] * B, noise)
     run = kernel.run_trials_lockstep if lockstep else kernel.run_trials_batch
     run(*args[:-1], outs)
     return int(outs[:, kernel.OUT_END_STEP].sum())

@@ -25,7 +25,7 @@ counting every run.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -33,12 +33,8 @@ import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, Controller, Hardware, Plant, Simulation, SuccessTest
-from striatal.sim.batch import TrialRequest
-from striatal.sim.rollout import NO_PROTOCOL, SensorNoise, recorded_trial, simulate
-
-#: Called with each run of a check: the case's (pole mass factor, length factor) and the
-#: run's recorded rows (kernel.TRAJ_COLUMNS), for a learner that learns from its checks.
-CheckRecorder = Callable[[tuple[float, float], np.ndarray], None]
+from striatal.sim.batch import Steps, TrialRequest, driven
+from striatal.sim.rollout import NO_PROTOCOL, SensorNoise, simulate
 
 __all__ = [
     "ROBUST_CASES",
@@ -46,16 +42,17 @@ __all__ = [
     "ROBUST_HARDWARE",
     "STOP_ORDER",
     "CaseResult",
-    "CheckRecorder",
     "Perturbation",
     "RobustReport",
     "StopCheck",
     "check_robust",
     "family_check",
+    "family_check_steps",
     "nominal_is_the_case",
     "robust_hardware",
     "run_case",
     "stop_check",
+    "stop_check_steps",
 ]
 
 #: The chapter's final time T_f [s] of the robust test.
@@ -270,6 +267,9 @@ class StopCheck:
     simulations: int
     simulated_seconds: float
     failed: str | None = None
+    #: With ``record``: each run's true plant (pole mass, length) factors and its rows
+    #: (kernel.TRAJ_COLUMNS), for a learner that learns from its checks.
+    recorded: tuple[tuple[tuple[float, float], np.ndarray], ...] = ()
 
 
 def nominal_is_the_case(sim: Simulation, action_every: int = 1) -> bool:
@@ -301,29 +301,26 @@ def _case_request(
 
 
 def _until_failure(
-    requests: Iterable[tuple[str, TrialRequest, tuple[float, float]]],
-    record: CheckRecorder | None = None,
-) -> StopCheck:
-    """Run the named requests in order up to the first that fails its success test at
-    T_f, every run and its simulated seconds counted. With ``record``, each run is
-    recorded (the same outcome) and handed to it with its plant factors."""
+    requests: Iterable[tuple[str, TrialRequest, tuple[float, float]]], record: bool = False
+) -> Steps[StopCheck]:
+    """Run the named requests in order (each yielded) up to the first that fails its
+    success test at T_f, every run and its simulated seconds counted. ``record``: each
+    run recorded (the same outcome), its rows kept in the verdict with its plant's
+    factors."""
     runs, seconds = 0, 0.0
+    recorded: list[tuple[tuple[float, float], np.ndarray]] = []
     for name, request, factors in requests:
-        if record is None:
-            outcome = request.run()
-        else:
-            outcome, rows = recorded_trial(
-                **{f.name: getattr(request, f.name) for f in fields(request)}
-            )
-            record(factors, rows)
+        (outcome,) = yield [replace(request, record=True) if record else request]
+        if record and outcome.rows is not None:
+            recorded.append((factors, outcome.rows))
         runs += 1
         seconds += outcome.ended_at
         if not outcome.success:
-            return StopCheck(False, runs, seconds, name)
-    return StopCheck(True, runs, seconds)
+            return StopCheck(False, runs, seconds, name, tuple(recorded))
+    return StopCheck(True, runs, seconds, recorded=tuple(recorded))
 
 
-def stop_check(
+def stop_check_steps(
     controller: Controller,
     plant: Plant,
     dt: float,
@@ -331,16 +328,17 @@ def stop_check(
     gains: np.ndarray | None = None,
     nominal_passed: bool = False,
     hardware: Hardware = ROBUST_HARDWARE,
-    record: CheckRecorder | None = None,
-) -> StopCheck:
+    record: bool = False,
+) -> Steps[StopCheck]:
     """Is ``controller`` (with ``gains`` if given: a learner's guarded W) robust?
 
     Runs the cases of :data:`ROBUST_CASES` in :data:`STOP_ORDER`, mean policy, 60 s,
     ``hardware`` (force held), the controller keeping ``plant`` as its model, and stops
     at the first failure. ``nominal_passed``: the caller's own success test already was
     the nominal case (:func:`nominal_is_the_case`) and it passed; it is not run again.
-    The verdict equals :func:`check_robust`'s ``robust``. ``record``: handed every run
-    recorded, with its case's (pole mass, length) factors.
+    The verdict equals :func:`check_robust`'s ``robust``. Its runs are yielded
+    (:data:`striatal.sim.batch.Steps`); :func:`stop_check` runs them. ``record``: the
+    verdict keeps every run's rows with its case's plant factors.
     """
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
     cases = [ROBUST_CASES[i] for i in STOP_ORDER]
@@ -353,10 +351,14 @@ def stop_check(
         for case in cases
         if not (nominal_passed and case == ROBUST_CASES[0])
     )
-    return _until_failure(runs, record)
+    return (yield from _until_failure(runs, record))
 
 
-def family_check(
+#: :func:`stop_check_steps` run to its end on the scalar kernel.
+stop_check = driven(stop_check_steps)
+
+
+def family_check_steps(
     controller: Controller,
     plants: tuple[Plant, ...],
     dt: float,
@@ -364,7 +366,7 @@ def family_check(
     model: Plant | None = None,
     gains: np.ndarray | None = None,
     hardware: Hardware = ROBUST_HARDWARE,
-) -> StopCheck:
+) -> Steps[StopCheck]:
     """The robust stop rule on each plant of ``plants`` (a family a model cannot rule
     out), stopping at the first failure, every run counted. ``model`` None: each plant
     is believed exactly and :func:`stop_check`'s cases run around it (its corners
@@ -374,7 +376,9 @@ def family_check(
     if model is None:
         runs, seconds = 0, 0.0
         for plant in plants:
-            verdict = stop_check(controller, plant, dt, gains=gains, hardware=hardware)
+            verdict = yield from stop_check_steps(
+                controller, plant, dt, gains=gains, hardware=hardware
+            )
             runs += verdict.simulations
             seconds += verdict.simulated_seconds
             if not verdict.robust:
@@ -382,12 +386,18 @@ def family_check(
         return StopCheck(True, runs, seconds)
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
     starts = [c for c in ROBUST_CASES if c.pole_mass == 1.0 and c.length == 1.0]
-    return _until_failure(
-        (
-            f"plant {k}, {case.name}",
-            _case_request(controller, W, case, plant, model, dt, hardware),
-            (1.0, 1.0),
+    return (
+        yield from _until_failure(
+            (
+                f"plant {k}, {case.name}",
+                _case_request(controller, W, case, plant, model, dt, hardware),
+                (1.0, 1.0),
+            )
+            for k, plant in enumerate(plants)
+            for case in starts
         )
-        for k, plant in enumerate(plants)
-        for case in starts
     )
+
+
+#: :func:`family_check_steps` run to its end on the scalar kernel.
+family_check = driven(family_check_steps)

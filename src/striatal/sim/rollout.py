@@ -1,22 +1,23 @@
 """Runs of the plant under the switching controller, on the one compiled kernel.
 
-:func:`simulate` records a whole trajectory (the ``simulate`` command, figures,
-animations). :func:`run_trial` runs one trial of the chapter's protocol for the
-learner and returns its outcome without recording.
+:class:`TrialRequest` is the one parameter object of a trial: everything a trial
+takes, built in one place, run on the scalar kernel by :meth:`TrialRequest.run` (or in
+batches by :mod:`striatal.sim.batch`). :func:`simulate` records a whole trajectory
+(the ``simulate`` command, figures, animations).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, ParamSpec
 
 import numpy as np
 
 from striatal.errors import ParameterError
 from striatal.params import (
     CHAPTER_HARDWARE,
+    N_GAINS,
     Controller,
     Hardware,
     Plant,
@@ -29,27 +30,21 @@ from striatal.sim.learned import LearnedPlant
 
 __all__ = [
     "NO_PROTOCOL",
-    "BatchArgs",
+    "OnlineLearning",
     "Protocol",
     "SensorNoise",
     "Trajectory",
-    "TrialArgs",
     "TrialOutcome",
+    "TrialRequest",
     "action_draws",
     "batch_args",
     "control_args",
     "noise_arrays",
     "plant_args",
     "protocol_args",
-    "recorded_trial",
-    "run_kernel",
     "run_trial",
     "simulate",
-    "trial",
-    "trial_args",
 ]
-
-P = ParamSpec("P")
 
 
 @dataclass(frozen=True)
@@ -107,6 +102,8 @@ class TrialOutcome:
     """What one trial returns. ``final_state`` has theta wrapped to (-pi, pi].
 
     ``track``: the cart ran off the track (|x| > Hardware.track), which ends the trial.
+    ``rows``: the recorded trial (n, N_TRAJ), columns kernel.TRAJ_COLUMNS, when its
+    request asked for them (:attr:`TrialRequest.record`); None otherwise.
     """
 
     reward: float
@@ -121,6 +118,7 @@ class TrialOutcome:
     max_abs_force: float
     success: bool
     track: bool = False
+    rows: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @property
     def end_reason(self) -> str:
@@ -134,8 +132,10 @@ class TrialOutcome:
         return "success" if self.success else "failure"
 
     @classmethod
-    def from_row(cls, out: np.ndarray, sim: Simulation) -> TrialOutcome:
-        """Decode a kernel summary row (layout kernel.OUT_*)."""
+    def from_row(
+        cls, out: np.ndarray, sim: Simulation, rows: np.ndarray | None = None
+    ) -> TrialOutcome:
+        """Decode a kernel summary row (layout kernel.OUT_*), with the trial's ``rows``."""
         final = (
             float(out[kernel.OUT_X]),
             float(out[kernel.OUT_X_DOT]),
@@ -161,6 +161,7 @@ class TrialOutcome:
             and (not track)
             and sim.success.passed(np.array(final)),
             track=track,
+            rows=rows,
         )
 
 
@@ -229,29 +230,6 @@ def noise_arrays(
 # The one place where the kernel's grouped arguments (kernel.Gains, PlantArgs, ...)
 # are built from the frozen settings; every caller and test goes through these.
 
-#: The arguments of kernel.run_trial, in its order.
-TrialArgs = tuple[
-    np.ndarray,
-    kernel.Gains,
-    kernel.PlantArgs,
-    kernel.ControlArgs,
-    kernel.ProtocolArgs,
-    kernel.NoiseArgs,
-    kernel.TraceArgs,
-    kernel.Buffers,
-]
-#: The arguments of kernel.run_trials_batch, in its order.
-BatchArgs = tuple[
-    np.ndarray,
-    kernel.Gains,
-    kernel.PlantArgs,
-    kernel.ControlArgs,
-    kernel.ProtocolArgs,
-    np.ndarray,
-    kernel.TraceArgs,
-    np.ndarray,
-]
-
 
 def plant_args(
     plant: Plant, dt: float, model: Plant | None = None, hardware: Hardware = CHAPTER_HARDWARE
@@ -302,105 +280,238 @@ def protocol_args(
     )
 
 
-def trial_args(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    *,
-    protocol: Protocol,
-    noise: np.ndarray | None = None,
-    sensor_noise: np.ndarray | None = None,
-    sensor: SensorNoise = SensorNoise(),
-    gains: np.ndarray | None = None,
-    theta_c: float | None = None,
-    state0: np.ndarray | None = None,
-    model: Plant | None = None,
-    action_every: int = 1,
-    chapter_eligibility: bool = False,
-    gamma: float = 0.0,
-    trace: np.ndarray | None = None,
-    record: bool = False,
-    hardware: Hardware = CHAPTER_HARDWARE,
-) -> TrialArgs:
-    """The arguments of :func:`striatal.sim.kernel.run_trial`, in its order.
+@dataclass(frozen=True)
+class OnlineLearning:
+    """Learning within a trial: the online actor-critic's rates and critic
+    (:func:`striatal.sim.kernel.run_online_trial`). The arrays are updated in place when
+    the trial runs: ``critic`` v and ``critic_trace`` z (N_FEATURES,), ``square`` (1,)
+    the running mean square of delta, ``stats`` (N_STATS,) written, and ``gains_end``
+    (6,) the gains at the trial's end. The rates are described at
+    :class:`striatal.sim.kernel.CriticArgs`."""
 
-    ``noise``: standard normals of the action draws (None: the mean policy);
-    ``sensor_noise`` (n_steps, 2): standard normals scaled by ``sensor``'s stds;
-    ``gains`` / ``theta_c`` / ``state0`` override the controller's W, theta_c and
-    the simulation's start state; ``trace`` (6,) is updated in place (default
-    zeros); ``record`` allocates the (n_steps + 1, N_TRAJ) trajectory; ``hardware``: the
-    motor's hold and limit and the track (default: the chapter's idealisation). The
-    kernel writes ``args[-1].out`` and ``args[-1].traj``.
+    alpha: float
+    beta: float
+    discount: float
+    critic_decay: float
+    max_step: float
+    w1_floor: float
+    normalise: bool
+    square_rate: float
+    critic: np.ndarray
+    critic_trace: np.ndarray
+    square: np.ndarray
+    stats: np.ndarray = field(default_factory=lambda: np.zeros(kernel.N_STATS))
+    gains_end: np.ndarray = field(default_factory=lambda: np.zeros(N_GAINS))
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.discount < 1.0:
+            raise ParameterError(f"the TD discount must be in [0, 1), got {self.discount}")
+        if not 0.0 <= self.critic_decay <= 1.0:
+            raise ParameterError(
+                f"the critic's trace decay must be in [0, 1], got {self.critic_decay}"
+            )
+        if self.critic.shape != (kernel.N_FEATURES,) or self.critic_trace.shape != (
+            kernel.N_FEATURES,
+        ):
+            raise ParameterError(f"the critic and its trace must have shape ({kernel.N_FEATURES},)")
+
+    @property
+    def rates(self) -> tuple[float, float, float, float, float, float, bool, float]:
+        """The numbers a batch of online trials shares."""
+        return (
+            self.alpha,
+            self.beta,
+            self.discount,
+            self.critic_decay,
+            self.max_step,
+            self.w1_floor,
+            self.normalise,
+            self.square_rate,
+        )
+
+    def args(self, check_x: float) -> kernel.CriticArgs:
+        """The kernel's :class:`~striatal.sim.kernel.CriticArgs` on these arrays."""
+        return kernel.CriticArgs(
+            alpha=float(self.alpha),
+            beta=float(self.beta),
+            discount=float(self.discount),
+            critic_decay=float(self.critic_decay),
+            max_step=float(self.max_step),
+            w1_floor=float(self.w1_floor),
+            check_x=check_x,
+            weights=self.critic,
+            trace=self.critic_trace,
+            stats=self.stats,
+            normalise=bool(self.normalise),
+            square_rate=float(self.square_rate),
+            square=self.square,
+            gains_end=self.gains_end,
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class TrialRequest:
+    """One trial of the protocol: the one parameter object of a trial, whatever runs it
+    (:meth:`run` on the scalar kernel, :func:`striatal.sim.batch.run_requests` in
+    batches).
+
+    ``rng``: the policy noise of eq 5 (None: the mean policy); ``mean_policy`` runs the
+    mean policy even with a generator, which then draws only the sensor noise; ``trace``
+    (6,): the eligibility trace D (eq 3), updated in place, with discount ``gamma``;
+    ``gains`` overrides ``controller.gains`` without validation (a learner's guarded W);
+    ``model``: the plant the controller believes in (None: the true ``plant``);
+    ``sensor``: noise on what the controller sees; ``hardware``: the motor's hold and
+    limit and the track; ``record``: the outcome carries the trial's rows;
+    ``online``: the gains learn within the trial (the actor-critic's online trial);
+    ``state0`` [x, x_dot, theta, theta_dot] overrides the simulation's start.
+    The noise draws from ``rng`` do not depend on ``record``.
     """
-    W = np.asarray(controller.gains if gains is None else gains, dtype=float)
-    return (
-        sim.initial_state if state0 is None else np.asarray(state0, dtype=float),
-        kernel.Gains(W=W, theta_c=controller.theta_c if theta_c is None else float(theta_c)),
-        plant_args(plant, sim.dt, model, hardware),
-        control_args(
-            controller, action_every=action_every, chapter_eligibility=chapter_eligibility
-        ),
-        protocol_args(protocol, sim.dt, sim.n_steps, hardware.track),
-        kernel.NoiseArgs(
-            action=np.empty(0) if noise is None else noise,
-            sensor=np.empty((0, 2)) if sensor_noise is None else sensor_noise,
-            sensor_std_x=sensor.x_std,
-            sensor_std_theta=sensor.theta_std,
-        ),
-        kernel.TraceArgs(gamma=gamma, trace=np.zeros(6) if trace is None else trace),
-        kernel.Buffers(
-            out=np.empty(kernel.N_OUT),
-            traj=np.zeros((sim.n_steps + 1 if record else 0, kernel.N_TRAJ)),
-        ),
-    )
+
+    plant: Plant
+    controller: Controller
+    sim: Simulation
+    protocol: Protocol
+    rng: np.random.Generator | None = None
+    trace: np.ndarray = field(default_factory=lambda: np.zeros(N_GAINS))
+    gamma: float = 0.0
+    gains: np.ndarray | None = None
+    action_every: int = 1
+    chapter_eligibility: bool = False
+    model: Plant | None = None
+    sensor: SensorNoise = field(default_factory=SensorNoise)
+    mean_policy: bool = False
+    hardware: Hardware = CHAPTER_HARDWARE
+    record: bool = False
+    online: OnlineLearning | None = None
+    state0: np.ndarray | None = None
+
+    @property
+    def draws_actions(self) -> bool:
+        """Whether the trial draws action noise (eq 5) from its generator."""
+        return self.rng is not None and not self.mean_policy
+
+    @property
+    def W(self) -> np.ndarray:
+        """The gains the trial starts from (6,)."""
+        return np.asarray(self.controller.gains if self.gains is None else self.gains, dtype=float)
+
+    @property
+    def start(self) -> np.ndarray:
+        """The state the trial starts from (4,)."""
+        return self.sim.initial_state if self.state0 is None else np.asarray(self.state0, float)
+
+    def noise(self) -> tuple[np.ndarray, np.ndarray]:
+        """(action normals, sensor normals) of the trial, drawn from ``rng`` as it runs."""
+        return noise_arrays(self.sim, self.action_every, self.rng, self.sensor, self.mean_policy)
+
+    def args(
+        self, noise: np.ndarray | None = None, sensor_noise: np.ndarray | None = None
+    ) -> kernel.TrialArgs:
+        """The arguments of :func:`striatal.sim.kernel.run_trial` for the normals given
+        (:meth:`noise`; None: none, the mean policy and no sensor noise); the kernel writes
+        ``args.buffers`` (and ``args.learning.trace`` is :attr:`trace`)."""
+        sim, hardware = self.sim, self.hardware
+        return kernel.TrialArgs(
+            self.start,
+            kernel.Gains(W=self.W, theta_c=self.controller.theta_c),
+            plant_args(self.plant, sim.dt, self.model, hardware),
+            control_args(
+                self.controller,
+                action_every=self.action_every,
+                chapter_eligibility=self.chapter_eligibility,
+            ),
+            protocol_args(self.protocol, sim.dt, sim.n_steps, hardware.track),
+            kernel.NoiseArgs(
+                action=np.empty(0) if noise is None else noise,
+                sensor=np.empty((0, 2)) if sensor_noise is None else sensor_noise,
+                sensor_std_x=self.sensor.x_std,
+                sensor_std_theta=self.sensor.theta_std,
+            ),
+            kernel.TraceArgs(gamma=self.gamma, trace=self.trace),
+            kernel.Buffers(
+                out=np.empty(kernel.N_OUT),
+                traj=np.zeros((sim.n_steps + 1 if self.record else 0, kernel.N_TRAJ)),
+            ),
+        )
+
+    def run(self) -> TrialOutcome:
+        """The trial on the scalar kernel (its rows in the outcome with :attr:`record`)."""
+        noise, sensor_noise = self.noise()
+        args = self.args(noise, sensor_noise)
+        if self.online is not None:
+            if self.sensor.active or self.record or isinstance(self.plant, LearnedPlant):
+                raise ParameterError(
+                    "an online trial runs on a physical plant, without sensor noise, unrecorded"
+                )
+            critic = self.online.args(self.protocol.check_x)
+            kernel.run_online_trial(*args[:7], critic, args.buffers.out)
+        elif isinstance(self.plant, LearnedPlant):
+            assert self.plant.dynamics is not None
+            kernel.run_learned_trial(self.plant.dynamics.args, args)
+        else:
+            kernel.run_trial(*args)
+        out, traj = args.buffers
+        rows = traj[: int(out[kernel.OUT_END_STEP]) + 1] if self.record else None
+        return TrialOutcome.from_row(out, self.sim, rows)
+
+    def batch_key(self) -> tuple[object, ...] | None:
+        """What a batched kernel call shares with this trial; None if it runs alone
+        (sensor noise: the batch kernel has none; a learned plant: it takes none; a
+        recorded trial: it records none)."""
+        if self.sensor.active or self.record or isinstance(self.plant, LearnedPlant):
+            return None
+        c = self.controller
+        return (
+            self.plant,
+            (c.balance_sign, c.switch, c.inhibition),
+            self.sim,
+            self.protocol,
+            self.action_every,
+            self.chapter_eligibility,
+            self.gamma,
+            self.model,
+            self.hardware,
+            self.draws_actions,
+            None if self.online is None else self.online.rates,
+        )
+
+
+def run_trial(request: TrialRequest) -> TrialOutcome:
+    """One trial of the protocol on the scalar kernel: ``request.run()``."""
+    return request.run()
 
 
 def batch_args(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    *,
-    protocol: Protocol,
-    gains: np.ndarray,
-    theta_c: np.ndarray,
-    noise: np.ndarray | None = None,
-    states0: np.ndarray | None = None,
-    model: Plant | None = None,
-    action_every: int = 1,
-    chapter_eligibility: bool = False,
-    gamma: float = 0.0,
-    traces: np.ndarray | None = None,
-    hardware: Hardware = CHAPTER_HARDWARE,
-) -> BatchArgs:
-    """The arguments of :func:`striatal.sim.kernel.run_trials_batch`, in its order.
+    requests: Sequence[TrialRequest], noise: np.ndarray | None = None
+) -> kernel.BatchArgs:
+    """The arguments of :func:`striatal.sim.kernel.run_trials_batch` for B ``requests``
+    that share their :meth:`TrialRequest.batch_key` (the first gives what they share).
 
-    B trials: ``gains`` (B, 6) and ``theta_c`` (B,) per trial; ``noise`` (B, n_draws)
-    action normals (None: the mean policy); ``states0`` (B, 4) (default: the
-    simulation's start state on every row); ``traces`` (B, 6) updated in place
-    (default zeros). ``controller`` gives the readings (sign, switch) only;
-    ``hardware`` as in :func:`trial_args` (run_trials_lockstep refuses all but the
-    default). The kernel writes ``args[-1]`` (B, N_OUT).
+    ``noise`` (B, n_draws): their action normals (None: the mean policy). Each row of
+    the gains, theta_c and traces is its request's; the traces are copies (write them
+    back with :func:`striatal.sim.batch.run_requests`). The kernel writes
+    ``args.outs`` (B, N_OUT).
     """
-    if isinstance(plant, LearnedPlant):
+    first = requests[0]
+    if isinstance(first.plant, LearnedPlant):
         raise ParameterError("the batch kernels run physical plants only, not a learned plant")
-    W = np.ascontiguousarray(gains, dtype=float)
-    B = W.shape[0]
-    if W.shape != (B, 6):
-        raise ParameterError(f"gains must be (B, 6), got {W.shape}")
-    tc = np.ascontiguousarray(theta_c, dtype=float)
-    if tc.shape != (B,):
-        raise ParameterError(f"theta_c must be (B,) = ({B},), got {tc.shape}")
-    s0 = np.tile(sim.initial_state, (B, 1)) if states0 is None else states0
-    return (
-        np.ascontiguousarray(s0, dtype=float),
-        kernel.Gains(W=W, theta_c=tc),
-        plant_args(plant, sim.dt, model, hardware),
-        control_args(
-            controller, action_every=action_every, chapter_eligibility=chapter_eligibility
+    B = len(requests)
+    sim, hardware = first.sim, first.hardware
+    return kernel.BatchArgs(
+        np.array([r.start for r in requests], dtype=float),
+        kernel.Gains(
+            W=np.array([r.W for r in requests], dtype=float),
+            theta_c=np.array([r.controller.theta_c for r in requests], dtype=float),
         ),
-        protocol_args(protocol, sim.dt, sim.n_steps, hardware.track),
+        plant_args(first.plant, sim.dt, first.model, hardware),
+        control_args(
+            first.controller,
+            action_every=first.action_every,
+            chapter_eligibility=first.chapter_eligibility,
+        ),
+        protocol_args(first.protocol, sim.dt, sim.n_steps, hardware.track),
         np.empty((B, 0)) if noise is None else noise,
-        kernel.TraceArgs(gamma=gamma, trace=np.zeros((B, 6)) if traces is None else traces),
+        kernel.TraceArgs(gamma=first.gamma, trace=np.array([r.trace for r in requests])),
         np.empty((B, kernel.N_OUT)),
     )
 
@@ -424,107 +535,23 @@ def simulate(
     controller believes in (default: the true ``plant``); ``hardware``: the motor's hold
     and limit and the track (default: the chapter's idealisation).
     """
-    outcome, data = trial(
+    outcome = TrialRequest(
         plant,
         controller,
         sim,
-        protocol=protocol,
-        trace=np.zeros(6),
-        gamma=0.0,
+        protocol,
         rng=rng,
         model=model,
         sensor=sensor,
         action_every=action_every,
         hardware=hardware,
         record=True,
-    )
+    ).run()
+    assert outcome.rows is not None
     return Trajectory(
-        data=data,
+        data=outcome.rows,
         outcome=outcome,
         plant=plant,
         controller=controller,
         sim=sim,
     )
-
-
-def trial(
-    plant: Plant,
-    controller: Controller,
-    sim: Simulation,
-    *,
-    protocol: Protocol,
-    trace: np.ndarray,
-    gamma: float,
-    rng: np.random.Generator | None,
-    gains: np.ndarray | None = None,
-    action_every: int = 1,
-    chapter_eligibility: bool = False,
-    model: Plant | None = None,
-    sensor: SensorNoise = SensorNoise(),
-    mean_policy: bool = False,
-    hardware: Hardware = CHAPTER_HARDWARE,
-    record: bool = False,
-) -> tuple[TrialOutcome, np.ndarray]:
-    """One trial of the protocol and its recorded rows (n, 8), columns
-    kernel.TRAJ_COLUMNS (none unless ``record``); the eligibility trace ``trace`` (6,)
-    is updated in place.
-
-    ``gains`` may override ``controller.gains`` without validation (the learner's
-    guarded W); ``rng`` None runs the mean policy. ``mean_policy`` runs the mean
-    policy even with a generator, which then draws only the sensor noise. The noise
-    draws from ``rng`` do not depend on ``record``.
-    """
-    noise, sensor_noise = noise_arrays(sim, action_every, rng, sensor, mean_policy)
-    args = trial_args(
-        plant,
-        controller,
-        sim,
-        protocol=protocol,
-        noise=noise,
-        sensor_noise=sensor_noise,
-        sensor=sensor,
-        gains=gains,
-        model=model,
-        action_every=action_every,
-        chapter_eligibility=chapter_eligibility,
-        gamma=gamma,
-        trace=trace,
-        record=record,
-        hardware=hardware,
-    )
-    run_kernel(plant, args)
-    out, traj = args[-1]
-    end = int(out[kernel.OUT_END_STEP])
-    return TrialOutcome.from_row(out, sim), traj[: end + 1]
-
-
-def _outcome_of(run: Callable[P, tuple[TrialOutcome, np.ndarray]]) -> Callable[P, TrialOutcome]:
-    def outcome(*args: P.args, **kwargs: P.kwargs) -> TrialOutcome:
-        return run(*args, **kwargs)[0]
-
-    return outcome
-
-
-#: One trial of the protocol without its rows: :func:`trial`'s outcome.
-run_trial = _outcome_of(trial)
-run_trial.__name__ = run_trial.__qualname__ = "run_trial"
-run_trial.__doc__ = """One trial of the protocol, its outcome: :func:`trial` (same arguments),
-nothing recorded unless ``record``; the eligibility trace ``trace`` (6,) is updated in place."""
-
-
-def recorded_trial(
-    plant: Plant, controller: Controller, sim: Simulation, **options: Any
-) -> tuple[TrialOutcome, np.ndarray]:
-    """:func:`trial` with its rows recorded (the same keyword options; same noise draws)."""
-    return trial(plant, controller, sim, record=True, **options)
-
-
-def run_kernel(plant: Plant, args: TrialArgs) -> None:
-    """Run the kernel trial of :func:`trial_args`' ``args`` on ``plant``:
-    :func:`striatal.sim.kernel.run_trial`, or on a :class:`~striatal.sim.learned.LearnedPlant`
-    :func:`striatal.sim.kernel.run_learned_trial` with its dynamics."""
-    if isinstance(plant, LearnedPlant):
-        assert plant.dynamics is not None
-        kernel.run_learned_trial(plant.dynamics.args, args)
-    else:
-        kernel.run_trial(*args)

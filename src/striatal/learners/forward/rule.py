@@ -42,14 +42,13 @@ from __future__ import annotations
 
 import importlib.util
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
-from typing import Any
 
 import numpy as np
 
 from striatal.errors import ParameterError
+from striatal.learners.common import initial_state
 from striatal.learners.config import ForwardModel, LearnerConfig, pick
 from striatal.learners.forward.model import (
     GenericModel,
@@ -58,13 +57,14 @@ from striatal.learners.forward.model import (
     fit_generic,
     fit_structured,
 )
-from striatal.learners.loop import default_config, learn
-from striatal.learners.rule import Rule, Trial, TrialPlan, Update
+from striatal.learners.loop import default_config, learn_steps
+from striatal.learners.rule import Judging, Rule, Trial, TrialContext, TrialPlan, Update
 from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Controller, Plant, Simulation
+from striatal.sim.batch import Steps, driven
 from striatal.sim.learned import LearnedPlant
-from striatal.sim.robust import CheckRecorder, family_check
-from striatal.sim.rollout import Protocol, TrialOutcome, recorded_trial
+from striatal.sim.robust import family_check_steps
+from striatal.sim.rollout import Protocol
 
 __all__ = [
     "FORWARD",
@@ -74,6 +74,7 @@ __all__ = [
     "World",
     "generic_world",
     "imagine",
+    "imagine_steps",
     "structured_world",
 ]
 
@@ -143,12 +144,16 @@ def keep_recent(data: np.ndarray, limit: int = MAX_TRANSITIONS) -> np.ndarray:
     return data[keep]
 
 
-def believed_plant(trial: Mapping[str, Any]) -> Plant:
-    """The plain plant (its four parameters) the real trial's controller believes: the
-    trial's ``model`` when it has one, else its plant's parameters; never the object the
-    loop ran on (no learned dynamics, nothing of the truth beyond what eq 12 uses)."""
-    believed = trial.get("model") or trial["plant"]
-    return Plant(**believed.to_dict())
+def believed_plant(nominal: Plant) -> Plant:
+    """The plain plant the real trials' controller believes (:attr:`TrialContext.plant`,
+    the nominal one): its four parameters only, so imagination's controller never holds
+    the object the loop was given (no learned dynamics, nothing beyond what eq 12 uses)."""
+    return Plant(
+        cart_mass=nominal.cart_mass,
+        pole_mass=nominal.pole_mass,
+        length=nominal.length,
+        gravity=nominal.gravity,
+    )
 
 
 @dataclass(frozen=True)
@@ -195,21 +200,23 @@ def generic_world(model: GenericModel, believed: Plant) -> World:
     return World(LearnedPlant.of(dynamics.mean(), believed), members, False, believed)
 
 
-def imagine(
+def imagine_steps(
     world: World,
     controller: Controller,
     config: LearnerConfig,
     sim: Simulation,
     protocol: Protocol,
     seed: int,
-) -> Imagined:
+) -> Steps[Imagined]:
     """Learn with :data:`INNER` on ``world.plant`` from ``controller`` (gains, theta_c)
     for at most ``config.imagine_trials`` imagined trials (eqs 22-25 with the inner
     rule's preset; with ``config.robust`` its stop rule, and its robust preset where
     ``world.jitter``). A solution must also be robust on each plant of
     ``world.family`` (with ``robust``), else the inner learner goes on from it with a
     new seed; with ``world.rehearse`` on the family plant that refused it, the checks'
-    runs spent from the budget too."""
+    runs spent from the budget too. Every imagined trial is yielded
+    (:data:`striatal.sim.batch.Steps`), so the engine that runs the real trials runs
+    them too; :func:`imagine` runs them here."""
     inner = default_config(
         INNER,
         robust=config.robust and world.jitter,
@@ -221,13 +228,13 @@ def imagine(
     template, round_seed, plant = controller, seed, world.plant
     solved = False
     while budget > 0 and not solved:
-        result = learn(
+        result = yield from learn_steps(
             plant,
             template,
             replace(inner, max_trials=budget),
-            round_seed,
-            sim=sim,
-            protocol=protocol,
+            initial_state(template.gains, template.theta_c, round_seed),
+            sim,
+            protocol,
         )
         budget -= result.trials_done
         simulations += result.simulations
@@ -236,7 +243,7 @@ def imagine(
         solved = result.success
         if solved and config.robust:
             for member in world.family:
-                verdict = family_check(
+                verdict = yield from family_check_steps(
                     template, (member,), sim.dt, model=world.family_model, hardware=config.hardware
                 )
                 simulations += verdict.simulations
@@ -256,6 +263,10 @@ def imagine(
         simulations=simulations,
         simulated_seconds=seconds,
     )
+
+
+#: :func:`imagine_steps` run to its end on the scalar kernel.
+imagine = driven(imagine_steps)
 
 
 class ForwardRule(Rule):
@@ -279,9 +290,7 @@ class ForwardRule(Rule):
     )
     history_columns = ("imagined", "model_pole_mass", "model_length", "solved_in_imagination")
     memory_names = ("data", "imagined")
-    judges_candidate = True
-    runs_trial = True
-    mean_policy_only = "runs its real trials with the mean policy"
+    judging = Judging("candidate", mean_policy_only="runs its real trials with the mean policy")
 
     def check(self, config: LearnerConfig) -> None:
         """Also: the generic model needs scikit-learn (refused before the first trial)."""
@@ -292,60 +301,45 @@ class ForwardRule(Rule):
             )
 
     def plan(
-        self, state: LearnerState, config: LearnerConfig, rng: np.random.Generator, plant: Plant
+        self,
+        state: LearnerState,
+        config: LearnerConfig,
+        rng: np.random.Generator,
+        context: TrialContext,
     ) -> TrialPlan:
+        """The real trial: the state's W and theta_c, mean policy, recorded (its
+        transitions feed the model); the seed of this trial's imagination drawn."""
         return TrialPlan(
             W=np.array(state.W, dtype=float),
             theta_c=state.theta_c,
             trace=np.zeros(N_GAINS),
             gamma=0.0,
             rng=None,
-            scratch={
-                "seed": np.array([rng.integers(2**31 - 1)], dtype=np.int64),
-                "rows": np.zeros((PER_TRIAL, _WIDTH)),
-                "n": np.zeros(1, dtype=np.int64),
-                "context": np.empty((), dtype=object),
-                "report": np.zeros(4),
-                "checks": np.empty((), dtype=object),
-                "record_checks": np.array(
-                    [config.forward_model == "conditioned" and config.imagine_trials > 0]
-                ),
-            },
+            record=True,
+            # the conditioned model learns from the real checks too (their plant factors
+            # are known); the other models fit one plant, the control fits nothing
+            record_checks=config.forward_model == "conditioned" and config.imagine_trials > 0,
+            scratch={"seed": np.array([rng.integers(2**31 - 1)], dtype=np.int64)},
         )
 
-    def run(self, config: LearnerConfig, plan: TrialPlan, trial: Mapping[str, Any]) -> TrialOutcome:
-        """The real trial, recorded (its transitions and context go to the plan's scratch)."""
-        outcome, rows = recorded_trial(**trial)
-        plan.scratch["context"][()] = trial
-        kept = transitions_of(rows)
-        plan.scratch["rows"][: len(kept)] = kept
-        plan.scratch["n"][0] = len(kept)
-        return outcome
-
-    def check_recorder(self, plan: TrialPlan) -> CheckRecorder | None:
-        """The conditioned model learns from the real checks too (their plant factors are
-        known): their transitions go to the plan's scratch. The other models fit one
-        plant, and the control fits nothing: not recorded."""
-        if not plan.scratch["record_checks"][0]:
-            return None
-        found: list[np.ndarray] = []
-        plan.scratch["checks"][()] = found
-        return lambda factors, rows: found.append(transitions_of(rows, factors))
-
-    def update(self, state: LearnerState, config: LearnerConfig, trial: Trial) -> Update:
+    def update_steps(
+        self, state: LearnerState, config: LearnerConfig, trial: Trial, context: TrialContext
+    ) -> Steps[Update]:
+        """Keep the real trial's transitions; unless it succeeded, fit the model and learn
+        in imagination from its W (:func:`imagine_steps`, every imagined trial yielded);
+        the candidate found is the next real trial's controller."""
         plan, success = trial.plan, trial.success
         c = pick(ForwardConfig, config)
-        new = [plan.scratch["rows"][: int(plan.scratch["n"][0])]]
-        if plan.scratch["checks"].item() is not None:  # forward_model "conditioned"
-            new += plan.scratch["checks"].item()
+        rows = trial.outcome.rows
+        new = [transitions_of(rows) if rows is not None else np.empty((0, _WIDTH))]
+        new += [transitions_of(run, factors) for factors, run in trial.checks]
         data = keep_recent(np.concatenate([kept_data(state), *new]))
         done = state.get("imagined") or (0.0, 0.0)
         W, theta_c = tuple(float(w) for w in plan.W), plan.theta_c
-        report = plan.scratch["report"]
+        report: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
         if not success and c.imagine_trials > 0 and len(data) > 0:
-            context: Mapping[str, Any] = plan.scratch["context"].item()
-            sim: Simulation = context["sim"]
-            template = replace(context["controller"], gains=W, theta_c=theta_c)
+            sim = context.sim
+            template = replace(context.template, gains=W, theta_c=theta_c)
             seed = int(plan.scratch["seed"][0])
             if c.forward_model in ("generic", "conditioned"):
                 transitions = Transitions(
@@ -356,7 +350,7 @@ class ForwardRule(Rule):
                     np.random.default_rng(seed),
                     conditioned=c.forward_model == "conditioned",
                 )
-                world = generic_world(model, believed_plant(context))
+                world = generic_world(model, believed_plant(context.plant))
                 fitted = (math.nan, math.nan)
             else:
                 nominal = (data[:, 9:] == 1.0).all(axis=1)
@@ -366,10 +360,10 @@ class ForwardRule(Rule):
                 fit = fit_structured(transitions)
                 world = structured_world(fit)
                 fitted = (fit.plant.pole_mass, fit.plant.length)
-            dream = imagine(world, template, config, sim, context["protocol"], seed)
+            dream = yield from imagine_steps(world, template, config, sim, context.protocol, seed)
             W, theta_c = dream.W, dream.theta_c
             done = (done[0] + dream.simulations, done[1] + dream.simulated_seconds)
-            report[:] = (dream.simulations, *fitted, dream.solved)
+            report = (float(dream.simulations), *fitted, float(dream.solved))
         return Update(
             W=W,
             theta_c=float(theta_c),
@@ -377,18 +371,15 @@ class ForwardRule(Rule):
                 ("data", tuple(float(v) for v in data.ravel())),
                 ("imagined", (float(done[0]), float(done[1]))),
             ),
+            # the imagined simulations after this trial, the fitted pole mass [kg] and
+            # length [m] they ran on, and whether imagination found a solution (0: none ran)
+            extra=tuple(zip(self.history_columns, report, strict=True)),
         )
 
     def imagined(self, state: LearnerState) -> tuple[int, float]:
         """The imagined trials so far and their simulated seconds (memory "imagined")."""
         done = state.get("imagined") or (0.0, 0.0)
         return int(done[0]), float(done[1])
-
-    def extra(self, state: LearnerState, plan: TrialPlan) -> tuple[tuple[str, float], ...]:
-        """The imagined simulations after this trial, the fitted pole mass [kg] and length
-        [m] they ran on, and whether imagination found a solution (0 when none ran)."""
-        r = plan.scratch["report"]
-        return tuple((name, float(v)) for name, v in zip(self.history_columns, r, strict=True))
 
 
 FORWARD = ForwardRule()

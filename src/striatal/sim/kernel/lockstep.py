@@ -23,12 +23,12 @@ from striatal.sim.kernel.plant import (
 from striatal.sim.kernel.policy import (
     ControlArgs,
     Gains,
-    balancing_law,
+    PolicyTerms,
     balancing_roots,
+    policy_gradient,
     sigma_of,
-    swingup_law,
 )
-from striatal.sim.kernel.traces import TraceArgs
+from striatal.sim.kernel.traces import TraceArgs, trace_step
 from striatal.sim.kernel.trials import (
     BLOW_UP,
     STATUS_FAULT,
@@ -53,13 +53,6 @@ def _poly_stage(theta: float, theta_dot: float, u: float, pt: PlantTerms) -> tup
     """An RK4 stage of eqs 13-14 (u held) with the polynomial sin/cos (no libm call)."""
     s, c = sincos_poly(theta)
     return accelerations_terms(s, c, theta_dot, u, pt)
-
-
-@njit(cache=True)
-def _clip01(v: float) -> float:
-    """min(max(v, 0), 1) as selects (NaN gives 1, as min(max(NaN, 0), 1) does)."""
-    lo = v if v > 0.0 else 0.0
-    return lo if lo < 1.0 else 1.0
 
 
 # Rows of the per-block state array of the lockstep kernel (fields x lanes).
@@ -161,64 +154,52 @@ def _lockstep_block(
             prev = S[_F_PREV, j]
             S[_F_NSW, j] += 1.0 if (run and prev >= 0.0 and mode != prev) else 0.0
             S[_F_PREV, j] = mode if run else prev
-        # at a draw: the policy (eqs 5, 22-23, switch of section 2.3 or 4), trace (eq 3)
+        # at a draw: the policy (eqs 5, 22-23, switch of section 2.3 or 4) and the trace
+        # (eq 3), each lane by the scalar trial's own functions
         if act:
             for j in range(L):
                 run = S[_F_ACTIVE, j] > 0.0
                 tw = S[_F_THW, j]
-                tc = S[_F_TC, j]
-                abs_th = abs(tw)
-                bal = abs_th < tc
-                wb_soft = _clip01(control.inhibition * (tc - abs_th))
-                ws_soft = _clip01(control.inhibition * (abs_th - tc))
-                wb = wb_soft if control.soft else (1.0 if bal else 0.0)
-                ws = ws_soft if control.soft else (0.0 if bal else 1.0)
-                on_b = wb > 0.0
-                on_s = ws > 0.0
-                xj = S[_F_X, j]
-                xdj = S[_F_XD, j]
-                thdj = S[_F_THD, j]
-                w1 = S[_F_W1, j]
-                w5 = S[_F_W5, j]
-                inv_root = S[_F_INVROOT, j]
-                mu_b, d1 = balancing_law(
-                    xj,
-                    xdj,
-                    tw,
-                    thdj,
-                    w1,
+                sg = S[_F_SIGMA, j]
+                pol = PolicyTerms(
+                    S[_F_W1, j],
                     S[_F_W2, j],
                     S[_F_W3, j],
+                    S[_F_W4, j],
+                    S[_F_W5, j],
+                    S[_F_TC, j],
+                    sg,
+                    S[_F_ROOT, j],
+                    S[_F_INVROOT, j],
                     control.sign,
+                    control.soft,
+                    control.inhibition,
+                    control.chapter_eligibility,
+                    m,
                     length,
                     g,
-                    S[_F_ROOT, j],
-                    inv_root,
-                    control.chapter_eligibility,
                 )
                 _, cth = sincos_poly(tw)
-                mu_s, e_t = swingup_law(xj, xdj, thdj, cth, S[_F_W4, j], w5, m, length, g)
-                mu = (wb * mu_b if on_b else 0.0) + (ws * mu_s if on_s else 0.0)
-                sg = S[_F_SIGMA, j]
+                mu, g1, g2, g3, g4, g5 = policy_gradient(
+                    S[_F_X, j], S[_F_XD, j], tw, S[_F_THD, j], cth, True, pol
+                )
                 eps = sg * S[_F_EPS, j]
-                upd = run and stochastic
-                g1 = wb * d1 if on_b else 0.0
-                g2 = -wb * xj if on_b else 0.0
-                g3 = -wb * xdj if on_b else 0.0
-                g4 = ws * e_t * thdj * cth if on_s else 0.0
-                g5 = -ws * (0.5 * w5 * xj + xdj) if on_s else 0.0
                 t0 = S[_F_D0, j]
                 t1 = S[_F_D0 + 1, j]
                 t2 = S[_F_D0 + 2, j]
                 t3 = S[_F_D0 + 3, j]
                 t4 = S[_F_D0 + 4, j]
                 t5 = S[_F_D0 + 5, j]
-                S[_F_D0, j] = eps * g1 + gamma * t0 if upd else t0
-                S[_F_D0 + 1, j] = eps * g2 + gamma * t1 if upd else t1
-                S[_F_D0 + 2, j] = eps * g3 + gamma * t2 if upd else t2
-                S[_F_D0 + 3, j] = eps * g4 + gamma * t3 if upd else t3
-                S[_F_D0 + 4, j] = eps * g5 + gamma * t4 if upd else t4
-                S[_F_D0 + 5, j] = (eps * eps - sg * sg) * (1.1 - sg) + gamma * t5 if upd else t5
+                d0, d1, d2, d3, d4, d5 = trace_step(
+                    eps, sg, gamma, g1, g2, g3, g4, g5, t0, t1, t2, t3, t4, t5
+                )
+                upd = run and stochastic
+                S[_F_D0, j] = d0 if upd else t0
+                S[_F_D0 + 1, j] = d1 if upd else t1
+                S[_F_D0 + 2, j] = d2 if upd else t2
+                S[_F_D0 + 3, j] = d3 if upd else t3
+                S[_F_D0 + 4, j] = d4 if upd else t4
+                S[_F_D0 + 5, j] = d5 if upd else t5
                 act_a = mu + eps if stochastic else mu
                 S[_F_A, j] = act_a if run else S[_F_A, j]
         # pass 2: force (eq 12), one RK4 step (eqs 13-14), the fault prefilter of judge
@@ -279,7 +260,7 @@ def _lockstep_block(
                 learning.trace[b, i] = S[_F_D0 + i, j]
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@njit(cache=True, parallel=True, nogil=True, error_model="numpy")
 def run_trials_lockstep(
     states0: np.ndarray,
     gains: Gains,
@@ -289,6 +270,7 @@ def run_trials_lockstep(
     noise: np.ndarray,
     learning: TraceArgs,
     outs: np.ndarray,
+    block: int = LOCKSTEP_BLOCK,
 ) -> None:
     """:func:`run_trials_batch` with all trials of a block advancing step k together.
 
@@ -300,7 +282,9 @@ def run_trials_lockstep(
     equal the scalar kernel's up to the round-off of the polynomial sin/cos, which
     the chaotic swing-up can amplify over a trial (tests/test_lockstep.py states the
     tolerance). It refuses (ValueError) the force hold, a force limit and a track:
-    run those with :func:`run_trials_batch`.
+    run those with :func:`run_trials_batch`. ``block``: trials per block (rounded up to
+    a multiple of 4, at most :data:`LOCKSTEP_BLOCK`): a caller with few trials gives
+    a smaller one, so that every thread gets a block.
     """
     if plant.hold_force or plant.max_force < math.inf or protocol.track < math.inf:
         raise ValueError(
@@ -308,9 +292,12 @@ def run_trials_lockstep(
             "use run_trials_batch for hold force, max_force or track"
         )
     B = states0.shape[0]
-    n_blocks = (B + LOCKSTEP_BLOCK - 1) // LOCKSTEP_BLOCK
+    # blocks of ``block`` trials (4 to LOCKSTEP_BLOCK, a multiple of 4: one AVX2 vector);
+    # a lane's result does not depend on its block
+    size = min(LOCKSTEP_BLOCK, max(4, -(-block // 4) * 4))
+    n_blocks = (B + size - 1) // size
     for i in prange(n_blocks):
-        lo = i * LOCKSTEP_BLOCK
-        hi = min(lo + LOCKSTEP_BLOCK, B)
+        lo = i * size
+        hi = min(lo + size, B)
         args = (states0, gains, plant, control, protocol, noise, learning)
         _lockstep_block(lo, hi, args, outs)

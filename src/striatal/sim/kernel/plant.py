@@ -8,7 +8,8 @@ Plant arrays are ``[M, m, l, g]``; states ``[x, x_dot, theta, theta_dot]`` in
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -96,7 +97,7 @@ def accelerations_terms(
 
 @njit(cache=True, inline="always")
 def rk4(
-    stage: Any,
+    stage: Callable[[float, float, float, PlantTerms], tuple[float, float]],
     x: float,
     x_dot: float,
     theta: float,

@@ -22,6 +22,7 @@ __all__ = [
     "PolicyTerms",
     "balancing_law",
     "balancing_roots",
+    "policy_gradient",
     "policy_mean",
     "policy_of",
     "policy_terms",
@@ -42,7 +43,7 @@ class Gains(NamedTuple):
     """
 
     W: np.ndarray
-    theta_c: Any
+    theta_c: Any  # float, or (B,) for the batch kernels
 
 
 class ControlArgs(NamedTuple):
@@ -59,7 +60,7 @@ class ControlArgs(NamedTuple):
     chapter_eligibility: bool
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def switch_weights(
     abs_theta: float, theta_c: float, soft: bool, inhibition: float
 ) -> tuple[float, float]:
@@ -192,9 +193,36 @@ def policy_terms(
     have_cos: bool,
     pol: PolicyTerms,
 ) -> tuple[float, float, float, float, float, float]:
-    """(mu, d mu / d W1..W5) of :func:`policy_mean` for a wrapped ``th`` [rad] (eqs 22-23).
+    """(mu, d mu / d W1..W5) of :func:`policy_mean` for a wrapped ``th`` [rad] (eqs 22-23):
+    :func:`policy_gradient`, raising ZeroDivisionError where the balancing law is used
+    with W1 = 0 (it has no sqrt(g / W1)).
 
     ``cos_th`` = cos th when ``have_cos`` (else computed here); ``pol``: :func:`policy_of`.
+    """
+    if pol.w1 == 0.0:
+        wb, _ = switch_weights(abs(th), pol.theta_c, pol.soft, pol.inhibition)
+        if wb > 0.0:
+            raise ZeroDivisionError("W1 = 0: the balancing law (eq 22) has no sqrt(g / W1)")
+    return policy_gradient(x, x_dot, th, theta_dot, cos_th, have_cos, pol)
+
+
+@njit(cache=True, inline="always")
+def policy_gradient(
+    x: float,
+    x_dot: float,
+    th: float,
+    theta_dot: float,
+    cos_th: float,
+    have_cos: bool,
+    pol: PolicyTerms,
+) -> tuple[float, float, float, float, float, float]:
+    """(mu, d mu / d W1..W5) for a wrapped ``th`` [rad]: the switch (section 2.3 or 4)
+    blends eq 22's balancing law and eq 23's swing-up law, each with its derivative.
+
+    The one statement of the policy's arithmetic: the scalar trial
+    (:func:`policy_terms`) and the lanes of the SIMD kernel
+    (:func:`striatal.sim.kernel.run_trials_lockstep`) call it. ``cos_th`` = cos th when
+    ``have_cos`` (else computed here); W1 = 0 gives NaN where balancing.
     """
     w1, w5, sign = pol.w1, pol.w5, pol.sign
     m, length, g = pol.m, pol.length, pol.g
@@ -206,9 +234,6 @@ def policy_terms(
     g4 = 0.0
     g5 = 0.0
     if wb > 0.0:
-        inv_root = pol.inv_root
-        if w1 == 0.0:
-            inv_root = math.sqrt(g / w1)  # raises ZeroDivisionError: W1 = 0 has no law
         mu_1, d1 = balancing_law(
             x,
             x_dot,
@@ -221,7 +246,7 @@ def policy_terms(
             length,
             g,
             pol.root,
-            inv_root,
+            pol.inv_root,
             pol.chapter_eligibility,
         )
         mu += wb * mu_1

@@ -26,7 +26,7 @@ class TraceArgs(NamedTuple):
     trace: np.ndarray
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def trace_step(
     eps: float,
     sigma: float,

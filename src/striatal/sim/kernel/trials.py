@@ -8,7 +8,8 @@ Build the arguments with :func:`striatal.sim.rollout.trial_args` and
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -62,10 +63,12 @@ __all__ = [
     "STATUS_SUCCESS",
     "STATUS_TRACK",
     "TRAJ_COLUMNS",
+    "BatchArgs",
     "Buffers",
     "NoiseArgs",
     "ProtocolArgs",
     "Tally",
+    "TrialArgs",
     "judge",
     "judge_batch",
     "judge_start",
@@ -150,6 +153,36 @@ class Buffers(NamedTuple):
 
     out: np.ndarray
     traj: np.ndarray
+
+
+class TrialArgs(NamedTuple):
+    """The arguments of one scalar trial (:func:`run_trial`, :func:`run_learned_trial`),
+    in their order; :meth:`striatal.sim.rollout.TrialRequest.args` builds them."""
+
+    state0: np.ndarray
+    gains: Gains
+    plant: PlantArgs
+    control: ControlArgs
+    protocol: ProtocolArgs
+    noise: NoiseArgs
+    learning: TraceArgs
+    buffers: Buffers
+
+
+class BatchArgs(NamedTuple):
+    """The arguments of the batch kernels (:func:`run_trials_batch`,
+    :func:`striatal.sim.kernel.run_trials_lockstep`), in their order: row b of
+    ``states0`` (B, 4), ``gains``, ``noise`` (B, n_draws), ``learning.trace`` (B, 6) and
+    ``outs`` (B, N_OUT) is trial b's; :func:`striatal.sim.rollout.batch_args` builds them."""
+
+    states0: np.ndarray
+    gains: Gains
+    plant: PlantArgs
+    control: ControlArgs
+    protocol: ProtocolArgs
+    noise: np.ndarray
+    learning: TraceArgs
+    outs: np.ndarray
 
 
 @njit(cache=True)
@@ -423,25 +456,28 @@ def run_trial(
     OUT_MAX_ABS_FORCE are the (clipped) force at the step's start.
     """
     trial_loop(
-        _physical_step, 0, (state0, gains, plant, control, protocol, noise, learning, buffers)
+        _physical_step,
+        0,
+        TrialArgs(state0, gains, plant, control, protocol, noise, learning, buffers),
     )
 
 
 @njit(cache=True)
-def run_learned_trial(model: LearnedArgs, args: Any) -> None:
-    """:func:`run_trial` on a learned plant, ``args`` the tuple of its arguments: each step
-    is :func:`learned_step` of ``model`` under the held motor force (eq 12 with
-    ``plant.model``, clipped to ``plant.max_force``); ``plant.plant`` is not used."""
+def run_learned_trial(model: LearnedArgs, args: TrialArgs) -> None:
+    """:func:`run_trial` on a learned plant: each step is :func:`learned_step` of ``model``
+    under the held motor force (eq 12 with ``plant.model``, clipped to
+    ``plant.max_force``); ``args.plant.plant`` is not used."""
     trial_loop(learned_step, model, args)
 
 
 @njit(cache=True, inline="always")
-def trial_loop(step: Any, dynamics: Any, args: Any) -> None:
+def trial_loop(step: Callable[..., State], dynamics: int | LearnedArgs, args: TrialArgs) -> None:
     """The trial loop of :func:`run_trial` with the plant's step ``step(state, inputs, pt,
-    dynamics)`` (:data:`State`, :data:`StepInputs`): the one loop of a scalar trial, whatever
+    dynamics)`` (:data:`State`, :data:`StepInputs`, :class:`PlantTerms`, and what the step
+    carries besides: a learned plant's :class:`LearnedArgs`, 0 for the physical plant's),
+    returning the next :data:`State`: the one loop of a scalar trial, whatever
     integrates the plant. Inlined where it is called, so that each caller compiles it
-    with its step function resolved (a step passed at run time cannot be cached).
-    ``args``: the tuple of :func:`run_trial`'s arguments."""
+    with its step function resolved (a step passed at run time cannot be cached)."""
     state0, gains, plant, control, protocol, noise, learning, buffers = args
     theta_c = gains.theta_c
     pt = plant_terms(plant)
@@ -499,7 +535,7 @@ def trial_loop(step: Any, dynamics: Any, args: Any) -> None:
     write_summary(buffers.out, status, reward, end_step, x, x_dot, theta, theta_dot, tally)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def run_trials_batch(
     states0: np.ndarray,
     gains: Gains,
