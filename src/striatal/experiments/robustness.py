@@ -100,12 +100,12 @@ def margin_passes(
     ).reshape(len(controllers), len(conditions))
 
 
-def sweep_controllers(rows: Sequence[dict[str, str]]) -> dict[str, dict[int, Controller]]:
+def sweep_controllers(rows: Sequence[dict[str, Any]]) -> dict[str, dict[int, Controller]]:
     """The controllers of a sweep's runs.csv rows that succeeded (with ``--robust``:
     passed the robustness set), by arm and seed."""
     out: dict[str, dict[int, Controller]] = {}
     for r in rows:
-        if r.get("success") != "1":
+        if str(r.get("success")) not in ("1", "True"):
             continue
         try:
             gains = tuple(float(r[f"W{i}"]) for i in range(1, N_GAINS + 1))
