@@ -9,9 +9,12 @@ import pytest
 from striatal.errors import ParameterError
 from striatal.learners.forward.model import (
     FAMILY_FLOOR,
+    GENERIC_INPUTS,
+    GENERIC_OUTPUTS,
     Transitions,
     fit_generic,
     fit_structured,
+    generic_powers,
     rk4_force_step,
 )
 from striatal.params import (
@@ -23,6 +26,7 @@ from striatal.params import (
     Plant,
     Simulation,
 )
+from striatal.sim.learned import LearnedPlant
 from striatal.sim.robust import ROBUST_HARDWARE
 from striatal.sim.rollout import simulate
 
@@ -153,3 +157,102 @@ def test_bad_transitions_are_refused() -> None:
         Transitions(z, np.zeros(3), z, 0.0)
     with pytest.raises(ParameterError, match="recorded trial"):
         Transitions.of([])
+
+
+def test_the_generic_model_holds_no_cart_pole_equation() -> None:
+    """Its inputs are the seven listed here and its features are monomials of them, no
+    more: no mass, length, gravity or eq 8-10 term enters. The same code fits a plant
+    under another gravity (which the cart-pole equations would need to be told)."""
+    pytest.importorskip("sklearn")
+    assert GENERIC_INPUTS == (
+        "x_dot",
+        "sin theta",
+        "cos theta",
+        "theta_dot",
+        "force",
+        "pole mass factor",
+        "length factor",
+    )
+    assert GENERIC_OUTPUTS == ("x_dot change / dt", "theta_dot change / dt")
+    plain, conditioned = generic_powers(3, False), generic_powers(3, True)
+    assert plain.shape == (56, 5) and (plain.sum(axis=1) <= 3).all()  # C(5 + 3, 3) monomials
+    # conditioned: those, then each of degree <= 2 times one factor (21 each)
+    assert conditioned.shape == (56 + 2 * 21, 7)
+    assert (conditioned[:, 5:].sum(axis=1) <= 1).all() and (conditioned.sum(axis=1) <= 3).all()
+    for gravity in (9.81, 20.0):
+        true = Plant(gravity=gravity)
+        data = Transitions.of(
+            [simulate(true, c, SIM, model=true, hardware=ROBUST_HARDWARE) for c in (FINAL, INITIAL)]
+        )
+        rest, held = data.split(7)
+        model = fit_generic(rest, np.random.default_rng(0))
+        assert model.args.powers.shape == plain.shape
+        err = model.predict(held.states, held.forces) - held.next_states
+        assert np.sqrt((err[:, 3] ** 2).mean()) < 1e-2  # rad/s, one step
+
+
+def corner_trials(factors: tuple[float, float], starts: tuple[float, ...]) -> Transitions:
+    """The final gains' trials on the plant scaled by ``factors``, from theta0 in
+    ``starts``, the controller believing the nominal plant; ``factors`` recorded."""
+    true = Plant().scaled(pole_mass=factors[0], length=factors[1])
+    runs = [
+        simulate(
+            true,
+            FINAL,
+            Simulation(duration=20.0, theta0=t),
+            model=Plant(),
+            hardware=ROBUST_HARDWARE,
+        )
+        for t in starts
+    ]
+    data = Transitions.of(runs)
+    return Transitions(
+        data.states, data.forces, data.next_states, data.dt, np.tile(factors, (len(data), 1))
+    )
+
+
+def merged(*parts: Transitions) -> Transitions:
+    return Transitions(
+        *(
+            np.concatenate([getattr(p, k) for p in parts])
+            for k in ("states", "forces", "next_states")
+        ),
+        parts[0].dt,
+        np.concatenate([p.factors for p in parts]),  # type: ignore[misc]
+    )
+
+
+def test_a_conditioned_model_predicts_a_held_out_corner_trial_better() -> None:
+    """Fitted on nominal trials and one trial on the corner pole mass x1.2, length x0.8
+    (as the real robust check runs it), the model conditioned on the factors predicts
+    another start's trial on that corner better than the same ensemble without them."""
+    pytest.importorskip("sklearn")
+    corner = (1.2, 0.8)
+    train = merged(
+        corner_trials((1.0, 1.0), (3.12, np.pi - 0.3, np.pi + 0.3)), corner_trials(corner, (3.12,))
+    )
+    held = corner_trials(corner, (np.pi + 0.3,))
+    acc_true = (held.next_states[:, [1, 3]] - held.states[:, [1, 3]]) / held.dt
+    errors = {}
+    for conditioned in (False, True):
+        model = fit_generic(train, np.random.default_rng(0), conditioned=conditioned)
+        acc = model.accelerations(held.states, held.forces, corner).mean(axis=0)
+        errors[conditioned] = np.sqrt(((acc - acc_true) ** 2).mean(axis=0))
+    assert (errors[True] < 0.5 * errors[False]).all()
+    # and it runs in the kernel at those factors as it predicts
+    model = fit_generic(train, np.random.default_rng(0), conditioned=True)
+    assert model.plants == ((1.0, 1.0), corner)
+    plant = model.plant(Plant()).scaled(pole_mass=corner[0], length=corner[1])
+    assert isinstance(plant, LearnedPlant) and plant.factors == corner
+    assert plant.believed == Plant()
+
+
+def test_a_model_from_one_plant_is_the_same_at_every_factor() -> None:
+    """Data from the nominal plant only give the factors zero spread: the conditioned
+    model then predicts every plant alike (it does not invent a difference)."""
+    pytest.importorskip("sklearn")
+    data = corner_trials((1.0, 1.0), (3.12,))
+    model = fit_generic(data, np.random.default_rng(0), conditioned=True)
+    a = model.accelerations(data.states[:100], data.forces[:100], (1.0, 1.0))
+    b = model.accelerations(data.states[:100], data.forces[:100], (0.7, 1.3))
+    assert np.array_equal(a, b)

@@ -4,6 +4,7 @@ model's family the real checks refuse what imagination found."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -15,7 +16,14 @@ from striatal.learners import LEARNERS, control_config, default_config, learn
 from striatal.learners.forward import rule as forward
 from striatal.learners.forward.model import Transitions, fit_structured
 from striatal.learners.state import LearnerState, TrialRecord
-from striatal.params import CHAPTER_INITIAL_THETA_C, Controller, Plant, Simulation
+from striatal.params import (
+    CHAPTER_FINAL_THETA_C,
+    CHAPTER_FINAL_W,
+    CHAPTER_INITIAL_THETA_C,
+    Controller,
+    Plant,
+    Simulation,
+)
 from striatal.sim import kernel
 from striatal.sim.robust import ROBUST_HARDWARE, check_robust
 from striatal.sim.rollout import simulate
@@ -239,8 +247,31 @@ def test_the_generic_model_without_scikit_learn_is_refused_before_any_trial(
     ):
         default_config("forward", forward_model="generic")
     with pytest.raises(
-        ParameterError, match="forward_model must be 'structured' or 'generic', got 'neural'"
+        ParameterError,
+        match="forward_model must be 'structured', 'generic' or 'conditioned', got 'neural'",
     ):
         default_config("forward", forward_model="neural")
     with pytest.raises(ParameterError, match="does not use forward_model"):
         default_config("pgpe", forward_model="generic")
+
+
+def test_the_conditioned_model_learns_from_the_real_checks(monkeypatch: pytest.MonkeyPatch) -> None:
+    """--forward-model conditioned: the real robust checks' runs join the data with their
+    plant factors, counted in ``simulations`` as always (the chapter's final gains pass
+    the nominal trial, so the robustness set runs)."""
+    pytest.importorskip("sklearn")
+    calls = Calls(monkeypatch)
+    config = default_config(
+        "forward", robust=True, max_trials=1, forward_model="conditioned", imagine_trials=1
+    )
+    final = Controller(gains=CHAPTER_FINAL_W, theta_c=CHAPTER_FINAL_THETA_C)
+    state = learn(Plant(), final, config, 0)
+    assert state.simulations > 1 and calls.real == state.simulations and calls.imagined == 0
+    data = forward.kept_data(state)
+    factors = [tuple(f) for f in data[:, 9:].tolist()]
+    corners = {f for f in factors if f != (1.0, 1.0)}
+    assert corners and corners <= {(a, b) for a in (0.8, 1.2) for b in (0.8, 1.2)}
+    # the plain generic model keeps only its real trial, as before
+    plain = learn(Plant(), final, replace(config, forward_model="generic"), 0)
+    assert plain.simulations == state.simulations
+    assert {tuple(f) for f in forward.kept_data(plain)[:, 9:].tolist()} == {(1.0, 1.0)}

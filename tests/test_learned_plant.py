@@ -143,7 +143,7 @@ def test_a_generic_model_runs_in_the_kernel_as_scikit_learn_predicts() -> None:
     assert np.abs(got - pred).max() < 1e-12
     # a short imagined run from the chapter's start tracks the real one (2 s, swing-up)
     short = Simulation(duration=2.0)
-    imagined = simulate(model.plant(), FINAL, short, hardware=ROBUST_HARDWARE)
+    imagined = simulate(model.plant(Plant()), FINAL, short, hardware=ROBUST_HARDWARE)
     real = simulate(true, FINAL, short, model=Plant(), hardware=ROBUST_HARDWARE)
     err = np.abs(imagined.data[:, 1:5] - real.data[:, 1:5]).max(axis=0)
     assert err[0] < 0.01 and err[2] < 0.01  # metres, radians

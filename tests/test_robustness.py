@@ -141,3 +141,35 @@ def test_cli_refuses_an_ablation_json_with_malformed_runs(tmp_path: Path, runs: 
     )
     assert r.returncode == 2, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+
+
+def test_the_margin_set_lies_outside_the_robustness_set_and_is_refused_by_nothing() -> None:
+    """Every margin condition is a plant or start that none of the nine robust cases is;
+    each runs for every controller (none refused, sensor noise in none), one simulation
+    each, counted in the table beside the others."""
+    from striatal.experiments.robustness import (
+        MARGIN_CONDITIONS,
+        MARGIN_DRAWS,
+        margin_passes,
+        margin_table,
+    )
+    from striatal.sim.robust import ROBUST_CASES
+
+    def key(c: Perturbation) -> tuple[float, ...]:
+        return (c.pole_mass, c.length, c.cart_mass, c.theta0, c.x0)
+
+    assert not {key(c) for c in MARGIN_CONDITIONS} & {key(c) for c in ROBUST_CASES}
+    assert len({c.name for c in MARGIN_CONDITIONS}) == len(MARGIN_CONDITIONS)
+    assert not any(c.sensor.active for c in MARGIN_CONDITIONS)
+    assert sum(c.name.startswith("draw ") for c in MARGIN_CONDITIONS) == MARGIN_DRAWS
+    assert {c.cart_mass for c in MARGIN_CONDITIONS} == {0.7, 1.0, 1.3}
+    assert Perturbation("c", cart_mass=1.3).plant(Plant()).cart_mass == pytest.approx(1.3)
+    chapter = Controller(CHAPTER_FINAL_W, CHAPTER_FINAL_THETA_C)
+    bad = Controller((0.001, 0.0, 0.0, 0.0, 0.0, 1.0), 0.6)
+    passes = margin_passes([chapter, bad])
+    assert passes.shape == (2, len(MARGIN_CONDITIONS))
+    assert passes[0].any() and not passes[1].any()  # it can fail, and it can pass
+    table, rows = margin_table({"random": {1: chapter, 2: bad}, "other": {1: chapter}})
+    assert "| random | 2 |" in table and f"| {2 * len(MARGIN_CONDITIONS)} |" in table
+    assert "n = 1" in table  # "other" paired with random on the seed both solved
+    assert len(rows) == 2 * len(MARGIN_CONDITIONS)

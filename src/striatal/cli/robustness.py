@@ -24,7 +24,22 @@ DESCRIPTION = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("files", type=Path, nargs="+", help="result.json or ablation.json")
+    parser.add_argument(
+        "files",
+        type=Path,
+        nargs="+",
+        help="result.json or ablation.json; with --margin, sweep folders (or their runs.csv), "
+        "each as NAME=PATH to call its learner arm NAME",
+    )
+    parser.add_argument(
+        "--margin",
+        action="store_true",
+        help="run the margin set instead (conditions outside the robustness set: a "
+        "pole-length scan at pole mass x0.8 and x1.2, random pole mass and length draws in "
+        "[0.6, 1.4], cart mass x0.7 and x1.3, farther starts; force held, 60 s, the success "
+        "test at T_f) on each arm's solved runs of the sweeps, paired with the arm "
+        "'random' on the seeds both solved",
+    )
     parser.add_argument(
         "--variants",
         action=CommaList,
@@ -56,6 +71,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.out is not None:
         options.out_format(args.out, (".md", ".json"))
+    if args.margin:
+        return _margin(args)
     merged: dict[str, list[Controller]] = {}
     for f in args.files:
         try:
@@ -92,6 +109,29 @@ def run(args: argparse.Namespace) -> int:
         f"x {args.repeats:,} repeats) x {steps:,} steps",
     )
     table, rows = robustness_table(groups, CONDITIONS, repeats=args.repeats, seed=args.seed)
+    if args.out is not None:
+        atomic_write_text(args.out, dumps_json(rows) if args.out.suffix == ".json" else table)
+    sys.stdout.write(dumps_json(rows) if args.json else table)
+    return 0
+
+
+def _margin(args: argparse.Namespace) -> int:
+    from striatal.experiments.robustness import margin_table, sweep_controllers
+    from striatal.experiments.runs_csv import read_runs
+
+    arms: dict[str, dict[int, Controller]] = {}
+    for f in args.files:
+        name, sep, rest = str(f).partition("=")
+        learner, f = (name, Path(rest)) if sep else ("learner", f)
+        path = f / "runs.csv" if f.is_dir() else f
+        if not path.is_file():
+            raise DataFileError(f"{path}: no such sweep runs.csv")
+        rows, _ = read_runs(path)
+        for arm, by_seed in sweep_controllers(rows).items():
+            arms.setdefault(learner if arm == "learner" else arm, {}).update(by_seed)
+    if not arms:
+        raise ParameterError("the sweeps hold no successful run to evaluate")
+    table, rows = margin_table(arms)
     if args.out is not None:
         atomic_write_text(args.out, dumps_json(rows) if args.out.suffix == ".json" else table)
     sys.stdout.write(dumps_json(rows) if args.json else table)

@@ -19,15 +19,20 @@ import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
 from striatal.io.rundir import result_of
-from striatal.params import Controller, Plant, check_seed
-from striatal.sim.robust import Perturbation
+from striatal.params import N_GAINS, Controller, Plant, check_seed
+from striatal.sim.robust import Perturbation, run_case
 from striatal.sim.rollout import Protocol, TrialRequest
 
 __all__ = [
     "CONDITIONS",
+    "MARGIN_CONDITIONS",
+    "MARGIN_DRAWS",
     "controller_groups",
     "evaluate",
+    "margin_passes",
+    "margin_table",
     "robustness_table",
+    "sweep_controllers",
 ]
 
 
@@ -44,6 +49,125 @@ CONDITIONS: tuple[Perturbation, ...] = (
     Perturbation("sensor noise 0.01", x_std=0.01, theta_std=0.01),
     Perturbation("sensor noise 0.05", x_std=0.05, theta_std=0.05),
 )
+
+
+#: Seed and number of the margin set's random (pole mass, length) draws in [0.6, 1.4].
+MARGIN_SEED = 20261205
+MARGIN_DRAWS = 20
+
+
+def _margin_conditions() -> tuple[Perturbation, ...]:
+    scan = tuple(
+        Perturbation(f"pole mass x{m}, length x{l}", pole_mass=m, length=l)
+        for m in (0.8, 1.2)
+        for l in (0.6, 0.65, 0.7, 0.75, 1.3, 1.4, 1.5)
+    )
+    draws = np.random.default_rng(MARGIN_SEED).uniform(0.6, 1.4, (MARGIN_DRAWS, 2))
+    drawn = tuple(
+        Perturbation(f"draw {i}: pole mass x{m:.3f}, length x{l:.3f}", pole_mass=m, length=l)
+        for i, (m, l) in enumerate(draws.round(3).tolist())
+    )
+    carts = tuple(Perturbation(f"cart mass x{c}", cart_mass=c) for c in (0.7, 1.3))
+    starts = (
+        Perturbation("theta0 = pi - 0.6", theta0=float(np.pi - 0.6)),
+        Perturbation("theta0 = pi + 0.6", theta0=float(np.pi + 0.6)),
+        Perturbation("x0 = -1.0 m", x0=-1.0),
+        Perturbation("x0 = +1.0 m", x0=1.0),
+    )
+    return scan + drawn + carts + starts
+
+
+#: The margin set: conditions outside the robustness set (none of its nine cases),
+#: judged as the robustness set judges (the mean policy, 60 s, the force held, the
+#: success test at T_f; :func:`striatal.sim.robust.run_case`): a pole-length scan
+#: beyond +-20 % at pole mass x0.8 and x1.2, :data:`MARGIN_DRAWS` random (pole mass,
+#: length) factors in [0.6, 1.4], the cart mass x0.7 and x1.3, and starts farther out.
+MARGIN_CONDITIONS: tuple[Perturbation, ...] = _margin_conditions()
+
+
+def margin_passes(
+    controllers: Sequence[Controller],
+    conditions: Sequence[Perturbation] = MARGIN_CONDITIONS,
+    *,
+    nominal: Plant | None = None,
+) -> np.ndarray:
+    """(n_controllers, n_conditions) bool: each controller's run of each condition
+    passes the success test at T_f (:func:`striatal.sim.robust.run_case`, one
+    simulation each, ``len(controllers) * len(conditions)`` in all)."""
+    return np.array(
+        [[run_case(c, cond, plant=nominal).success for cond in conditions] for c in controllers],
+        dtype=bool,
+    ).reshape(len(controllers), len(conditions))
+
+
+def sweep_controllers(rows: Sequence[dict[str, Any]]) -> dict[str, dict[int, Controller]]:
+    """The controllers of a sweep's runs.csv rows that succeeded (with ``--robust``:
+    passed the robustness set), by arm and seed."""
+    out: dict[str, dict[int, Controller]] = {}
+    for r in rows:
+        if str(r.get("success")) not in ("1", "True"):
+            continue
+        try:
+            gains = tuple(float(r[f"W{i}"]) for i in range(1, N_GAINS + 1))
+            out.setdefault(r["arm"], {})[int(r["seed"])] = Controller(
+                gains=gains, theta_c=float(r["theta_c"])
+            )
+        except (KeyError, ValueError, ParameterError) as exc:
+            raise ParameterError(f"runs.csv row without valid W and theta_c: {exc}") from None
+    return out
+
+
+def margin_table(
+    arms: dict[str, dict[int, Controller]],
+    reference: str = "random",
+    conditions: Sequence[Perturbation] = MARGIN_CONDITIONS,
+) -> tuple[str, list[dict[str, Any]]]:
+    """Markdown table of the margin set for each arm's solved seeds: the fraction of
+    conditions passed per controller (median and mean), beside ``reference``'s on the
+    seeds both solved (Wilcoxon signed-rank p, and seeds better / worse), and the
+    simulations run; and the rows, one per arm and condition."""
+    from scipy.stats import wilcoxon
+
+    passes = {
+        arm: dict(zip(ctrls, margin_passes(list(ctrls.values()), conditions), strict=True))
+        for arm, ctrls in arms.items()
+    }
+    rows: list[dict[str, Any]] = []
+    lines = [
+        f"| arm | controllers | conditions passed per controller: mean, median | "
+        f"paired with {reference} (seeds both solved): mean of both, better / worse, "
+        "Wilcoxon p | simulations |",
+        "|---|---|---|---|---|",
+    ]
+    ref = passes.get(reference, {})
+    for arm, by_seed in passes.items():
+        frac = np.array([v.mean() for v in by_seed.values()])
+        cell = "-"
+        if arm != reference and ref:
+            shared = sorted(set(by_seed) & set(ref))
+            a = np.array([by_seed[s].mean() for s in shared])
+            b = np.array([ref[s].mean() for s in shared])
+            diff = a - b
+            p = float(wilcoxon(a, b).pvalue) if np.any(diff != 0) else 1.0
+            cell = (
+                f"n = {len(shared)}: {100 * a.mean():.1f} % vs {100 * b.mean():.1f} %, "
+                f"{int((diff > 0).sum())} / {int((diff < 0).sum())}, p = {p:.2g}"
+            )
+        lines.append(
+            f"| {arm} | {len(frac)} | {100 * frac.mean():.1f} %, {100 * np.median(frac):.1f} % "
+            f"| {cell} | {len(frac) * len(conditions)} |"
+        )
+        stacked = np.array(list(by_seed.values())).reshape(len(by_seed), len(conditions))
+        for j, cond in enumerate(conditions):
+            rows.append(
+                {
+                    "arm": arm,
+                    "condition": cond.name,
+                    "runs": len(by_seed),
+                    "success": float(stacked[:, j].mean()) if len(by_seed) else float("nan"),
+                }
+            )
+    return "\n".join(lines) + "\n", rows
 
 
 def evaluate(

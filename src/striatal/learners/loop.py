@@ -221,6 +221,7 @@ def learning_steps(
     else:
         W, theta_c = np.array(state.W, dtype=float), state.theta_c
     success = True
+    checks: tuple[tuple[tuple[float, float], np.ndarray], ...] = ()
     for check in success_checks(config):
         if not success:
             break
@@ -236,7 +237,9 @@ def learning_steps(
                 gains=W,
                 nominal_passed=nominal,
                 hardware=context.hardware,
+                record=plan.record_checks,
             )
+            checks = verdict.recorded
             simulations += verdict.simulations
             seconds += verdict.simulated_seconds
             success = verdict.robust
@@ -265,7 +268,7 @@ def learning_steps(
             simulations += 1
             seconds += rerun.ended_at
             success = rerun.success
-    trial = Trial(plan, outcome, reward, success)
+    trial = Trial(plan, outcome, reward, success, checks)
     update = yield from rule.update_steps(state, config, trial, context)
     update = _finite(update, state)
     record = TrialRecord(

@@ -63,8 +63,9 @@ class TrialPlan:
     ``rng``: the policy noise of eq 5 (None: the mean policy); ``plant``: the true
     plant of this trial when it differs from the nominal one the controller believes
     in (None: the nominal plant); ``record``: the outcome carries the trial's rows (a
-    rule that learns from the trajectory); ``online``: the gains learn within the
-    trial (ac); ``scratch``: the rule's own numbers for its update.
+    rule that learns from the trajectory), ``record_checks``: so do the robustness
+    set's runs of the judged controller (:attr:`Trial.checks`); ``online``: the gains
+    learn within the trial (ac); ``scratch``: the rule's own numbers for its update.
     """
 
     W: np.ndarray
@@ -77,6 +78,7 @@ class TrialPlan:
     record: bool = False
     online: OnlineLearning | None = None
     scratch: Mapping[str, np.ndarray] = field(default_factory=dict)
+    record_checks: bool = False
 
 
 @dataclass(frozen=True)
@@ -119,12 +121,15 @@ class TrialContext:
 @dataclass(frozen=True)
 class Trial:
     """A trial as the loop hands it to :meth:`Rule.update`: the plan it ran, its outcome,
-    its reward (eqs 24-25, or the shaped reward) and the success test's verdict."""
+    its reward (eqs 24-25, or the shaped reward) and the success test's verdict; with
+    the plan's ``record_checks``, ``checks``: the robustness set's runs (each run's true
+    plant's pole mass and length factors, and its rows), counted by the loop as always."""
 
     plan: TrialPlan
     outcome: TrialOutcome
     reward: float
     success: bool
+    checks: tuple[tuple[tuple[float, float], np.ndarray], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -61,9 +61,9 @@ ROBUST_DURATION = 60.0
 
 @dataclass(frozen=True)
 class Perturbation:
-    """What a run changes from the nominal one: the true plant's pole mass and length
-    factors (the controller keeps its nominal model), the start (at rest) and Gaussian
-    sensor noise on the x and theta the controller sees (stds in m and rad).
+    """What a run changes from the nominal one: the true plant's pole mass, length and
+    cart mass factors (the controller keeps its nominal model), the start (at rest) and
+    Gaussian sensor noise on the x and theta the controller sees (stds in m and rad).
 
     The one perturbation model of the project: the robustness set's cases
     (:data:`ROBUST_CASES`) and the conditions of ``striatal robustness``
@@ -77,10 +77,14 @@ class Perturbation:
     x0: float = 0.0
     x_std: float = 0.0
     theta_std: float = 0.0
+    cart_mass: float = 1.0
 
     def plant(self, nominal: Plant) -> Plant:
-        """The true plant: ``nominal`` with its pole mass and length scaled."""
-        return nominal.scaled(pole_mass=self.pole_mass, length=self.length)
+        """The true plant: ``nominal`` with its pole mass, length and cart mass scaled."""
+        plant = nominal.scaled(pole_mass=self.pole_mass, length=self.length)
+        if self.cart_mass == 1.0:
+            return plant
+        return replace(plant, cart_mass=plant.cart_mass * self.cart_mass)
 
     def sim(self, **kwargs: Any) -> Simulation:
         """A trial from this start (``kwargs``: the other fields of the Simulation)."""
@@ -123,6 +127,7 @@ class CaseResult:
             "case": self.case.name,
             "pole_mass_factor": self.case.pole_mass,
             "length_factor": self.case.length,
+            "cart_mass_factor": self.case.cart_mass,
             "theta0": self.case.theta0,
             "x0": self.case.x0,
             "success": self.success,
@@ -262,6 +267,9 @@ class StopCheck:
     simulations: int
     simulated_seconds: float
     failed: str | None = None
+    #: With ``record``: each run's true plant (pole mass, length) factors and its rows
+    #: (kernel.TRAJ_COLUMNS), for a learner that learns from its checks.
+    recorded: tuple[tuple[tuple[float, float], np.ndarray], ...] = ()
 
 
 def nominal_is_the_case(sim: Simulation, action_every: int = 1) -> bool:
@@ -292,17 +300,24 @@ def _case_request(
     )
 
 
-def _until_failure(requests: Iterable[tuple[str, TrialRequest]]) -> Steps[StopCheck]:
+def _until_failure(
+    requests: Iterable[tuple[str, TrialRequest, tuple[float, float]]], record: bool = False
+) -> Steps[StopCheck]:
     """Run the named requests in order (each yielded) up to the first that fails its
-    success test at T_f, every run and its simulated seconds counted."""
+    success test at T_f, every run and its simulated seconds counted. ``record``: each
+    run recorded (the same outcome), its rows kept in the verdict with its plant's
+    factors."""
     runs, seconds = 0, 0.0
-    for name, request in requests:
-        (outcome,) = yield [request]
+    recorded: list[tuple[tuple[float, float], np.ndarray]] = []
+    for name, request, factors in requests:
+        (outcome,) = yield [replace(request, record=True) if record else request]
+        if record and outcome.rows is not None:
+            recorded.append((factors, outcome.rows))
         runs += 1
         seconds += outcome.ended_at
         if not outcome.success:
-            return StopCheck(False, runs, seconds, name)
-    return StopCheck(True, runs, seconds)
+            return StopCheck(False, runs, seconds, name, tuple(recorded))
+    return StopCheck(True, runs, seconds, recorded=tuple(recorded))
 
 
 def stop_check_steps(
@@ -313,6 +328,7 @@ def stop_check_steps(
     gains: np.ndarray | None = None,
     nominal_passed: bool = False,
     hardware: Hardware = ROBUST_HARDWARE,
+    record: bool = False,
 ) -> Steps[StopCheck]:
     """Is ``controller`` (with ``gains`` if given: a learner's guarded W) robust?
 
@@ -321,28 +337,21 @@ def stop_check_steps(
     at the first failure. ``nominal_passed``: the caller's own success test already was
     the nominal case (:func:`nominal_is_the_case`) and it passed; it is not run again.
     The verdict equals :func:`check_robust`'s ``robust``. Its runs are yielded
-    (:data:`striatal.sim.batch.Steps`); :func:`stop_check` runs them.
+    (:data:`striatal.sim.batch.Steps`); :func:`stop_check` runs them. ``record``: the
+    verdict keeps every run's rows with its case's plant factors.
     """
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
     cases = [ROBUST_CASES[i] for i in STOP_ORDER]
-    return (
-        yield from _until_failure(
-            (
-                case.name,
-                _case_request(
-                    controller,
-                    W,
-                    case,
-                    case.plant(plant),
-                    plant,
-                    dt,
-                    hardware,
-                ),
-            )
-            for case in cases
-            if not (nominal_passed and case == ROBUST_CASES[0])
+    runs = (
+        (
+            case.name,
+            _case_request(controller, W, case, case.plant(plant), plant, dt, hardware),
+            (case.pole_mass, case.length),
         )
+        for case in cases
+        if not (nominal_passed and case == ROBUST_CASES[0])
     )
+    return (yield from _until_failure(runs, record))
 
 
 #: :func:`stop_check_steps` run to its end on the scalar kernel.
@@ -382,6 +391,7 @@ def family_check_steps(
             (
                 f"plant {k}, {case.name}",
                 _case_request(controller, W, case, plant, model, dt, hardware),
+                (1.0, 1.0),
             )
             for k, plant in enumerate(plants)
             for case in starts

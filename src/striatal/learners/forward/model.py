@@ -12,9 +12,11 @@ declared by their prior knowledge:
   the fit, and :meth:`StructuredFit.family` gives the plants it cannot rule out.
 - :func:`fit_generic` knows nothing of the cart-pole's equations: a bootstrap
   ensemble of scikit-learn regressors (ridge regression on the monomials of degree
-  <= 3) from (x_dot, sin theta, cos theta, theta_dot, f) to the step's mean
-  accelerations, a smooth function of these inputs. Its uncertainty is the
-  ensemble's spread, and :meth:`GenericModel.plant` runs trials on it.
+  <= 3) from (x_dot, sin theta, cos theta, theta_dot, f) and, conditioned, the true
+  plant's pole mass and length factors (known for every real run: the robustness
+  set's corners are scaled plants) to the step's mean accelerations, a smooth
+  function of these inputs. Its uncertainty is the ensemble's spread, and
+  :meth:`GenericModel.plant` runs trials on it (a conditioned one on any factors).
 
 Both are pure: the same transitions give the same model.
 """
@@ -30,12 +32,14 @@ from scipy.optimize import least_squares
 from striatal.errors import ParameterError
 from striatal.params import Plant
 from striatal.sim.dynamics import rk4_force_step
-from striatal.sim.kernel.learned import LearnedArgs
-from striatal.sim.learned import LearnedDynamics, LearnedPlant
+from striatal.sim.kernel.learned import N_FEATURES, LearnedArgs
+from striatal.sim.learned import ConditionedDynamics, LearnedDynamics, LearnedPlant
 from striatal.sim.rollout import Trajectory
 
 __all__ = [
     "DEGREE",
+    "GENERIC_INPUTS",
+    "GENERIC_OUTPUTS",
     "RIDGE",
     "GenericModel",
     "StructuredFit",
@@ -53,15 +57,23 @@ FAMILY_FLOOR = 0.02
 @dataclass(frozen=True)
 class Transitions:
     """One-step transitions: ``states`` (n, 4) [m, m/s, rad, rad/s], ``forces`` (n,) [N]
-    held over the step, ``next_states`` (n, 4), ``dt`` [s]."""
+    held over the step, ``next_states`` (n, 4), ``dt`` [s]; ``factors`` (n, 2): the
+    true plant's pole mass and length factors of each (None: all 1, the nominal plant).
+    """
 
     states: np.ndarray
     forces: np.ndarray
     next_states: np.ndarray
     dt: float
+    factors: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.forces)
+        if self.factors is None:
+            object.__setattr__(self, "factors", np.ones((n, 2)))
+        assert self.factors is not None
+        if self.factors.shape != (n, 2) or not (self.factors > 0).all():
+            raise ParameterError(f"factors must be ({n}, 2) and > 0, got {self.factors.shape}")
         if self.states.shape != (n, 4) or self.next_states.shape != (n, 4):
             raise ParameterError(
                 f"transitions need states and next states of shape ({n}, 4), got "
@@ -102,7 +114,14 @@ class Transitions:
         return self._pick(~held), self._pick(held)
 
     def _pick(self, rows: np.ndarray) -> Transitions:
-        return Transitions(self.states[rows], self.forces[rows], self.next_states[rows], self.dt)
+        assert self.factors is not None
+        return Transitions(
+            self.states[rows],
+            self.forces[rows],
+            self.next_states[rows],
+            self.dt,
+            self.factors[rows],
+        )
 
 
 @dataclass(frozen=True)
@@ -174,34 +193,77 @@ def fit_structured(data: Transitions, prior: Plant = NOMINAL) -> StructuredFit:
     return StructuredFit(plant, float(sol.x[3]), covariance, rms, len(data))
 
 
-def _features(states: np.ndarray, forces: np.ndarray) -> np.ndarray:
-    """(x_dot, sin theta, cos theta, theta_dot, f): the inputs of the generic model; the
-    cart position is left out (the track is flat)."""
+#: The generic model's inputs, in order: the state's velocities and the angle's sine and
+#: cosine, the motor force held over the step, and (a conditioned model) the true
+#: plant's pole mass and length factors. The cart position is left out (the track is flat).
+GENERIC_INPUTS: tuple[str, ...] = (
+    "x_dot",
+    "sin theta",
+    "cos theta",
+    "theta_dot",
+    "force",
+    "pole mass factor",
+    "length factor",
+)
+#: Its outputs: the step's mean accelerations [m/s^2, rad/s^2].
+GENERIC_OUTPUTS: tuple[str, ...] = ("x_dot change / dt", "theta_dot change / dt")
+
+
+def _features(
+    states: np.ndarray, forces: np.ndarray, factors: np.ndarray | None = None
+) -> np.ndarray:
+    """The first five :data:`GENERIC_INPUTS` of each row, then the two factors if given."""
     th = states[:, 2]
-    return np.column_stack([states[:, 1], np.sin(th), np.cos(th), states[:, 3], forces])
+    columns = [states[:, 1], np.sin(th), np.cos(th), states[:, 3], forces]
+    if factors is not None:
+        columns += [factors[:, 0], factors[:, 1]]
+    return np.column_stack(columns)
 
 
-@dataclass(frozen=True)
+def _monomials(z: np.ndarray, powers: np.ndarray) -> np.ndarray:
+    """(n, F) the monomials prod_i z_i ** powers[j, i] of standardised inputs z (n, d)."""
+    return np.prod(z[:, None, :] ** powers[None, :, :], axis=2)
+
+
+@dataclass(frozen=True, eq=False)
 class GenericModel:
-    """A bootstrap ensemble of regressors from :func:`_features` to the step's mean
-    accelerations ((x_dot' - x_dot) / dt, (theta_dot' - theta_dot) / dt); the position
-    and angle advance by the mean of the old and new velocities (a trapezoid). The
-    members share their standardisation and monomials and differ in their readout."""
+    """A bootstrap ensemble of readouts from the monomials of the standardised
+    :func:`_features` to the step's mean accelerations ((x_dot' - x_dot) / dt,
+    (theta_dot' - theta_dot) / dt); the position and angle advance by the mean of the
+    old and new velocities (a trapezoid). ``args``: the inputs' mean and scale, the
+    monomials' exponents, and each member's readout (:class:`LearnedArgs`; the members
+    share their standardisation and monomials). ``conditioned``: the pole mass and
+    length factors are inputs too (all seven :data:`GENERIC_INPUTS`), so the model can
+    be asked about another plant."""
 
-    members: tuple[object, ...]
+    args: LearnedArgs
     dt: float
+    conditioned: bool = False
+    #: The (pole mass, length) factor pairs of the data it was fitted on.
+    plants: tuple[tuple[float, float], ...] = ((1.0, 1.0),)
 
-    def accelerations(self, states: np.ndarray, forces: np.ndarray) -> np.ndarray:
-        """(n_members, n, 2) predicted mean accelerations [m/s^2, rad/s^2]."""
-        X = _features(np.asarray(states, float), np.asarray(forces, float))
-        return np.stack([member.predict(X) for member in self.members])  # type: ignore[attr-defined]
+    def accelerations(
+        self, states: np.ndarray, forces: np.ndarray, factors: tuple[float, float] = (1.0, 1.0)
+    ) -> np.ndarray:
+        """(n_members, n, 2) predicted mean accelerations [m/s^2, rad/s^2] on the plant
+        with pole mass and length ``factors`` (ignored unless :attr:`conditioned`)."""
+        s = np.asarray(states, float)
+        f = np.asarray(forces, float)
+        fac = np.tile(np.asarray(factors, float), (len(f), 1)) if self.conditioned else None
+        a = self.args
+        phi = _monomials((_features(s, f, fac) - a.mean) / a.scale, a.powers)
+        return np.einsum("nf,kcf->knc", phi, a.coef) + a.intercept[:, None, :]
 
     def predict(
-        self, states: np.ndarray, forces: np.ndarray, dt: float | None = None
+        self,
+        states: np.ndarray,
+        forces: np.ndarray,
+        dt: float | None = None,
+        factors: tuple[float, float] = (1.0, 1.0),
     ) -> np.ndarray:
         """Next states (n, 4) under the ensemble mean."""
         step = self.dt if dt is None else dt
-        acc = self.accelerations(states, forces).mean(axis=0)
+        acc = self.accelerations(states, forces, factors).mean(axis=0)
         s = np.asarray(states, float)
         v = s[:, [1, 3]] + step * acc
         out = s.copy()
@@ -209,38 +271,66 @@ class GenericModel:
         out[:, [0, 2]] = s[:, [0, 2]] + 0.5 * step * (s[:, [1, 3]] + v)
         return out
 
-    def spread(self, states: np.ndarray, forces: np.ndarray) -> np.ndarray:
+    def spread(
+        self, states: np.ndarray, forces: np.ndarray, factors: tuple[float, float] = (1.0, 1.0)
+    ) -> np.ndarray:
         """(n, 2) ensemble standard deviation of the accelerations: the model's doubt."""
-        return self.accelerations(states, forces).std(axis=0)
+        return self.accelerations(states, forces, factors).std(axis=0)
 
-    def dynamics(self) -> LearnedDynamics:
+    def conditioned_dynamics(self) -> ConditionedDynamics:
+        """The conditioned ensemble (:class:`~striatal.sim.learned.ConditionedDynamics`)."""
+        if not self.conditioned:
+            raise ParameterError("the model is not conditioned on the plant factors")
+        return ConditionedDynamics(self.args)
+
+    def dynamics(self, pole_mass: float = 1.0, length: float = 1.0) -> LearnedDynamics:
         """The ensemble as the compiled kernel's learned plant step
         (:mod:`striatal.sim.kernel.learned`), whose step is :meth:`predict`'s (the
-        members' mean, the trapezoid)."""
-        scaler, poly, _ = (step for _, step in self.members[0].steps)  # type: ignore[attr-defined]
-        ridges = [member.steps[-1][1] for member in self.members]  # type: ignore[attr-defined]
-        return LearnedDynamics(
-            LearnedArgs(
-                mean=np.array(scaler.mean_, dtype=float),
-                scale=np.array(scaler.scale_, dtype=float),
-                powers=np.ascontiguousarray(poly.powers_, dtype=np.int64),
-                coef=np.ascontiguousarray(np.stack([r.coef_ for r in ridges]), dtype=float),
-                intercept=np.ascontiguousarray(
-                    np.stack([r.intercept_ for r in ridges]), dtype=float
-                ),
-            )
-        )
+        members' mean, the trapezoid); a conditioned model at the given factors."""
+        if self.conditioned:
+            return self.conditioned_dynamics().at(pole_mass, length)
+        return LearnedDynamics(self.args)
 
-    def plant(self, believed: Plant = NOMINAL) -> LearnedPlant:
-        """The ensemble as a plant to run trials on, the controller believing ``believed``."""
-        return LearnedPlant.of(self.dynamics(), believed)
+    def plant(self, believed: Plant) -> LearnedPlant:
+        """The ensemble's mean as a plant to run trials on (a conditioned one at the
+        nominal factors, scalable), the controller believing ``believed``."""
+        if self.conditioned:
+            return LearnedPlant.conditioned_on(self.conditioned_dynamics().mean(), believed)
+        return LearnedPlant.of(self.dynamics().mean(), believed)
 
 
 #: The degree of the generic model's monomials.
 DEGREE = 3
+#: How much a plant factor's monomials are shrunk before the ridge readout (module
+#: docstring of :func:`fit_generic`).
+FACTOR_SHRINK = 0.1
 #: The ridge penalty of its readout: the monomials of standardised inputs are collinear
 #: (sin^2 + cos^2 = 1), so the penalty keeps the normal equations well posed.
 RIDGE = 1e-3
+
+
+def generic_powers(degree: int, conditioned: bool) -> np.ndarray:
+    """The monomials' exponents (F, 5) or, ``conditioned``, (F, 7): every monomial of
+    degree <= ``degree`` of the five state and force inputs (scikit-learn's
+    ``PolynomialFeatures`` order), then each of those of degree <= ``degree`` - 1 times
+    the pole mass factor, then times the length factor: a model linear in each factor
+    (physics aside, the smallest change that lets the plant's size move every term)."""
+    from sklearn.preprocessing import PolynomialFeatures
+
+    base = PolynomialFeatures(degree).fit(np.zeros((1, N_FEATURES))).powers_.astype(np.int64)
+    if not conditioned:
+        return np.ascontiguousarray(base)
+    low = base[base.sum(axis=1) <= degree - 1]
+    zeros, ones = np.zeros((len(low), 1), np.int64), np.ones((len(low), 1), np.int64)
+    return np.ascontiguousarray(
+        np.vstack(
+            [
+                np.hstack([base, np.zeros((len(base), 2), np.int64)]),
+                np.hstack([low, ones, zeros]),
+                np.hstack([low, zeros, ones]),
+            ]
+        )
+    )
 
 
 def fit_generic(
@@ -250,16 +340,19 @@ def fit_generic(
     members: int = 5,
     degree: int = DEGREE,
     ridge: float = RIDGE,
+    conditioned: bool = False,
 ) -> GenericModel:
     """A bootstrap ensemble of ``members`` regressors: scikit-learn's ``StandardScaler``
-    and ``PolynomialFeatures`` (every monomial of degree <= ``degree`` of the five
-    standardised inputs), fitted once on ``data``, then a ``Ridge`` readout (penalty
-    ``ridge``) per member, each on a bootstrap resample of ``data``. Needs scikit-learn
-    (the ``model`` extra)."""
+    and ``PolynomialFeatures`` (every monomial of degree <= ``degree`` of the standardised
+    inputs: the seven :data:`GENERIC_INPUTS`, or the first five when not
+    ``conditioned``), fitted once on ``data``, then a ``Ridge`` readout (penalty
+    ``ridge``) per member, each on a bootstrap resample of ``data``. Data from one
+    plant only leave the factors' monomials at zero (a factor of zero spread
+    standardises to 0), so the conditioned model then predicts every plant alike.
+    Needs scikit-learn (the ``model`` extra)."""
     try:
         from sklearn.linear_model import Ridge
-        from sklearn.pipeline import make_pipeline
-        from sklearn.preprocessing import PolynomialFeatures, StandardScaler
+        from sklearn.preprocessing import StandardScaler
     except ImportError as exc:  # pragma: no cover - depends on the install
         raise ParameterError(
             "the generic forward model needs scikit-learn: pip install 'striatal[model]'"
@@ -268,14 +361,27 @@ def fit_generic(
         raise ParameterError(f"members must be >= 1, got {members}")
     if not 1 <= degree <= 6:
         raise ParameterError(f"degree must be in [1, 6], got {degree}")
-    X = _features(data.states, data.forces)
+    X = _features(data.states, data.forces, data.factors if conditioned else None)
     y = (data.next_states[:, [1, 3]] - data.states[:, [1, 3]]) / data.dt
     scaler = StandardScaler().fit(X)
-    poly = PolynomialFeatures(degree).fit(scaler.transform(X))
-    Phi = poly.transform(scaler.transform(X))
-    fitted = []
+    powers = generic_powers(degree, conditioned)
+    # a factor's monomials enter shrunk, so the ridge penalty holds them FACTOR_SHRINK^-2
+    # times harder: a plant seen on one trajectory moves the model only as far as needed
+    shrink = np.where(powers[:, N_FEATURES:].sum(axis=1) > 0, FACTOR_SHRINK, 1.0)
+    Phi = _monomials(scaler.transform(X), powers) * shrink
+    coef, intercept = [], []
     for _ in range(members):
         rows = rng.integers(0, len(data), len(data))
         readout = Ridge(alpha=ridge).fit(Phi[rows], y[rows])
-        fitted.append(make_pipeline(scaler, poly, readout))
-    return GenericModel(tuple(fitted), data.dt)
+        coef.append(readout.coef_ * shrink)
+        intercept.append(readout.intercept_)
+    args = LearnedArgs(
+        mean=np.array(scaler.mean_, dtype=float),
+        scale=np.array(scaler.scale_, dtype=float),
+        powers=powers,
+        coef=np.ascontiguousarray(np.stack(coef), dtype=float),
+        intercept=np.ascontiguousarray(np.stack(intercept), dtype=float),
+    )
+    assert data.factors is not None
+    plants = tuple((float(a), float(b)) for a, b in np.unique(data.factors, axis=0))
+    return GenericModel(args, data.dt, conditioned, plants)

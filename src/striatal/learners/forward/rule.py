@@ -78,12 +78,14 @@ __all__ = [
     "structured_world",
 ]
 
-#: Transitions kept from the real trials (the most recent); each trial adds at most
-#: :data:`PER_TRIAL` of them, evenly spaced.
+#: Transitions kept from the real runs of each plant (the most recent); each run adds
+#: at most :data:`PER_TRIAL` of them, evenly spaced.
 MAX_TRANSITIONS = 1200
 PER_TRIAL = 400
-#: Columns of one kept transition: state (4), held force, next state (4).
-_WIDTH = 9
+#: Columns of one kept transition: state (4), held force, next state (4), the true
+#: plant's pole mass and length factors (2).
+_WIDTH = 11
+
 #: The rule that learns in imagination.
 INNER = "pgpe"
 
@@ -109,21 +111,49 @@ class Imagined:
     simulated_seconds: float
 
 
-def transitions_of(rows: np.ndarray, per_trial: int = PER_TRIAL) -> np.ndarray:
-    """At most ``per_trial`` evenly spaced transitions (n, 9) of one recorded trial
-    (rows: kernel.TRAJ_COLUMNS; row k's force acts from row k to row k+1)."""
+def transitions_of(
+    rows: np.ndarray, factors: tuple[float, float] = (1.0, 1.0), per_trial: int = PER_TRIAL
+) -> np.ndarray:
+    """At most ``per_trial`` evenly spaced transitions (n, 11) of one recorded run on
+    the plant with pole mass and length ``factors`` (rows: kernel.TRAJ_COLUMNS; row k's
+    force acts from row k to row k+1)."""
     n = len(rows) - 1
     if n < 1:
         return np.empty((0, _WIDTH))
     k = np.unique(np.linspace(0, n - 1, min(n, per_trial)).astype(int))
     states = rows[:, 1:5]
-    return np.column_stack([states[k], rows[k, 6], states[k + 1]])
+    return np.column_stack([states[k], rows[k, 6], states[k + 1], np.tile(factors, (len(k), 1))])
 
 
 def kept_data(state: LearnerState) -> np.ndarray:
-    """The transitions (n, 9) in the state's memory "data"."""
+    """The transitions (n, 11) in the state's memory "data"."""
     flat = np.array(state.get("data"), dtype=float)
     return flat.reshape(-1, _WIDTH)
+
+
+def keep_recent(data: np.ndarray, limit: int = MAX_TRANSITIONS) -> np.ndarray:
+    """The most recent ``limit`` transitions of each plant (factor pair) in ``data``,
+    in their order: a plant seen once is not forgotten as others are run."""
+    if len(data) == 0:
+        return data
+    _, plant = np.unique(data[:, 9:], axis=0, return_inverse=True)
+    plant = plant.ravel()
+    keep = np.zeros(len(data), dtype=bool)
+    for p in np.unique(plant):
+        keep[np.flatnonzero(plant == p)[-limit:]] = True
+    return data[keep]
+
+
+def believed_plant(nominal: Plant) -> Plant:
+    """The plain plant the real trials' controller believes (:attr:`TrialContext.plant`,
+    the nominal one): its four parameters only, so imagination's controller never holds
+    the object the loop was given (no learned dynamics, nothing beyond what eq 12 uses)."""
+    return Plant(
+        cart_mass=nominal.cart_mass,
+        pole_mass=nominal.pole_mass,
+        length=nominal.length,
+        gravity=nominal.gravity,
+    )
 
 
 @dataclass(frozen=True)
@@ -138,6 +168,9 @@ class World:
     family: tuple[Plant, ...]
     jitter: bool
     family_model: Plant | None
+    #: Whether a candidate a family plant refuses is learned on that plant next, with
+    #: every imagined simulation (checks too) spent from the budget.
+    rehearse: bool = False
 
 
 def structured_world(fit: StructuredFit) -> World:
@@ -147,8 +180,21 @@ def structured_world(fit: StructuredFit) -> World:
 
 
 def generic_world(model: GenericModel, believed: Plant) -> World:
-    """The generic ensemble: learn on its mean (one evaluation a step), check on each
-    member (the ensemble's doubt), the controller believing ``believed`` throughout."""
+    """The generic ensemble, the controller believing ``believed`` throughout: learn on
+    its mean (one evaluation a step), check on each member (the ensemble's doubt). A
+    model conditioned on the plant factors is also checked on its mean at each plant
+    the data hold (the corners the real checks ran), and a candidate a family plant
+    refuses is learned on that plant next (``rehearse``)."""
+    if model.conditioned:
+        cd = model.conditioned_dynamics()
+        mean = LearnedPlant.conditioned_on(cd.mean(), believed)
+        members = tuple(
+            LearnedPlant.conditioned_on(cd.member(k), believed) for k in range(cd.members)
+        )
+        corners = tuple(
+            mean.scaled(pole_mass=a, length=b) for a, b in model.plants if (a, b) != (1.0, 1.0)
+        )
+        return World(mean, members + corners, False, believed, rehearse=True)
     dynamics = model.dynamics()
     members = tuple(LearnedPlant.of(dynamics.member(k), believed) for k in range(dynamics.members))
     return World(LearnedPlant.of(dynamics.mean(), believed), members, False, believed)
@@ -167,8 +213,10 @@ def imagine_steps(
     rule's preset; with ``config.robust`` its stop rule, and its robust preset where
     ``world.jitter``). A solution must also be robust on each plant of
     ``world.family`` (with ``robust``), else the inner learner goes on from it with a
-    new seed. Every imagined trial is yielded (:data:`striatal.sim.batch.Steps`), so the
-    engine that runs the real trials runs them too; :func:`imagine` runs them here."""
+    new seed; with ``world.rehearse`` on the family plant that refused it, the checks'
+    runs spent from the budget too. Every imagined trial is yielded
+    (:data:`striatal.sim.batch.Steps`), so the engine that runs the real trials runs
+    them too; :func:`imagine` runs them here."""
     inner = default_config(
         INNER,
         robust=config.robust and world.jitter,
@@ -176,13 +224,12 @@ def imagine_steps(
         track=config.track,
         action_every=config.action_every,
     )
-    budget = config.imagine_trials
-    simulations, seconds = 0, 0.0
-    template, round_seed = controller, seed
+    simulations, seconds, budget = 0, 0.0, config.imagine_trials
+    template, round_seed, plant = controller, seed, world.plant
     solved = False
     while budget > 0 and not solved:
         result = yield from learn_steps(
-            world.plant,
+            plant,
             template,
             replace(inner, max_trials=budget),
             initial_state(template.gains, template.theta_c, round_seed),
@@ -195,12 +242,19 @@ def imagine_steps(
         template = replace(template, gains=tuple(result.W), theta_c=result.theta_c)
         solved = result.success
         if solved and config.robust:
-            verdict = yield from family_check_steps(
-                template, world.family, sim.dt, model=world.family_model, hardware=config.hardware
-            )
-            simulations += verdict.simulations
-            seconds += verdict.simulated_seconds
-            solved = verdict.robust
+            for member in world.family:
+                verdict = yield from family_check_steps(
+                    template, (member,), sim.dt, model=world.family_model, hardware=config.hardware
+                )
+                simulations += verdict.simulations
+                seconds += verdict.simulated_seconds
+                if world.rehearse:
+                    budget -= verdict.simulations
+                if not verdict.robust:
+                    solved = False
+                    if world.rehearse:
+                        plant = member
+                    break
         round_seed += 1
     return Imagined(
         W=tuple(float(w) for w in template.gains),
@@ -241,7 +295,7 @@ class ForwardRule(Rule):
     def check(self, config: LearnerConfig) -> None:
         """Also: the generic model needs scikit-learn (refused before the first trial)."""
         super().check(config)
-        if config.forward_model == "generic" and importlib.util.find_spec("sklearn") is None:
+        if config.forward_model != "structured" and importlib.util.find_spec("sklearn") is None:
             raise ParameterError(
                 "--forward-model generic needs scikit-learn: pip install 'striatal[model]'"
             )
@@ -262,6 +316,9 @@ class ForwardRule(Rule):
             gamma=0.0,
             rng=None,
             record=True,
+            # the conditioned model learns from the real checks too (their plant factors
+            # are known); the other models fit one plant, the control fits nothing
+            record_checks=config.forward_model == "conditioned" and config.imagine_trials > 0,
             scratch={"seed": np.array([rng.integers(2**31 - 1)], dtype=np.int64)},
         )
 
@@ -274,21 +331,32 @@ class ForwardRule(Rule):
         plan, success = trial.plan, trial.success
         c = pick(ForwardConfig, config)
         rows = trial.outcome.rows
-        new = transitions_of(rows) if rows is not None else np.empty((0, _WIDTH))
-        data = np.concatenate([kept_data(state), new])[-MAX_TRANSITIONS:]
+        new = [transitions_of(rows) if rows is not None else np.empty((0, _WIDTH))]
+        new += [transitions_of(run, factors) for factors, run in trial.checks]
+        data = keep_recent(np.concatenate([kept_data(state), *new]))
         done = state.get("imagined") or (0.0, 0.0)
         W, theta_c = tuple(float(w) for w in plan.W), plan.theta_c
         report: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
         if not success and c.imagine_trials > 0 and len(data) > 0:
             sim = context.sim
-            transitions = Transitions(data[:, :4], data[:, 4], data[:, 5:], sim.dt)
             template = replace(context.template, gains=W, theta_c=theta_c)
             seed = int(plan.scratch["seed"][0])
-            if c.forward_model == "generic":
-                model = fit_generic(transitions, np.random.default_rng(seed))
-                world = generic_world(model, context.plant)
+            if c.forward_model in ("generic", "conditioned"):
+                transitions = Transitions(
+                    data[:, :4], data[:, 4], data[:, 5:9], sim.dt, data[:, 9:]
+                )
+                model = fit_generic(
+                    transitions,
+                    np.random.default_rng(seed),
+                    conditioned=c.forward_model == "conditioned",
+                )
+                world = generic_world(model, believed_plant(context.plant))
                 fitted = (math.nan, math.nan)
             else:
+                nominal = (data[:, 9:] == 1.0).all(axis=1)
+                transitions = Transitions(
+                    data[nominal, :4], data[nominal, 4], data[nominal, 5:9], sim.dt
+                )
                 fit = fit_structured(transitions)
                 world = structured_world(fit)
                 fitted = (fit.plant.pole_mass, fit.plant.length)
