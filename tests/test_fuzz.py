@@ -49,6 +49,21 @@ FUZZ = settings(
 #: The most seconds one command may take on a fuzzed input (a refusal takes well under
 #: one; the cheapest valid runs below take a few).
 TIME_LIMIT = 60.0
+#: The work limit while fuzzing (``STRIATAL_MAX_STEPS``): every command refuses, in one
+#: line, work past what the time limit can wait for, as it refuses past its stated limit.
+FUZZ_MAX_STEPS = 2 * 10**7
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _work_the_time_limit_can_wait_for() -> Iterator[None]:
+    old = os.environ.get("STRIATAL_MAX_STEPS")
+    os.environ["STRIATAL_MAX_STEPS"] = str(FUZZ_MAX_STEPS)
+    yield
+    if old is None:
+        del os.environ["STRIATAL_MAX_STEPS"]
+    else:
+        os.environ["STRIATAL_MAX_STEPS"] = old
+
 
 #: Commands left out: ``bench`` measures speed (minutes by design) and ``neural`` runs a
 #: spiking network (its own tests bound it); ``animate`` encodes a GIF of every frame.

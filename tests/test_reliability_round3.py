@@ -532,7 +532,7 @@ ROUND3: tuple[Scenario, ...] = (
     S("list-too-long", "bad input", "`striatal sweep --alpha-grid 1,1,...` with 1 001 values "
       "(a list option took any length)", "exit 2, one line naming --alpha-grid; nothing "
       "written", usage_error(("sweep", "--seeds", "1", "--alpha-grid", ",".join(["1"] * 1001),
-                              "--out", "OUT"), says="at most 1000 comma-separated values")),
+                              "--out", "OUT"), says="at most 1,000 comma-separated values")),
     S("sweep-runs-bounded", "bad input", "`striatal sweep --seeds 100000 --alpha-grid "
       "1,...,11` (1.2 million run specs built before the first ran)", "exit 2, one line "
       "naming the number of runs; nothing written",

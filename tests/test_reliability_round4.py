@@ -386,3 +386,11 @@ def test_a_result_file_of_the_wrong_type_is_one_line(tmp_path: Path) -> None:
     p.write_text(json.dumps({"W": [1.0] * 6, "theta_c": 0.6, "trials": -1}))
     with pytest.raises(DataFileError, match="field trials"):
         read_result(p)
+
+
+def test_a_plant_the_lqr_baseline_cannot_fit_is_one_line(tmp_path: Path) -> None:
+    """Found by tests/test_fuzz.py: --gravity 1.3e30 ended in scipy's LinAlgError."""
+    out = tmp_path / "s"
+    r = cli_in_process("sweep", "--gravity", "1.3327198662459107e+30", "--out", str(out))
+    one_line(r, "the LQR baseline cannot be fitted to this plant")
+    assert not out.exists()

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -29,11 +30,13 @@ __all__ = [
     "ARGS",
     "MAX_ITEMS",
     "MAX_STEPS",
+    "MAX_STEPS_ENV",
     "Arg",
     "check",
     "check_all",
     "check_learning_work",
     "check_work",
+    "max_steps",
     "plain",
     "spelling",
 ]
@@ -43,8 +46,22 @@ MAX_ITEMS = 1_000
 #: The most simulated control steps (of dt each) one command may start, counted at its
 #: worst case (every run to its budget). 10**12 steps are about 5 days of this machine's
 #: kernel; every documented experiment is far below (a 100-seed sweep of six arms over
-#: two inits at 2 000 trials of 60 s is 1.4 * 10**10).
+#: two inits at 2 000 trials of 60 s is 1.4 * 10**10). The environment variable
+#: ``STRIATAL_MAX_STEPS`` sets a lower limit (the fuzzer's: work it can wait for).
 MAX_STEPS = 10**12
+MAX_STEPS_ENV = "STRIATAL_MAX_STEPS"
+
+
+def max_steps() -> int:
+    """:data:`MAX_STEPS`, or the lower limit that ``STRIATAL_MAX_STEPS`` sets."""
+    text = os.environ.get(MAX_STEPS_ENV, "")
+    try:
+        return min(MAX_STEPS, max(1, int(text))) if text else MAX_STEPS
+    except ValueError:
+        raise ParameterError(
+            f"{MAX_STEPS_ENV} must be a whole number of steps, got {text!r:.40}"
+        ) from None
+
 
 Kind = Literal["count", "whole", "real", "choice", "flag", "reals", "names", "text"]
 
@@ -196,10 +213,11 @@ def check_all(
 def check_work(steps: float, what: str, how: str) -> None:
     """ParameterError if ``steps`` (a command's worst-case simulated steps) exceed
     :data:`MAX_STEPS`; the line gives the estimate and how it was made."""
-    if not steps <= MAX_STEPS:
+    limit = max_steps()
+    if not steps <= limit:
         raise ParameterError(
             f"{what} would simulate up to {steps:.3g} steps ({how}), more than the "
-            f"limit of {MAX_STEPS:.0e}; ask for fewer"
+            f"limit of {limit:.0e}; ask for fewer"
         )
 
 

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 
+from striatal import arguments
 from striatal.cli import options, progress
 from striatal.errors import ParameterError
 from striatal.io.files import dumps_json
@@ -66,6 +68,10 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(
             f"--duration must be at least the {Protocol().check_time:g}-s check of eq 24"
         )
+    steps = math.ceil(sim.duration / sim.dt)
+    arguments.check_work(
+        args.draws * steps, "the evaluation", f"{args.draws:,} draws x {steps:,} steps"
+    )
     shown = progress.bar(args, total=args.draws, unit="draw")
 
     def on_draw(k: int) -> None:

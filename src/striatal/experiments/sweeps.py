@@ -557,7 +557,7 @@ def plan(
         "trial": {"dt": sim.dt, "duration": sim.duration, "theta0": sim.theta0, "x0": sim.x0},
         "protocol": json_roundtrip(Protocol().__dict__),
         "baselines": {
-            "lqr": baseline_methods.lqr_fit(plant).to_dict(),
+            "lqr": lqr_settings(plant),
             "random_box": [
                 baseline_methods.RANDOM_BOX[0].tolist(),
                 baseline_methods.RANDOM_BOX[1].tolist(),
@@ -576,6 +576,20 @@ def plan(
     if tuning_root is not None:
         settings["tuning_root"] = tuning_root
     return Plan(specs, settings, config.max_trials)
+
+
+def lqr_settings(plant: Plant) -> dict[str, Any]:
+    """The LQR baseline's fit to ``plant`` as sweep.json records it; ParameterError (one
+    line, before any run) when the Riccati equation has no solution for that plant."""
+    from numpy.linalg import LinAlgError
+
+    try:
+        return baseline_methods.lqr_fit(plant).to_dict()
+    except (LinAlgError, ArithmeticError) as exc:
+        raise ParameterError(
+            f"the LQR baseline cannot be fitted to this plant (--cart-mass, --pole-mass, "
+            f"--length, --gravity): {str(exc).splitlines()[0][:120]}"
+        ) from None
 
 
 def check_libraries(config: LearnerConfig) -> None:

@@ -20,6 +20,7 @@ one line naming the file, the field and the value.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal, TypeVar
@@ -129,7 +130,9 @@ def one_line(exc: ValidationError, where: str) -> str:
     if len(shown) > 60:
         shown = shown[:57] + "..."
     more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
-    msg = first["msg"][0].lower() + first["msg"][1:]
+    # pydantic names its own classes ("or instance of StateModel"): the user never wrote them
+    msg = re.sub(r" or instance of \w+", "", first["msg"])
+    msg = msg[0].lower() + msg[1:]
     if first["type"] in ("missing",):
         return f"{where}: field {loc} is missing{more}"
     if first["type"] == "value_error":  # a check across fields: its own sentence
