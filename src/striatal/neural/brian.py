@@ -48,6 +48,8 @@ from striatal.params import Controller, Plant
 
 __all__ = [
     "BRIAN2_INSTALL",
+    "FORCE_OF_U",
+    "PLANT_EQUATIONS",
     "CompiledNetwork",
     "CompiledRun",
     "Translation",
@@ -156,12 +158,15 @@ def translate(
         )
     nengo = require_nengo()
     from nengo.builder import Model
+    from nengo.cache import get_default_decoder_cache
 
     h = build(controller, plant, config, seed)
     pathway_conns = {id(c): k for k, (_ch, _t, c) in enumerate(h.pathways)}
     for (_ch, _t, c), scale in zip(h.pathways, h.pathway_scales, strict=True):
         c.transform = scale
-    model = Model(dt=net_dt, label="striatal brian2 translation")
+    # nengo's decoder cache, as nengo.Simulator uses it: a learning run solves only the
+    # decoders whose targets changed (the fibres' criterion when theta_c moves)
+    model = Model(dt=net_dt, label="striatal brian2", decoder_cache=get_default_decoder_cache())
     model.build(h.model)
 
     ensembles = list(h.model.all_ensembles)
@@ -312,7 +317,7 @@ class CompiledRun:
 #: The plant of the compiled program: eqs 8-9 with the point-mass pole of eq 10. The
 #: force f of eq 12 is computed from u once per network step, before the state update,
 #: and held over the step; u = sum_i c_i s_i + sigma n(t) (s_i linked to the pathway rows).
-_PLANT_EQS = """
+PLANT_EQUATIONS = """
 dx/dt = xd / second : 1
 dxd/dt = xdd / second : 1
 dth/dt = thd / second : 1
@@ -329,7 +334,7 @@ g_p : 1 (shared)
 """
 
 #: Eq 12: the force that realises the cart acceleration u (the model is the plant).
-_FORCE_CODE = (
+FORCE_OF_U = (
     "f = (M_p + m_p - m_p * cos(th)**2) * u + m_p * g_p * cos(th) * sin(th)"
     " - m_p * l_p * thd**2 * sin(th)"
 )
@@ -367,6 +372,13 @@ v = 0
 """
 
 
+def _program_version() -> str:
+    """The program's code and Brian2's version: a change to either is a new cache entry."""
+    b2 = require_brian2()
+    text = "".join((PLANT_EQUATIONS, FORCE_OF_U, _SIGNAL_EQS, _SIGNAL_VALUE, _LIF_STEP, _LIF_RESET))
+    return hashlib.sha256((text + b2.__version__).encode()).hexdigest()[:12]
+
+
 class CompiledNetwork:
     """One compiled Brian2 program for a network structure and a run length.
 
@@ -384,12 +396,13 @@ class CompiledNetwork:
         self.duration = duration
         self.control_dt = control_dt
         self.structure = tr
-        self.key = tr.structure_key(self.n_net, self.every)
+        self.key = tr.structure_key(self.n_net, self.every, _program_version())
         self.project = cache_root() / self.key
         self.compile_time = 0.0
         self.compiled_now = False
         self._o: dict[str, Any] = {}
         self._work: Path | None = None
+        self._device: Any = None
 
     @property
     def cached(self) -> bool:
@@ -405,9 +418,11 @@ class CompiledNetwork:
         self.project.parent.mkdir(parents=True, exist_ok=True)
         t0 = time.perf_counter()
         was_cached = self.cached
-        b2.device.reinit()
-        b2.device.activate()
+        # a fresh standalone project (the device is one object per process: reinit it)
         b2.set_device("cpp_standalone", build_on_run=False, directory=str(self.project))
+        device = b2.get_device()
+        device.reinit()
+        device.activate(build_on_run=False, directory=str(self.project))
         b2.prefs.devices.cpp_standalone.openmp_threads = 0
         b2.defaultclock.dt = tr.net_dt * b2.second
         second = b2.second
@@ -417,11 +432,11 @@ class CompiledNetwork:
         noise = b2.TimedArray(np.zeros(self.n_control + 1), dt=self.control_dt * second)
         links = "".join(f"s{i} : 1 (linked)\nc{i} : 1 (shared)\n" for i in range(n_path))
         plant = b2.NeuronGroup(
-            1, _PLANT_EQS + links, method="rk4", name="plant", order=0, namespace={}
+            1, PLANT_EQUATIONS + links, method="rk4", name="plant", order=0, namespace={}
         )
         u_code = " + ".join(f"c{i} * s{i}" for i in range(n_path))
         plant.run_regularly(
-            f"u = {u_code} + sigma * noise(t)\n{_FORCE_CODE}",
+            f"u = {u_code} + sigma * noise(t)\n{FORCE_OF_U}",
             when="before_groups",
             name="plant_motor",
         )
@@ -495,10 +510,11 @@ class CompiledNetwork:
         )
         net.run(self.duration * second, namespace={"noise": noise, **ns})
         with FileLock(str(self.project) + ".lock"):
-            b2.device.build(directory=str(self.project), compile=True, run=False, with_output=False)
+            device.build(directory=str(self.project), compile=True, run=False, with_output=False)
             (self.project / ".complete").touch()
         self.compile_time = time.perf_counter() - t0
         self.compiled_now = not was_cached
+        self._device = device
         self._work = Path(tempfile.mkdtemp(prefix="striatal-brian2-"))
         shutil.copy2(self.project / "main", self._work / "main")
         shutil.copytree(self.project / "static_arrays", self._work / "static_arrays")
@@ -520,10 +536,13 @@ class CompiledNetwork:
         b2 = require_brian2()
         if self._work is None:
             raise ParameterError("build the compiled network before running it")
-        if tr.structure_key(self.n_net, self.every) != self.key:
+        if tr.structure_key(self.n_net, self.every, _program_version()) != self.key:
             raise ParameterError("the translation is not of the compiled network's structure")
         o = self._o
         second = b2.second
+        if b2.get_device() is not self._device:
+            # another Brian2 device was set since the build (a runtime simulation)
+            b2.set_device(self._device, build_on_run=False)
         c = np.asarray(coefficients, dtype=float)
         n_path = int(tr.pathway_rows.shape[0])
         if c.shape != (n_path,) or not np.all(np.isfinite(c)):
@@ -562,7 +581,7 @@ class CompiledNetwork:
             args[getattr(sg, name)] = a
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
-        b2.device.run(
+        self._device.run(
             directory=str(self._work),
             results_directory="results",
             with_output=False,
@@ -570,7 +589,7 @@ class CompiledNetwork:
         )
         wall = time.perf_counter() - t0
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        for name in b2.device.run_args_arrays:
+        for name in self._device.run_args_arrays:
             (self._work / "static_arrays" / name).unlink(missing_ok=True)
         mp = o["mon_plant"]
         traj = np.column_stack([np.asarray(getattr(mp, k))[0] for k in ("x", "xd", "th", "thd")])

@@ -42,6 +42,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -51,9 +52,9 @@ from striatal.learners import default_config
 from striatal.learners.chapter import ChapterConfig, chapter_gain_update
 from striatal.learners.common import theta_c_rule
 from striatal.learners.config import LearnerConfig, pick
-from striatal.neural.interpret import balancing_terms, swingup_terms
+from striatal.neural.interpret import pathway_coefficients
 from striatal.neural.network import NetworkConfig
-from striatal.neural.run import NeuralRun, run_network
+from striatal.neural.run import Backend, NeuralRun, run_network
 from striatal.params import Controller, Plant, Simulation, check_gains, check_seed
 from striatal.sim import kernel
 from striatal.sim.rollout import Protocol, TrialOutcome
@@ -84,13 +85,6 @@ PATHWAYS: tuple[tuple[str, str], ...] = (
     ("mu_2", "x_dot"),
 )
 N_PATHWAYS = len(PATHWAYS)
-
-
-def pathway_coefficients(W: object, plant: Plant, sign: float = 1.0) -> np.ndarray:
-    """c(W), the seven pathway coefficients of eqs 22-23 (:mod:`.interpret`), (7,)."""
-    w = check_gains(W)
-    terms = (*balancing_terms(w, plant, sign), *swingup_terms(w))
-    return np.array([t.coefficient for t in terms])
 
 
 def coefficient_jacobian(W: object, plant: Plant, sign: float = 1.0) -> np.ndarray:
@@ -314,6 +308,8 @@ def learn_network(
     protocol: Protocol | None = None,
     on_trial: Callable[[NeuralTrial], None] | None = None,
     net_dt: float = 0.001,
+    backend: Backend = "nengo",
+    on_compile: Callable[[Path], None] | None = None,
 ) -> NeuralLearning:
     """Run ``trials`` learning trials of the network from ``controller``'s W and theta_c.
 
@@ -348,7 +344,16 @@ def learn_network(
         elig = Eligibility(sigma, rng.standard_normal(sim.n_steps), chapter.gamma, every)
         t0 = time.perf_counter()
         run = run_network(
-            ctrl, plant, sim, config, seed, net_dt=net_dt, record_rates=False, exploration=elig
+            ctrl,
+            plant,
+            sim,
+            config,
+            seed,
+            net_dt=net_dt,
+            record_rates=False,
+            exploration=elig,
+            backend=backend,
+            on_compile=on_compile,
         )
         wall = time.perf_counter() - t0
         neurons = run.neurons
