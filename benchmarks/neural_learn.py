@@ -52,6 +52,7 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
         "neurons_requested": args.neurons,
         "duration": args.duration,
         "alpha": args.alpha,
+        "backend": args.backend,
     }
 
     def on_trial(t: NeuralTrial) -> None:
@@ -72,6 +73,7 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
         trials=args.trials,
         alpha=args.alpha,
         on_trial=on_trial,
+        backend=args.backend,
     )
     append(
         args.out,
@@ -128,7 +130,8 @@ def summarize(paths: list[Path]) -> None:
     rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
     groups: dict[tuple[str, float, int], list[dict]] = {}
     for r in rows:
-        groups.setdefault((r["side"], r["alpha"], r["duration"]), []).append(r)
+        side = r["side"] if r.get("backend", "nengo") == "nengo" else f"{r['side']}-{r['backend']}"
+        groups.setdefault((side, r["alpha"], r["duration"]), []).append(r)
     W0 = np.array(CHAPTER_INITIAL_W)
     for (side, alpha, dur), rs in sorted(groups.items(), key=lambda kv: (kv[0][0], str(kv[0][1]))):
         trials = [r for r in rs if r["kind"] == "trial"]
@@ -222,6 +225,9 @@ def main() -> int:
     parser.add_argument("--alpha", type=float, default=5.0)
     parser.add_argument("--out", type=Path)
     parser.add_argument("--figure", type=Path, help="with --summary: also draw W per trial here")
+    parser.add_argument(
+        "--backend", choices=("nengo", "brian2"), default="nengo", help="the network's simulator"
+    )
     args = parser.parse_args()
     if args.summary:
         summarize(args.summary)

@@ -40,6 +40,7 @@ from striatal.neural.brian import (  # noqa: E402
 from striatal.neural.interpret import pathway_coefficients  # noqa: E402
 from striatal.neural.learn import (  # noqa: E402
     Eligibility,
+    NeuralLearning,
     gain_eligibility,
     learn_network,
 )
@@ -232,20 +233,29 @@ def test_network_update_equals_the_rate_learners() -> None:
         )
 
 
-def test_learning_on_brian2_replays_the_traces_and_counts_the_child(
+def test_learning_on_brian2_replays_the_traces_and_resumes_bit_for_bit(
     brian_run: NeuralRun,
 ) -> None:
-    """Two learning trials on the program: the noise reaches the plant (u differs from the
-    mean run's), the traces are filled, and W moves by the chapter's update."""
+    """Two learning trials on the program: the traces are filled, W moves by the chapter's
+    update, the child's CPU time is counted; one trial resumed to two equals the two in
+    one go (every recorded number but the times), and a resume of another seed is refused."""
     res = learn_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, trials=2, backend="brian2")
     first, second = res.trials
     assert tuple(CTRL.gains) == first.W and second.W != first.W
     assert np.any(np.array(first.pathway_trace) != 0.0)
     assert first.cpu_time > 0.0
-    again = learn_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, trials=2, backend="brian2")
-    assert [t.to_dict() | {"cpu_time_s": 0, "wall_time_s": 0} for t in again.trials] == [
-        t.to_dict() | {"cpu_time_s": 0, "wall_time_s": 0} for t in res.trials
-    ]
+    part = learn_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, trials=1, backend="brian2")
+    resumed = learn_network(
+        CTRL, PLANT, SIM, NetworkConfig(), SEED, trials=2, backend="brian2", resume=part
+    )
+
+    def bits(r: NeuralLearning) -> list[dict[str, object]]:
+        return [t.to_dict() | {"cpu_time_s": 0, "wall_time_s": 0} for t in r.trials]
+
+    assert len(resumed.trials) == 2 and bits(resumed) == bits(res)
+    assert resumed.W == res.W and resumed.theta_c == res.theta_c
+    with pytest.raises(ParameterError, match="resume"):
+        learn_network(CTRL, PLANT, SIM, NetworkConfig(), 5, trials=2, resume=part)
 
 
 def test_cli_json_says_which_backend_ran(cli: object, brian_run: NeuralRun) -> None:

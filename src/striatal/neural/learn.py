@@ -310,6 +310,7 @@ def learn_network(
     net_dt: float = 0.001,
     backend: Backend = "nengo",
     on_compile: Callable[[Path], None] | None = None,
+    resume: NeuralLearning | None = None,
 ) -> NeuralLearning:
     """Run ``trials`` learning trials of the network from ``controller``'s W and theta_c.
 
@@ -318,6 +319,10 @@ def learn_network(
     ``alpha`` replaced if given (alpha = 0: no learning, W stays). ``seed`` fixes the
     network (the same neurons every trial) and the exploration noise
     (``numpy.random.default_rng(seed)``, one standard normal per control step).
+    ``resume``: an earlier run of the same start, seed and options, continued up to
+    ``trials`` trials in all: its trials are kept, its W and theta_c go on, and the
+    noise generator skips the draws its trials used, so that the continued run equals
+    one run of ``trials`` trials.
     """
     seed = check_seed(seed)
     if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
@@ -338,7 +343,26 @@ def learn_network(
     history: list[NeuralTrial] = []
     solved = False
     neurons = 0
-    for k in range(1, trials + 1):
+    if resume is not None:
+        same = (
+            resume.seed == seed
+            and tuple(float(w) for w in controller.gains) == resume.W0
+            and resume.theta_c0 == float(controller.theta_c)
+            and resume.config.to_dict() == lc.to_dict()
+        )
+        if not same:
+            raise ParameterError(
+                "the run to resume has another seed, start or learner options than this one"
+            )
+        if resume.solved or len(resume.trials) >= trials:
+            return resume
+        history = list(resume.trials)
+        neurons = resume.neurons
+        for _ in history:
+            rng.standard_normal(sim.n_steps)
+        W = np.array(resume.W, dtype=float)
+        theta_c = resume.theta_c
+    for k in range(len(history) + 1, trials + 1):
         ctrl = controller.with_gains(W, theta_c)
         sigma = kernel.sigma_of(W[5])
         elig = Eligibility(sigma, rng.standard_normal(sim.n_steps), chapter.gamma, every)
