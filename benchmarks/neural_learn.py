@@ -92,6 +92,69 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
     )
 
 
+def run_loop_side(args: argparse.Namespace, seed: int) -> None:
+    """``--side loop``: rule ``--learner`` through the project's learning loop, its trials
+    on the network (:func:`striatal.neural.driver.learn_with_rule`); alpha 0 (and pgpe's
+    sigma_rate 0) is the rule's no-learning control."""
+    from striatal.neural.driver import learn_with_rule
+    from striatal.neural.network import NetworkConfig
+    from striatal.params import Plant
+
+    base = {
+        "side": f"loop-{args.learner}",
+        "seed": seed,
+        "neurons_requested": args.neurons,
+        "duration": args.duration,
+        "alpha": args.alpha,
+        "backend": args.backend,
+    }
+
+    def on_trial(_state: Any, rec: Any) -> None:
+        append(
+            args.out,
+            {
+                **base,
+                "kind": "trial",
+                "trial": rec.trial,
+                "W": list(rec.W),
+                "theta_c": rec.theta_c,
+                "reward": rec.reward,
+                "success": rec.success,
+                "fault": rec.fault,
+            },
+        )
+        print(
+            f"loop-{args.learner} seed={seed} trial={rec.trial} reward={rec.reward:+g}",
+            file=sys.stderr,
+            flush=True,
+        )
+
+    control = {"sigma_rate": 0.0} if args.learner == "pgpe" and args.alpha == 0 else {}
+    state = learn_with_rule(
+        args.learner,
+        Controller(gains=CHAPTER_INITIAL_W, theta_c=CHAPTER_INITIAL_THETA_C),
+        Plant(),
+        Simulation(duration=args.duration),
+        NetworkConfig(neurons=args.neurons),
+        seed,
+        trials=args.trials,
+        backend=args.backend,
+        on_trial=on_trial,
+        alpha=args.alpha,
+        **control,
+    )
+    append(
+        args.out,
+        {
+            **base,
+            "kind": "final",
+            "W": list(state.W),
+            "theta_c": state.theta_c,
+            "solved": state.success,
+        },
+    )
+
+
 def run_rate_side(args: argparse.Namespace, seed: int) -> None:
     import striatal
 
@@ -183,7 +246,7 @@ def _groups(paths: list[Path], max_trial: int) -> dict[str, dict[int, list[bool]
         key=lambda r: r["trial"],
     ):
         backend = r.get("backend", "nengo")
-        side = r["side"] if backend == "nengo" or r["side"] == "rate" else f"network-{backend}"
+        side = r["side"] if backend == "nengo" or r["side"] != "network" else f"network-{backend}"
         out.setdefault(f"{side} alpha={r['alpha']:g}", {}).setdefault(r["seed"], []).append(
             r["reward"] > 0
         )
@@ -318,7 +381,8 @@ def main() -> int:
         help="rates with Wilson intervals and paired tests over trials 1..--trials of these "
         "files (with --figure: the learning curves) and stop",
     )
-    parser.add_argument("--side", choices=("network", "rate"))
+    parser.add_argument("--side", choices=("network", "rate", "loop"))
+    parser.add_argument("--learner", default="pgpe", help="with --side loop: the rule")
     parser.add_argument("--seeds", type=seed_list, default=[0, 1, 2])
     parser.add_argument("--trials", type=int, default=20)
     parser.add_argument("--duration", type=float, default=30.0)
@@ -344,7 +408,8 @@ def main() -> int:
         parser.error("--side and --out are required")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     for seed in args.seeds:
-        (run_network_side if args.side == "network" else run_rate_side)(args, seed)
+        side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
+        side[args.side](args, seed)
     return 0
 
 

@@ -276,3 +276,50 @@ def test_cli_json_says_which_backend_ran(cli: object, brian_run: NeuralRun) -> N
     assert summary["settings"]["network"]["backend"] == "brian2"
     assert summary["cpu_time_s"] > 0.0 and summary["compile_time_s"] >= 0.0
     assert summary["final_state"] == pytest.approx(list(brian_run.summary()["final_state"]))
+
+
+def test_the_learning_loop_runs_its_trials_on_the_network(brian_run: NeuralRun) -> None:
+    """The project's one learning loop (``learners.loop.learning_steps``) with its trial
+    run on the Brian2 program: the chapter's rule draws its noise as the kernel would
+    (the generator's state after trial 1 is default_rng(seed) after n_steps normals),
+    and the W it moves to is its own update of the network's trace and reward."""
+    from striatal.neural.driver import learn_with_rule, run_request
+    from striatal.sim.batch import TrialRequest
+    from striatal.sim.rollout import Protocol
+
+    records = []
+    state = learn_with_rule(
+        "chapter",
+        CTRL,
+        PLANT,
+        SIM,
+        NetworkConfig(),
+        SEED,
+        trials=1,
+        on_trial=lambda s, r: records.append(r),
+    )
+    rng = np.random.default_rng(SEED)
+    rng.standard_normal(SIM.n_steps)
+    assert state.rng_state == rng.bit_generator.state
+    assert state.trials_done == 1 and state.simulations == 1 and len(records) == 1
+    if not state.success:
+        assert tuple(CTRL.gains) != state.W
+    # the same trial through run_request fills the trace it is given
+    req = TrialRequest(
+        PLANT,
+        CTRL,
+        SIM,
+        Protocol(),
+        rng=np.random.default_rng(SEED),
+        gamma=0.999,
+    )
+    out = run_request(req, NetworkConfig(), SEED, "brian2")
+    assert out.reward in (10.0, -5.0) and np.any(req.trace != 0.0)
+    with pytest.raises(ParameterError, match="chapter's trial only"):
+        run_request(replace_model(req), NetworkConfig(), SEED, "brian2")
+
+
+def replace_model(req: object) -> object:
+    from dataclasses import replace
+
+    return replace(req, model=Plant(pole_mass=0.2))  # type: ignore[type-var]

@@ -30,6 +30,7 @@ lives beside Numba's (:func:`cache_root`).
 
 from __future__ import annotations
 
+import atexit
 import hashlib
 import os
 import resource
@@ -516,6 +517,8 @@ class CompiledNetwork:
         self.compiled_now = not was_cached
         self._device = device
         self._work = Path(tempfile.mkdtemp(prefix="striatal-brian2-"))
+        # the private copy and its results go with the process
+        atexit.register(shutil.rmtree, self._work, True)
         shutil.copy2(self.project / "main", self._work / "main")
         shutil.copytree(self.project / "static_arrays", self._work / "static_arrays")
         b2.get_device().project_dir = str(self._work)

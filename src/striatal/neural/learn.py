@@ -71,6 +71,7 @@ __all__ = [
     "learn_network",
     "network_transforms",
     "pathway_coefficients",
+    "trial_outcome",
     "trial_reward",
 ]
 
@@ -201,7 +202,7 @@ def trial_reward(run: NeuralRun, protocol: Protocol) -> float:
     return protocol.reward_failure
 
 
-def _outcome(run: NeuralRun, reward: float, theta_c: float) -> TrialOutcome:
+def trial_outcome(run: NeuralRun, reward: float, theta_c: float) -> TrialOutcome:
     """The run as a :class:`TrialOutcome` (what eq 21 reads: min |theta| under the swing-up)."""
     th = np.abs(np.array([kernel.wrap_angle(v) for v in run.data[:, 3]]))
     swing = th[th >= theta_c]
@@ -408,7 +409,7 @@ def learn_network(
             solved = True
             break
         W = chapter_gain_update(W, D, reward, chapter)
-        theta_c = theta_c_rule(_outcome(run, reward, theta_c), theta_c, chapter.theta_c_rule)
+        theta_c = theta_c_rule(trial_outcome(run, reward, theta_c), theta_c, chapter.theta_c_rule)
     return NeuralLearning(
         trials=tuple(history),
         W=tuple(float(w) for w in W),
