@@ -31,12 +31,7 @@ nengo = pytest.importorskip("nengo")
 b2 = pytest.importorskip("brian2")
 from brian2.devices.device import reset_device  # noqa: E402
 
-from striatal.neural.brian import (  # noqa: E402
-    BRIAN2_INSTALL,
-    FORCE_OF_U,
-    PLANT_EQUATIONS,
-    translate,
-)
+from striatal.neural.brian import BRIAN2_INSTALL, FORCE_OF_U, PLANT_EQUATIONS  # noqa: E402
 from striatal.neural.interpret import pathway_coefficients  # noqa: E402
 from striatal.neural.learn import (  # noqa: E402
     Eligibility,
@@ -46,6 +41,7 @@ from striatal.neural.learn import (  # noqa: E402
 )
 from striatal.neural.network import NetworkConfig  # noqa: E402
 from striatal.neural.run import NeuralRun, frozen_at_fault, run_network  # noqa: E402
+from striatal.neural.translate import translate  # noqa: E402
 
 CTRL = Controller()
 PLANT = Plant()

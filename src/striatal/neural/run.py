@@ -382,8 +382,9 @@ def _run_compiled(
     on_progress: Callable[[float], None] | None,
 ) -> NeuralRun:
     """:func:`run_network` on the Brian2 program (:mod:`striatal.neural.brian`)."""
-    from striatal.neural.brian import compiled_network, require_brian2, translate
+    from striatal.neural.brian import compiled_network, require_brian2
     from striatal.neural.interpret import pathway_coefficients
+    from striatal.neural.translate import translate
 
     require_brian2()
     seed = check_seed(seed)
