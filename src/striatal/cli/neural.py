@@ -1,4 +1,4 @@
-"""``striatal neural``: the switching controller as a spiking network (nengo) on the kernel."""
+"""``striatal neural``: the switching controller as a spiking network (nengo, or Brian2)."""
 
 from __future__ import annotations
 
@@ -43,7 +43,9 @@ DESCRIPTION = (
     "between them (or, with --selection basal-ganglia, nengo's BasalGanglia + Thalamus). "
     "The plant is the project's kernel (RK4) stepped every 1 ms of network time. Reports the "
     "chapter's success test at T_f, whether |theta| < 0.1 over the last 10 s, the neuron "
-    "count and the wall and CPU time per simulated second."
+    "count and the wall and CPU time per simulated second. --backend brian2 runs the same "
+    "network as a compiled Brian2 program with the plant inside it (eqs 8-10, the force "
+    "of eq 12 held per step), about 17 times less CPU."
 )
 
 
