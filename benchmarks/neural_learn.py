@@ -13,6 +13,10 @@ trial is appended to ``--out`` as it ends, then one line with the final W. Examp
     python benchmarks/neural_learn.py --side rate --seeds 0-2 --trials 20 --duration 30 \
         --out docs/data/neural_learn.jsonl
     python benchmarks/neural_learn.py --summary docs/data/neural_learn.jsonl
+
+``--backend brian2`` runs the network side on the compiled Brian2 program;
+``--compare FILES --trials N [--figure PNG]`` prints each arm's +10 rate with its
+Wilson interval and the paired tests, and draws the learning curves.
 """
 
 from __future__ import annotations
@@ -52,6 +56,7 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
         "neurons_requested": args.neurons,
         "duration": args.duration,
         "alpha": args.alpha,
+        "backend": args.backend,
     }
 
     def on_trial(t: NeuralTrial) -> None:
@@ -72,6 +77,7 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
         trials=args.trials,
         alpha=args.alpha,
         on_trial=on_trial,
+        backend=args.backend,
     )
     append(
         args.out,
@@ -82,6 +88,69 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
             "theta_c": r.theta_c,
             "solved": r.solved,
             "neurons": r.neurons,
+        },
+    )
+
+
+def run_loop_side(args: argparse.Namespace, seed: int) -> None:
+    """``--side loop``: rule ``--learner`` through the project's learning loop, its trials
+    on the network (:func:`striatal.neural.driver.learn_with_rule`); alpha 0 (and pgpe's
+    sigma_rate 0) is the rule's no-learning control."""
+    from striatal.neural.driver import learn_with_rule
+    from striatal.neural.network import NetworkConfig
+    from striatal.params import Plant
+
+    base = {
+        "side": f"loop-{args.learner}",
+        "seed": seed,
+        "neurons_requested": args.neurons,
+        "duration": args.duration,
+        "alpha": args.alpha,
+        "backend": args.backend,
+    }
+
+    def on_trial(_state: Any, rec: Any) -> None:
+        append(
+            args.out,
+            {
+                **base,
+                "kind": "trial",
+                "trial": rec.trial,
+                "W": list(rec.W),
+                "theta_c": rec.theta_c,
+                "reward": rec.reward,
+                "success": rec.success,
+                "fault": rec.fault,
+            },
+        )
+        print(
+            f"loop-{args.learner} seed={seed} trial={rec.trial} reward={rec.reward:+g}",
+            file=sys.stderr,
+            flush=True,
+        )
+
+    control = {"sigma_rate": 0.0} if args.learner == "pgpe" and args.alpha == 0 else {}
+    state = learn_with_rule(
+        args.learner,
+        Controller(gains=CHAPTER_INITIAL_W, theta_c=CHAPTER_INITIAL_THETA_C),
+        Plant(),
+        Simulation(duration=args.duration),
+        NetworkConfig(neurons=args.neurons),
+        seed,
+        trials=args.trials,
+        backend=args.backend,
+        on_trial=on_trial,
+        alpha=args.alpha,
+        **control,
+    )
+    append(
+        args.out,
+        {
+            **base,
+            "kind": "final",
+            "W": list(state.W),
+            "theta_c": state.theta_c,
+            "solved": state.success,
         },
     )
 
@@ -128,7 +197,8 @@ def summarize(paths: list[Path]) -> None:
     rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
     groups: dict[tuple[str, float, int], list[dict]] = {}
     for r in rows:
-        groups.setdefault((r["side"], r["alpha"], r["duration"]), []).append(r)
+        side = r["side"] if r.get("backend", "nengo") == "nengo" else f"{r['side']}-{r['backend']}"
+        groups.setdefault((side, r["alpha"], r["duration"]), []).append(r)
     W0 = np.array(CHAPTER_INITIAL_W)
     for (side, alpha, dur), rs in sorted(groups.items(), key=lambda kv: (kv[0][0], str(kv[0][1]))):
         trials = [r for r in rs if r["kind"] == "trial"]
@@ -165,6 +235,96 @@ def summarize(paths: list[Path]) -> None:
                 f"  +10 rewards: trials 1-{half} {sum(first)}/{len(first)}, "
                 f"later {sum(second)}/{len(second)}"
             )
+
+
+def _groups(paths: list[Path], max_trial: int) -> dict[str, dict[int, list[bool]]]:
+    """``"side[-backend] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial."""
+    rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
+    out: dict[str, dict[int, list[bool]]] = {}
+    for r in sorted(
+        (r for r in rows if r["kind"] == "trial" and r["trial"] <= max_trial),
+        key=lambda r: r["trial"],
+    ):
+        backend = r.get("backend", "nengo")
+        side = r["side"] if backend == "nengo" or r["side"] != "network" else f"network-{backend}"
+        out.setdefault(f"{side} alpha={r['alpha']:g}", {}).setdefault(r["seed"], []).append(
+            r["reward"] > 0
+        )
+    return out
+
+
+def compare(paths: list[Path], max_trial: int) -> None:
+    """Per group: +10 rate with its Wilson interval over trials 1..max_trial; then paired
+    tests on the seeds two groups share: learning against its alpha = 0 control, and the
+    network against the rate learner at the same alpha (Wilcoxon signed-rank on each
+    seed's count of +10, and McNemar on "+10 in the last trial")."""
+    import itertools
+
+    from scipy.stats import wilcoxon
+
+    from striatal.experiments.stats import mcnemar_test, wilson_interval
+
+    groups = _groups(paths, max_trial)
+    for name, seeds in groups.items():
+        k = sum(sum(v) for v in seeds.values())
+        n = sum(len(v) for v in seeds.values())
+        ci = wilson_interval(k, n)
+        last = [v[-1] for v in seeds.values()]
+        print(
+            f"{name}: {len(seeds)} seeds, {n} trials; +10 in {k}/{n} = {k / n:.2f} "
+            f"(95 % Wilson {ci.low or 0:.2f}-{ci.high or 0:.2f}); last trial +10 in "
+            f"{sum(last)}/{len(last)} seeds"
+        )
+    for a, b in itertools.combinations(sorted(groups), 2):
+        sa, sb = a.split(" alpha="), b.split(" alpha=")
+        if sa[0] != sb[0] and sa[1] != sb[1]:
+            continue
+        shared = sorted(set(groups[a]) & set(groups[b]))
+        shared = [s for s in shared if len(groups[a][s]) == len(groups[b][s])]
+        if len(shared) < 2:
+            continue
+        ca = np.array([sum(groups[a][s]) for s in shared])
+        cb = np.array([sum(groups[b][s]) for s in shared])
+        diff = ca - cb
+        p = float(wilcoxon(ca, cb).pvalue) if np.any(diff != 0) else 1.0
+        mc = mcnemar_test(
+            {s: groups[a][s][-1] for s in shared}, {s: groups[b][s][-1] for s in shared}
+        )
+        print(
+            f"{a} vs {b}: {len(shared)} shared seeds; mean +10 per seed {ca.mean():.2f} vs "
+            f"{cb.mean():.2f} (Wilcoxon signed-rank p = {p:.3g}); last trial +10 "
+            f"{mc.only_a} seeds only in the first, {mc.only_b} only in the second "
+            f"(McNemar p = {mc.p_value:.3g})"
+        )
+
+
+def curve_figure(paths: list[Path], max_trial: int, out: Path) -> None:
+    """Fraction of seeds rewarded +10 at each trial, with its 95 % Wilson band, per group."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from striatal.experiments.stats import wilson_interval
+
+    groups = _groups(paths, max_trial)
+    fig, ax = plt.subplots(figsize=(7, 4), constrained_layout=True)
+    for i, (name, seeds) in enumerate(sorted(groups.items())):
+        n_trials = min(len(v) for v in seeds.values())
+        t = np.arange(1, n_trials + 1)
+        k = np.array([sum(v[j] for v in seeds.values()) for j in range(n_trials)])
+        n = len(seeds)
+        cis = [wilson_interval(int(kk), n) for kk in k]
+        ax.plot(t, k / n, marker="o", ms=3, color=f"C{i}", label=f"{name} ({n} seeds)")
+        ax.fill_between(
+            t, [c.low or 0 for c in cis], [c.high or 0 for c in cis], color=f"C{i}", alpha=0.12
+        )
+    ax.set_xlabel("trial")
+    ax.set_ylabel("fraction of seeds rewarded +10 (eq 25)")
+    ax.set_ylim(-0.02, 1.02)
+    ax.legend(fontsize=7)
+    ax.set_title("the chapter's rule from the chapter's W(0), 30-s trials", fontsize=10)
+    fig.savefig(out, dpi=110)
 
 
 def learn_figure(paths: list[Path], out: Path) -> None:
@@ -214,7 +374,15 @@ def learn_figure(paths: list[Path], out: Path) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--summary", type=Path, nargs="+", help="summarize these files and stop")
-    parser.add_argument("--side", choices=("network", "rate"))
+    parser.add_argument(
+        "--compare",
+        type=Path,
+        nargs="+",
+        help="rates with Wilson intervals and paired tests over trials 1..--trials of these "
+        "files (with --figure: the learning curves) and stop",
+    )
+    parser.add_argument("--side", choices=("network", "rate", "loop"))
+    parser.add_argument("--learner", default="pgpe", help="with --side loop: the rule")
     parser.add_argument("--seeds", type=seed_list, default=[0, 1, 2])
     parser.add_argument("--trials", type=int, default=20)
     parser.add_argument("--duration", type=float, default=30.0)
@@ -222,7 +390,15 @@ def main() -> int:
     parser.add_argument("--alpha", type=float, default=5.0)
     parser.add_argument("--out", type=Path)
     parser.add_argument("--figure", type=Path, help="with --summary: also draw W per trial here")
+    parser.add_argument(
+        "--backend", choices=("nengo", "brian2"), default="nengo", help="the network's simulator"
+    )
     args = parser.parse_args()
+    if args.compare:
+        compare(args.compare, args.trials)
+        if args.figure is not None:
+            curve_figure(args.compare, args.trials, args.figure)
+        return 0
     if args.summary:
         summarize(args.summary)
         if args.figure is not None:
@@ -232,7 +408,8 @@ def main() -> int:
         parser.error("--side and --out are required")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     for seed in args.seeds:
-        (run_network_side if args.side == "network" else run_rate_side)(args, seed)
+        side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
+        side[args.side](args, seed)
     return 0
 
 

@@ -31,6 +31,7 @@ __all__ = [
     "balancing_terms",
     "linear_form",
     "pathway",
+    "pathway_coefficients",
     "plasticity_table",
     "reading",
     "swingup_terms",
@@ -111,6 +112,14 @@ def swingup_terms(W: Sequence[float]) -> tuple[Term, ...]:
         _term("x", on_x, "-W5^2/4"),
         _term("x_dot", on_x_dot, "-W5"),
     )
+
+
+def pathway_coefficients(W: object, plant: Plant, sign: float = 1.0) -> np.ndarray:
+    """c(W), the seven pathway coefficients of eqs 22-23, (7,): the terms of
+    :func:`balancing_terms` then :func:`swingup_terms`."""
+    w = check_gains(W)
+    terms = (*balancing_terms(w, plant, sign), *swingup_terms(w))
+    return np.array([t.coefficient for t in terms])
 
 
 _SYMBOL = {

@@ -42,6 +42,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -51,9 +52,9 @@ from striatal.learners import default_config
 from striatal.learners.chapter import ChapterConfig, chapter_gain_update
 from striatal.learners.common import theta_c_rule
 from striatal.learners.config import LearnerConfig, pick
-from striatal.neural.interpret import balancing_terms, swingup_terms
+from striatal.neural.interpret import pathway_coefficients
 from striatal.neural.network import NetworkConfig
-from striatal.neural.run import NeuralRun, run_network
+from striatal.neural.run import Backend, NeuralRun, run_network
 from striatal.params import Controller, Plant, Simulation, check_gains, check_seed
 from striatal.sim import kernel
 from striatal.sim.rollout import Protocol, TrialOutcome
@@ -70,6 +71,7 @@ __all__ = [
     "learn_network",
     "network_transforms",
     "pathway_coefficients",
+    "trial_outcome",
     "trial_reward",
 ]
 
@@ -84,13 +86,6 @@ PATHWAYS: tuple[tuple[str, str], ...] = (
     ("mu_2", "x_dot"),
 )
 N_PATHWAYS = len(PATHWAYS)
-
-
-def pathway_coefficients(W: object, plant: Plant, sign: float = 1.0) -> np.ndarray:
-    """c(W), the seven pathway coefficients of eqs 22-23 (:mod:`.interpret`), (7,)."""
-    w = check_gains(W)
-    terms = (*balancing_terms(w, plant, sign), *swingup_terms(w))
-    return np.array([t.coefficient for t in terms])
 
 
 def coefficient_jacobian(W: object, plant: Plant, sign: float = 1.0) -> np.ndarray:
@@ -207,7 +202,7 @@ def trial_reward(run: NeuralRun, protocol: Protocol) -> float:
     return protocol.reward_failure
 
 
-def _outcome(run: NeuralRun, reward: float, theta_c: float) -> TrialOutcome:
+def trial_outcome(run: NeuralRun, reward: float, theta_c: float) -> TrialOutcome:
     """The run as a :class:`TrialOutcome` (what eq 21 reads: min |theta| under the swing-up)."""
     th = np.abs(np.array([kernel.wrap_angle(v) for v in run.data[:, 3]]))
     swing = th[th >= theta_c]
@@ -314,6 +309,9 @@ def learn_network(
     protocol: Protocol | None = None,
     on_trial: Callable[[NeuralTrial], None] | None = None,
     net_dt: float = 0.001,
+    backend: Backend = "nengo",
+    on_compile: Callable[[Path], None] | None = None,
+    resume: NeuralLearning | None = None,
 ) -> NeuralLearning:
     """Run ``trials`` learning trials of the network from ``controller``'s W and theta_c.
 
@@ -322,6 +320,10 @@ def learn_network(
     ``alpha`` replaced if given (alpha = 0: no learning, W stays). ``seed`` fixes the
     network (the same neurons every trial) and the exploration noise
     (``numpy.random.default_rng(seed)``, one standard normal per control step).
+    ``resume``: an earlier run of the same start, seed and options, continued up to
+    ``trials`` trials in all: its trials are kept, its W and theta_c go on, and the
+    noise generator skips the draws its trials used, so that the continued run equals
+    one run of ``trials`` trials.
     """
     seed = check_seed(seed)
     if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
@@ -342,13 +344,41 @@ def learn_network(
     history: list[NeuralTrial] = []
     solved = False
     neurons = 0
-    for k in range(1, trials + 1):
+    if resume is not None:
+        same = (
+            resume.seed == seed
+            and tuple(float(w) for w in controller.gains) == resume.W0
+            and resume.theta_c0 == float(controller.theta_c)
+            and resume.config.to_dict() == lc.to_dict()
+        )
+        if not same:
+            raise ParameterError(
+                "the run to resume has another seed, start or learner options than this one"
+            )
+        if resume.solved or len(resume.trials) >= trials:
+            return resume
+        history = list(resume.trials)
+        neurons = resume.neurons
+        for _ in history:
+            rng.standard_normal(sim.n_steps)
+        W = np.array(resume.W, dtype=float)
+        theta_c = resume.theta_c
+    for k in range(len(history) + 1, trials + 1):
         ctrl = controller.with_gains(W, theta_c)
         sigma = kernel.sigma_of(W[5])
         elig = Eligibility(sigma, rng.standard_normal(sim.n_steps), chapter.gamma, every)
         t0 = time.perf_counter()
         run = run_network(
-            ctrl, plant, sim, config, seed, net_dt=net_dt, record_rates=False, exploration=elig
+            ctrl,
+            plant,
+            sim,
+            config,
+            seed,
+            net_dt=net_dt,
+            record_rates=False,
+            exploration=elig,
+            backend=backend,
+            on_compile=on_compile,
         )
         wall = time.perf_counter() - t0
         neurons = run.neurons
@@ -379,7 +409,7 @@ def learn_network(
             solved = True
             break
         W = chapter_gain_update(W, D, reward, chapter)
-        theta_c = theta_c_rule(_outcome(run, reward, theta_c), theta_c, chapter.theta_c_rule)
+        theta_c = theta_c_rule(trial_outcome(run, reward, theta_c), theta_c, chapter.theta_c_rule)
     return NeuralLearning(
         trials=tuple(history),
         W=tuple(float(w) for w in W),

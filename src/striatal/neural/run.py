@@ -6,7 +6,8 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Protocol
+from pathlib import Path
+from typing import Any, Literal, Protocol
 
 import numpy as np
 
@@ -16,14 +17,17 @@ from striatal.params import Controller, Plant, Simulation, check_seed
 from striatal.sim import kernel
 
 __all__ = [
+    "BACKENDS",
     "NEURAL_TRAJ_COLUMNS",
     "UPRIGHT_THETA",
     "UPRIGHT_WINDOW",
+    "Backend",
     "KernelPlant",
     "MotorExploration",
     "NeuralRun",
     "SpikeBins",
     "add_exploration",
+    "frozen_at_fault",
     "held_state_response",
     "run_network",
     "upright_throughout",
@@ -75,11 +79,17 @@ class KernelPlant:
 
 
 class MotorExploration(Protocol):
-    """A nengo Node function that adds exploration to the motor command (see
+    """What adds exploration to the motor command (see
     :class:`striatal.neural.learn.Eligibility`): called once per network step with the
-    pathways' presynaptic signals, returns the exploration added to u."""
+    pathways' presynaptic signals, returns the exploration added to u. The nengo backend
+    calls it inside the network; the compiled backend runs ``sigma * noise`` (one draw
+    per ``every`` network steps) inside its program and makes the same calls after the
+    run, with the pathway signals it recorded at each draw."""
 
     n_pre: int
+    sigma: float
+    noise: np.ndarray
+    every: int
 
     def __call__(self, t: float, pre: np.ndarray) -> np.ndarray: ...
 
@@ -103,13 +113,22 @@ class SpikeBins:
         return self.sums[:n] / self.steps_per_bin
 
 
+#: The simulators ``run_network`` can use: nengo (the reference) or the Brian2 program.
+Backend = Literal["nengo", "brian2"]
+BACKENDS: tuple[str, ...] = ("nengo", "brian2")
+
+
 @dataclass(frozen=True)
 class NeuralRun:
     """One closed-loop run of the spiking network.
 
     ``data``: (n, 8) with columns :data:`NEURAL_TRAJ_COLUMNS`, sampled every
     ``sim.dt``; theta unwrapped. ``rates``: (n_rates, n_pop) mean firing rate [Hz] of
-    each population (``populations``), sampled every ``sim.dt``.
+    each population (``populations``), sampled every ``sim.dt``. ``cpu_time``: of the
+    simulation (nengo: this process; brian2: the compiled child process), building and
+    compiling excluded; ``build_time`` [s] builds the network (nengo's builder), and
+    ``compile_time`` [s] generates and compiles the Brian2 program (make finds nothing
+    to do when it is cached).
     """
 
     data: np.ndarray
@@ -125,6 +144,8 @@ class NeuralRun:
     sim: Simulation
     config: NetworkConfig
     seed: int
+    backend: str = "nengo"
+    compile_time: float = 0.0
 
     @property
     def wall_per_sim_second(self) -> float:
@@ -151,8 +172,11 @@ class NeuralRun:
             "wall_time_s": self.wall_time,
             "cpu_time_s": self.cpu_time,
             "build_time_s": self.build_time,
+            "compile_time_s": self.compile_time,
             "wall_per_sim_second": self.wall_per_sim_second,
+            "cpu_per_sim_second": self.cpu_time / self.sim.duration,
             "seed": self.seed,
+            "backend": self.backend,
         }
 
 
@@ -183,6 +207,8 @@ def run_network(
     record_rates: bool = True,
     on_progress: Callable[[float], None] | None = None,
     exploration: MotorExploration | None = None,
+    backend: Backend = "nengo",
+    on_compile: Callable[[Path], None] | None = None,
 ) -> NeuralRun:
     """Simulate the spiking controller on the plant from ``sim.initial_state``.
 
@@ -198,7 +224,16 @@ def run_network(
     Success is the chapter's test at T_f (``sim.success``, end of
     section 2.4) on the final state; ``upright_last_10s`` a looser test (|theta| <
     UPRIGHT_THETA over the last UPRIGHT_WINDOW s).
+    ``backend="brian2"`` runs the same network as a compiled Brian2 program with the
+    plant inside it (:mod:`striatal.neural.brian`); ``on_compile(folder)`` is called
+    before it compiles (once per network size and run length; ``folder`` is the cache).
     """
+    if backend == "brian2":
+        return _run_compiled(
+            controller, plant, sim, config, seed, net_dt, exploration, on_compile, on_progress
+        )
+    if backend != "nengo":
+        raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
     nengo = require_nengo()
     seed = check_seed(seed)
     n_net = int(round(sim.duration / net_dt))
@@ -240,8 +275,53 @@ def run_network(
                 on_progress((start + steps) * net_dt)
     t2 = time.perf_counter()
     cpu = time.process_time() - c1
-    states = plant_fn.states[::every]
-    u = plant_fn.u[::every]
+    return _assemble(
+        controller,
+        plant,
+        sim,
+        config,
+        seed,
+        plant_fn.states,
+        plant_fn.u,
+        plant_fn.fault,
+        counter.rates(),
+        names,
+        every,
+        net_dt,
+        neurons=h.n_neurons,
+        wall=t2 - t1,
+        cpu=cpu,
+        build=t1 - t0,
+    )
+
+
+def _assemble(
+    controller: Controller,
+    plant: Plant,
+    sim: Simulation,
+    config: NetworkConfig,
+    seed: int,
+    net_states: np.ndarray,
+    net_u: np.ndarray,
+    fault: bool,
+    rates: np.ndarray,
+    names: tuple[str, ...],
+    every: int,
+    net_dt: float,
+    *,
+    neurons: int,
+    wall: float,
+    cpu: float,
+    build: float,
+    backend: str = "nengo",
+    compile_time: float = 0.0,
+) -> NeuralRun:
+    """A :class:`NeuralRun` from the plant's state at every network step (n_net + 1, 4)
+    and u of every step: sampled every ``sim.dt``, the force of eq 12, the mode, the
+    chapter's success test and the upright test. One reading for both backends."""
+    n_net = net_states.shape[0] - 1
+    states = net_states[::every]
+    u = net_u[::every]
     t = np.arange(states.shape[0]) * sim.dt
     p = plant.as_array()
     forces = np.array([kernel.force(s[2], s[3], a, p) for s, a in zip(states, u, strict=True)])
@@ -255,24 +335,108 @@ def run_network(
         dtype=float,
     )
     data = np.column_stack([t, states, u, forces, mode])
-    final = plant_fn.states[-1].copy()
+    final = net_states[-1].copy()
     final[2] = kernel.wrap_angle(final[2])
-    fault = plant_fn.fault
     return NeuralRun(
         data=data,
-        rates=counter.rates(),
+        rates=rates,
         populations=names,
         success=(not fault) and sim.success.passed(final),
         upright_last_10s=(not fault)
-        and upright_throughout(np.arange(n_net + 1) * net_dt, plant_fn.states[:, 2]),
+        and upright_throughout(np.arange(n_net + 1) * net_dt, net_states[:, 2]),
         fault=fault,
-        neurons=h.n_neurons,
-        wall_time=t2 - t1,
+        neurons=neurons,
+        wall_time=wall,
         cpu_time=cpu,
-        build_time=t1 - t0,
+        build_time=build,
         sim=sim,
         config=config,
         seed=seed,
+        backend=backend,
+        compile_time=compile_time,
+    )
+
+
+def frozen_at_fault(states: np.ndarray) -> tuple[np.ndarray, bool]:
+    """``states`` (n, 4) held at the last row before the first that is not finite or
+    beyond ``kernel.BLOW_UP`` (as :class:`KernelPlant` freezes a state that blows up),
+    and whether one was."""
+    bad = ~np.all(np.isfinite(states) & (np.abs(states) < kernel.BLOW_UP), axis=1)
+    if not bad.any():
+        return states, False
+    k = int(np.argmax(bad))
+    out = states.copy()
+    out[k:] = states[k - 1] if k > 0 else states[0]
+    return out, True
+
+
+def _run_compiled(
+    controller: Controller,
+    plant: Plant,
+    sim: Simulation,
+    config: NetworkConfig,
+    seed: int,
+    net_dt: float,
+    exploration: MotorExploration | None,
+    on_compile: Callable[[Path], None] | None,
+    on_progress: Callable[[float], None] | None,
+) -> NeuralRun:
+    """:func:`run_network` on the Brian2 program (:mod:`striatal.neural.brian`)."""
+    from striatal.neural.brian import compiled_network, require_brian2
+    from striatal.neural.interpret import pathway_coefficients
+    from striatal.neural.translate import translate
+
+    require_brian2()
+    seed = check_seed(seed)
+    t0 = time.perf_counter()
+    tr = translate(controller, plant, config, seed, net_dt)
+    t1 = time.perf_counter()
+    program = compiled_network(tr, sim.duration, sim.dt, on_compile=on_compile)
+    coefficients = pathway_coefficients(controller.gains, plant, controller.sign)
+    if exploration is None:
+        r = program.run(tr, coefficients, plant, sim.initial_state)
+    else:
+        if exploration.every != program.every:
+            raise ParameterError(
+                f"exploration draws every {exploration.every} network steps, the program "
+                f"every {program.every}"
+            )
+        r = program.run(
+            tr,
+            coefficients,
+            plant,
+            sim.initial_state,
+            sigma=exploration.sigma,
+            noise=exploration.noise[: program.n_control],
+        )
+        # the same calls the nengo Node gets: the pathway signals at each draw, held
+        for k in range(program.n_control):
+            for j in range(program.every):
+                exploration((k * program.every + j) * net_dt, r.pre[k])
+    if on_progress is not None:
+        on_progress(sim.duration)
+    states, fault = frozen_at_fault(r.states)
+    sizes = np.array([size for _name, size in tr.pop_sizes], dtype=float)
+    rates = r.counts / sizes / (program.every * net_dt)
+    return _assemble(
+        controller,
+        plant,
+        sim,
+        config,
+        seed,
+        states,
+        np.append(r.u, r.u[-1:]),
+        fault,
+        rates,
+        tuple(name for name, _size in tr.pop_sizes),
+        program.every,
+        net_dt,
+        neurons=tr.neurons,
+        wall=r.wall_time,
+        cpu=r.cpu_time,
+        build=t1 - t0,
+        backend="brian2",
+        compile_time=program.compile_time,
     )
 
 
