@@ -275,3 +275,21 @@ def test_the_conditioned_model_learns_from_the_real_checks(monkeypatch: pytest.M
     plain = learn(Plant(), final, replace(config, forward_model="generic"), 0)
     assert plain.simulations == state.simulations
     assert {tuple(f) for f in forward.kept_data(plain)[:, 9:].tolist()} == {(1.0, 1.0)}
+
+
+def test_imagination_believes_a_plain_plant_passed_explicitly() -> None:
+    """The imagined controller believes the four nominal parameters the real controller
+    believes (TrialContext.plant), never the object the loop holds: a learned plant as the
+    loop's plant gives a plain Plant of the same parameters, and every plant of the
+    generic world believes exactly that."""
+    pytest.importorskip("sklearn")
+    data = Transitions.of(
+        [simulate(Plant(), start(1), Simulation(duration=5.0), hardware=ROBUST_HARDWARE)]
+    )
+    model = forward.fit_generic(data, np.random.default_rng(0))
+    loops_plant = model.plant(Plant(pole_mass=0.11))
+    believed = forward.believed_plant(loops_plant)
+    assert type(believed) is Plant and believed == Plant(pole_mass=0.11)
+    world = forward.generic_world(model, believed)
+    assert all(p.believed == believed for p in (world.plant, *world.family))  # type: ignore[attr-defined]
+    assert world.family_model == believed

@@ -173,3 +173,36 @@ def test_the_margin_set_lies_outside_the_robustness_set_and_is_refused_by_nothin
     assert "| random | 2 |" in table and f"| {2 * len(MARGIN_CONDITIONS)} |" in table
     assert "n = 1" in table  # "other" paired with random on the seed both solved
     assert len(rows) == 2 * len(MARGIN_CONDITIONS)
+
+
+def test_the_margin_command_reads_sweeps_and_refuses_a_missing_one(tmp_path: Path) -> None:
+    """``striatal robustness --margin NAME=SWEEP``: the learner arm under NAME, the rest
+    under their names; a path with no runs.csv is one line on stderr and exit 2."""
+    from conftest import cli_in_process
+
+    ran = cli_in_process("robustness", "--margin", str(tmp_path / "none"))
+    assert ran.rc == 2 and ran.err.count("\n") == 1 and "no such sweep runs.csv" in ran.err
+    out = tmp_path / "sweep"
+    ran = cli_in_process(
+        "sweep",
+        "--init",
+        "chapter",
+        "--seeds",
+        "1",
+        "--max-trials",
+        "1",
+        "--learner",
+        "forward",
+        "--baselines",
+        "random",
+        "--eval-draws",
+        "0",
+        "--no-progress",
+        "--out",
+        str(out),
+    )
+    assert ran.rc == 0, ran.err
+    ran = cli_in_process("robustness", "--margin", f"fwd={out}", "--json")
+    assert ran.rc == 0, ran.err
+    arms = {row["arm"] for row in json.loads(ran.out)}
+    assert arms <= {"fwd", "fwd control", "random"}

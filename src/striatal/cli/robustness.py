@@ -128,7 +128,8 @@ def _margin(args: argparse.Namespace) -> int:
             raise DataFileError(f"{path}: no such sweep runs.csv")
         rows, _ = read_runs(path)
         for arm, by_seed in sweep_controllers(rows).items():
-            arms.setdefault(learner if arm == "learner" else arm, {}).update(by_seed)
+            named = {"learner": learner, "control": f"{learner} control"}.get(arm, arm)
+            arms.setdefault(named, {}).update(by_seed)
     if not arms:
         raise ParameterError("the sweeps hold no successful run to evaluate")
     table, rows = margin_table(arms)
