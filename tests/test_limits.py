@@ -190,12 +190,12 @@ def test_every_int_option_is_bounded(capsys: pytest.CaptureFixture[str]) -> None
     from striatal.cli import build_parser
     from striatal.cli.guards import MAX_WHOLE
 
-    parser = build_parser(only="robustness")
-    ok = parser.parse_args(["robustness", "r.json", "--seed", str(MAX_WHOLE)])
-    assert ok.seed == MAX_WHOLE
+    parser = build_parser(only="profile")
+    ok = parser.parse_args(["profile", "d", "--dpi", str(MAX_WHOLE)])
+    assert ok.dpi == MAX_WHOLE
     for bad, says in ((str(MAX_WHOLE + 1), "at most 2,147,483,647"), ("1.5", "invalid int")):
         with pytest.raises(SystemExit) as exc:
-            parser.parse_args(["robustness", "r.json", "--seed", bad])
+            parser.parse_args(["profile", "d", "--dpi", bad])
         assert exc.value.code == 2
         assert says in capsys.readouterr().err
 

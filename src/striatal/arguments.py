@@ -253,7 +253,8 @@ def _args(*args: Arg) -> dict[str, Arg]:
 #: options that several commands share, by their Python name.
 ARGS: dict[str, Arg] = _args(
     Arg("seeds", "count", "seeds per arm and init", low=1, high=100_000),
-    Arg("seed", "count", "root seed: SeedSequence(seed).spawn(seeds)", low=0, high=2**31 - 1),
+    # a seed as a sweep spawns one for each run (runs.csv's seeds): 32 bits
+    Arg("seed", "count", "a seed (of a run, or a sweep's root)", low=0, high=2**32 - 1),
     Arg("max_trials", "count", "learning-trial budget of a run", low=1, high=2**31 - 1),
     Arg("init", "names", "initial gains: chapter, random or both", choices=("chapter", "random"),
         min_items=1),
