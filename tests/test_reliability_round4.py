@@ -394,3 +394,54 @@ def test_a_plant_the_lqr_baseline_cannot_fit_is_one_line(tmp_path: Path) -> None
     r = cli_in_process("sweep", "--gravity", "1.3327198662459107e+30", "--out", str(out))
     one_line(r, "the LQR baseline cannot be fitted to this plant")
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        ("--learner", "chapter"),
+        ("--learner", "rpe"),
+        ("--learner", "pgpe"),
+        ("--learner", "pgpe", "--symmetric"),
+        ("--learner", "ac"),
+        ("--learner", "forward", "--imagine-trials", "5"),
+    ],
+)
+def test_what_each_learner_writes_is_what_its_schema_reads(
+    tmp_path: Path, options: tuple[str, ...]
+) -> None:
+    """The writers and the schema agree: every learner's checkpoint (its memory too) and
+    result, and the history they wrote, read back through their schema."""
+    from striatal.io import schema
+    from striatal.io.rundir import RunDir, read_history
+
+    out = tmp_path / "run"
+    r = cli_in_process("train", *options, "--max-trials", "3", "--duration", "3", "--out", str(out))
+    assert r.rc == 0, r.err
+    data = json.loads((out / "checkpoint.json").read_text())
+    model = schema.validated(schema.CheckpointModel, data, "checkpoint")
+    schema.check_memory(data["settings"]["learner"], model.state, "checkpoint")
+    RunDir(out).read_checkpoint()
+    RunDir(out).read_result()
+    assert len(read_history(out / "history.csv")) == 3
+
+
+def test_what_a_sweep_and_an_ablation_write_is_what_their_schemas_read(
+    swept: Path, tmp_path: Path
+) -> None:
+    from striatal.experiments.profiles import read_sweep_runs
+    from striatal.experiments.runs_csv import read_runs
+    from striatal.io import schema
+
+    schema.read_summary(swept)
+    schema.read_sweep_settings(swept / "sweep.json")
+    rows, _ = read_runs(swept / "runs.csv", max_trials=3)
+    assert len(rows) == len(read_sweep_runs(swept)) == 4
+    out = tmp_path / "a"
+    r = cli_in_process(
+        *("ablation", "--seeds", "2", "--max-trials", "1", "--variants", "chapter,pgpe"),
+        *("--no-progress", "--out", str(out)),
+    )
+    assert r.rc == 0, r.err
+    schema.AblationModel.of(json.loads((out / "ablation.json").read_text()), "ablation")
+    schema.read_summary(out)

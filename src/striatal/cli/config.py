@@ -127,11 +127,11 @@ def read_toml(path: Path) -> dict[str, Any]:
 
 def read_summary_options(path: Path, command: str) -> dict[str, Any]:
     """The options recorded in ``path`` (a summary.json or its folder) by ``command``."""
-    from striatal.io.files import read_json
+    from striatal.io.schema import read_summary
 
     p = path / "summary.json" if path.is_dir() else path
-    data = read_json(p, what="summary")
-    settings = data.get("settings") if isinstance(data, dict) else None
+    data = read_summary(p, what="--from-summary")
+    settings = data.get("settings")
     if not isinstance(settings, dict):
         raise DataFileError(f"--from-summary {p} holds no settings block")
     made_by = settings.get("command")

@@ -340,11 +340,11 @@ class RunDir:
         return read_result(self.result_path)
 
     def check_result_run(self, run: str) -> None:
-        """DataFileError if a result.json in the folder belongs to another run than ``run``."""
+        """DataFileError if a result.json in the folder belongs to another run than ``run``
+        (or breaks its schema: it is read as every result.json is)."""
         if not self.result_path.exists():
             return
-        data = read_json(self.result_path, what="result")
-        other = data.get("run_id") if isinstance(data, dict) else None
+        other = self.read_result().data.get("run_id")
         if other != run:
             raise DataFileError(
                 f"result {self.result_path} belongs to another run ({other}) than the "
