@@ -160,6 +160,7 @@ def base_argv(command: str, inputs: Path, out: Path) -> list[str]:
             *("--eval-draws", "0", "--no-progress", "--out", str(out / "s")),
         ],
         "compare": ["compare", str(swept)],
+        "report": ["report", str(swept), "--out", str(out / "r.html")],
         "curves": ["curves", str(run / "history.csv"), "--out", str(out / "c.png")],
         "profile": ["profile", str(swept), "--out", str(out / "p.png")],
         "switch-figure": ["switch-figure", "--out", str(out / "sw.png")],

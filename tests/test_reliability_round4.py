@@ -108,7 +108,7 @@ def test_n1_the_generic_model_run_writes_its_result_and_resumes(tmp_path: Path) 
         ("emptied", "state.memory.data is missing or empty"),
         ("text", "field state.memory.data: input should be a valid list"),
         ("huge", "field state.memory.data.5"),
-        ("one short", "not a multiple of 9"),
+        ("one short", "not a multiple of 11"),
         ("unknown", "state.memory.trace is not kept by the forward learner"),
         ("imagined negative", "state.memory.imagined holds a negative count"),
     ],

@@ -118,15 +118,18 @@ MEMORY: dict[str, dict[str, MemoryEntry]] = {
         "trace": MemoryEntry(sizes=(6,)),
         "rpe_square": MemoryEntry(sizes=(1,)),
     },
-    # the recorded transitions (n, 9): state (4), force (1), next state (4); at most
-    # 1 200 of them; and the imagined trials so far and their simulated seconds
+    # the recorded transitions (n, 11): state (4), force (1), next state (4), the true
+    # plant's pole mass and length factors (2); at most 1 200 of each of the five plants
+    # the real checks run (the nominal one and the robustness set's four corners); and
+    # the imagined trials so far and their simulated seconds
     "forward": {
-        "data": MemoryEntry(multiple_of=9),
+        "data": MemoryEntry(multiple_of=11),
         "imagined": MemoryEntry(sizes=(2,), counts=True),
     },
 }
-#: The most numbers one memory entry holds (forward's 1 200 transitions of 9).
-MAX_MEMORY_NUMBERS = 1200 * 9
+#: The most numbers one memory entry holds (forward's 1 200 transitions of 11 on each of
+#: five plants).
+MAX_MEMORY_NUMBERS = 1200 * 5 * 11
 
 MemoryNumbers = Annotated[list[Recorded], Field(max_length=MAX_MEMORY_NUMBERS)]
 
