@@ -323,7 +323,7 @@ def curve_figure(paths: list[Path], max_trial: int, out: Path) -> None:
     ax.set_ylabel("fraction of seeds rewarded +10 (eq 25)")
     ax.set_ylim(-0.02, 1.02)
     ax.legend(fontsize=7)
-    ax.set_title("the chapter's rule from the chapter's W(0), 30-s trials", fontsize=10)
+    ax.set_title("from the chapter's W(0), 30-s trials, seeds 0-19", fontsize=10)
     fig.savefig(out, dpi=110)
 
 
