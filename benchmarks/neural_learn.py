@@ -57,6 +57,7 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
         "duration": args.duration,
         "alpha": args.alpha,
         "backend": args.backend,
+        "init": args.init,
     }
 
     def on_trial(t: NeuralTrial) -> None:
@@ -68,8 +69,10 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
             flush=True,
         )
 
+    from striatal.experiments.spec import initial_gains
+
     r = learn_network(
-        Controller(gains=CHAPTER_INITIAL_W, theta_c=CHAPTER_INITIAL_THETA_C),
+        Controller(gains=initial_gains(args.init, seed), theta_c=CHAPTER_INITIAL_THETA_C),
         Plant(),
         Simulation(duration=args.duration),
         NetworkConfig(neurons=args.neurons),
@@ -158,7 +161,13 @@ def run_loop_side(args: argparse.Namespace, seed: int) -> None:
 def run_rate_side(args: argparse.Namespace, seed: int) -> None:
     import striatal
 
-    base = {"side": "rate", "seed": seed, "duration": args.duration, "alpha": args.alpha}
+    base = {
+        "side": "rate",
+        "seed": seed,
+        "duration": args.duration,
+        "alpha": args.alpha,
+        "init": args.init,
+    }
 
     def on_trial(_state: Any, rec: Any) -> None:
         append(
@@ -175,9 +184,11 @@ def run_rate_side(args: argparse.Namespace, seed: int) -> None:
             },
         )
 
+    from striatal.experiments.spec import initial_gains
+
     run = striatal.train(
         "chapter",
-        init="chapter",
+        init_gains=initial_gains(args.init, seed),
         seed=seed,
         sim=Simulation(duration=args.duration),
         max_trials=args.trials,
@@ -247,7 +258,8 @@ def _groups(paths: list[Path], max_trial: int) -> dict[str, dict[int, list[bool]
     ):
         backend = r.get("backend", "nengo")
         side = r["side"] if backend == "nengo" or r["side"] != "network" else f"network-{backend}"
-        out.setdefault(f"{side} alpha={r['alpha']:g}", {}).setdefault(r["seed"], []).append(
+        init = "" if r.get("init", "chapter") == "chapter" else f" init={r['init']}"
+        out.setdefault(f"{side}{init} alpha={r['alpha']:g}", {}).setdefault(r["seed"], []).append(
             r["reward"] > 0
         )
     return out
@@ -323,7 +335,7 @@ def curve_figure(paths: list[Path], max_trial: int, out: Path) -> None:
     ax.set_ylabel("fraction of seeds rewarded +10 (eq 25)")
     ax.set_ylim(-0.02, 1.02)
     ax.legend(fontsize=7)
-    ax.set_title("the chapter's rule from the chapter's W(0), 30-s trials", fontsize=10)
+    ax.set_title("from the chapter's W(0), 30-s trials, seeds 0-19", fontsize=10)
     fig.savefig(out, dpi=110)
 
 
@@ -383,6 +395,12 @@ def main() -> int:
     )
     parser.add_argument("--side", choices=("network", "rate", "loop"))
     parser.add_argument("--learner", default="pgpe", help="with --side loop: the rule")
+    parser.add_argument(
+        "--init",
+        choices=("chapter", "random"),
+        default="chapter",
+        help="W(0): the chapter's, or uniform in [-1, 1]^6 per seed (experiments.spec)",
+    )
     parser.add_argument("--seeds", type=seed_list, default=[0, 1, 2])
     parser.add_argument("--trials", type=int, default=20)
     parser.add_argument("--duration", type=float, default=30.0)
