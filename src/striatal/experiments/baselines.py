@@ -39,7 +39,13 @@ cmaes
     sizes from NumPy's global generator, which the seed does not govern).
 
 Every search takes a :class:`Budget` (its arm's config gives it: :meth:`Budget.of`): at
-most ``max_trials`` candidates, the reading ``success_on`` and the stop rule.
+most ``max_trials`` candidates, the reading ``success_on`` and the stop rule. A candidate
+meets the learner's success test, its checks named by
+:func:`striatal.learners.loop.success_checks` (:attr:`Budget.checks`: the candidate's own
+trial, with ``robust`` the robustness set). Each search is written as
+:data:`striatal.sim.batch.Steps` (``fixed_controller_steps``, ``random_search_steps``,
+``cmaes_steps``): it yields its trials, so the batch engines batch them with the other
+runs'; ``fixed_controller``, ``random_search`` and ``cmaes`` run them on the scalar kernel.
 
 Robust (``Budget.robust``, ``sweep --baselines random,cmaes --robust``): the protocol of
 the learner's robust stop rule. Every trial holds the motor force of eq 12
@@ -66,6 +72,7 @@ is reported as unsolved at ``max_trials``.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -73,9 +80,12 @@ from typing import Any
 
 import numpy as np
 
+from striatal.errors import ParameterError
 from striatal.learners.common import shaped_reward
 from striatal.learners.config import W1_FLOOR, LearnerConfig, SuccessOn
+from striatal.learners.loop import nominal_checked, success_checks
 from striatal.learners.pgpe import THETA_C_LEARNED_RANGE
+from striatal.learners.rule import Judging
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
     CHAPTER_FINAL_W,
@@ -111,6 +121,9 @@ __all__ = [
     "random_search_steps",
 ]
 
+
+#: A baseline's candidate is judged on its own trial (noise-free with success_on "mean").
+JUDGING = Judging("candidate")
 
 #: LQR weights on (x, x_dot, theta, theta_dot) and on u.
 LQR_Q = np.eye(4)
@@ -212,6 +225,19 @@ class Budget:
         """The budget and stop rule of an arm's config."""
         return cls(config.max_trials, config.success_on, config.robust, config.hardware)
 
+    @functools.cached_property
+    def test(self) -> LearnerConfig:
+        """The success test a candidate meets, as the learner's loop states it (its
+        reading and stop rule; the baselines' trials run on the nominal plant)."""
+        return LearnerConfig(success_on=self.success_on, robust=self.robust)
+
+    @functools.cached_property
+    def checks(self) -> tuple[str, ...]:
+        """The checks of that test (:func:`striatal.learners.loop.success_checks`) for a
+        candidate judged on its own trial: the trial, and with ``robust`` the
+        robustness set."""
+        return success_checks(self.test, JUDGING)
+
 
 def _trial(
     plant: Plant,
@@ -225,9 +251,9 @@ def _trial(
     """(success, shaped score or nan, simulated seconds, simulations) of one 60-s trial
     of p, yielded; with ``budget.robust`` the force held and, when the trial passes, the
     robust stop rule's runs (module docstring) added to the seconds and simulations."""
-    success_on, robust, hardware = budget.success_on, budget.robust, budget.hardware
+    hardware = budget.hardware
     if hardware is None:
-        hardware = robust_hardware() if robust else CHAPTER_HARDWARE
+        hardware = robust_hardware() if budget.robust else CHAPTER_HARDWARE
     controller = template.with_gains(template.gains, float(p[6]))
     W = np.array(p[:N_GAINS], dtype=float)
     (outcome,) = yield [
@@ -236,7 +262,7 @@ def _trial(
             controller,
             sim,
             Protocol(),
-            rng=rng if success_on == "noisy" else None,
+            rng=rng if budget.success_on == "noisy" else None,
             gains=W,
             hardware=hardware,
             record=shaped,
@@ -246,18 +272,27 @@ def _trial(
     if shaped:
         assert outcome.rows is not None
         score = shaped_reward(outcome.rows, outcome, plant, sim, Protocol())
-    ok, seconds = outcome.success, outcome.ended_at
-    if not (robust and ok):
-        return ok, score, seconds, 1
-    verdict = yield from stop_check_steps(
-        controller,
-        plant,
-        sim.dt,
-        gains=W,
-        nominal_passed=success_on == "mean" and nominal_is_the_case(sim),
-        hardware=hardware,
-    )
-    return verdict.robust, score, seconds + verdict.simulated_seconds, 1 + verdict.simulations
+    ok, seconds, runs = True, outcome.ended_at, 1
+    for check in budget.checks:
+        if not ok:
+            break
+        if check == "trial":
+            ok = outcome.success
+        elif check == "robustness set":
+            nominal = nominal_checked(budget.test, JUDGING) and nominal_is_the_case(sim)
+            verdict = yield from stop_check_steps(
+                controller,
+                plant,
+                sim.dt,
+                gains=W,
+                nominal_passed=nominal,
+                hardware=hardware,
+            )
+            ok, seconds = verdict.robust, seconds + verdict.simulated_seconds
+            runs += verdict.simulations
+        else:
+            raise ParameterError(f"a baseline's candidate cannot take the check {check!r}")
+    return ok, score, seconds, runs
 
 
 #: What a baseline's search returns (success, trials, W, theta_c, simulations, ...).
@@ -376,7 +411,13 @@ def cmaes_steps(
                 seconds, runs = seconds + t, runs + n
                 if ok:
                     return _result(
-                        True, trials, p, seconds, runs, restarts=restarts, popsize=popsize
+                        True,
+                        trials,
+                        p,
+                        seconds,
+                        runs,
+                        restarts=restarts,
+                        popsize=popsize,
                     )
                 losses.append(-score)
                 if trials >= max_trials:
@@ -431,5 +472,10 @@ def _cmaes(
 #: simulated_seconds.
 Search = Callable[[Plant, Controller, Simulation, int, LearnerConfig], Steps[Found]]
 #: The baselines by name, in the order of ``--baselines``' help.
-SEARCHES: dict[str, Search] = {"lqr": _lqr, "hand": _hand, "random": _random, "cmaes": _cmaes}
+SEARCHES: dict[str, Search] = {
+    "lqr": _lqr,
+    "hand": _hand,
+    "random": _random,
+    "cmaes": _cmaes,
+}
 BASELINES: tuple[str, ...] = tuple(SEARCHES)

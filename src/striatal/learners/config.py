@@ -373,6 +373,8 @@ def _hints() -> dict[str, Any]:
 C = TypeVar("C")
 
 
+@functools.lru_cache(maxsize=256)
 def pick(cls: type[C], config: LearnerConfig) -> C:
-    """The rule config ``cls`` (a dataclass) with the same-named fields of ``config``."""
+    """The rule config ``cls`` (a dataclass) with the same-named fields of ``config``
+    (remembered: a rule reads it every trial of a run)."""
     return cls(**{f.name: getattr(config, f.name) for f in fields(cls)})  # type: ignore[arg-type]

@@ -41,7 +41,7 @@ from striatal.learners.common import shaped_reward as shaped_reward
 from striatal.learners.config import LearnerConfig
 from striatal.learners.pgpe import PGPE
 from striatal.learners.rpe import RPE
-from striatal.learners.rule import Rule, Trial, TrialContext, Update
+from striatal.learners.rule import Judging, Rule, Trial, TrialContext, Update
 from striatal.learners.state import LearnerState, TrialRecord
 from striatal.params import Controller, Plant, Simulation
 from striatal.sim.batch import Steps, drive, driven
@@ -57,6 +57,7 @@ __all__ = [
     "learn_steps",
     "learning_step",
     "learning_steps",
+    "nominal_checked",
     "register",
     "rule_of",
     "success_checks",
@@ -147,12 +148,14 @@ CHECKS: dict[str, str] = {
 }
 
 
-def success_checks(config: LearnerConfig) -> tuple[str, ...]:
-    """The names of the checks (:data:`CHECKS`) the success test of ``config`` applies."""
-    rule = rule_of(config)
+def success_checks(config: LearnerConfig, judging: Judging | None = None) -> tuple[str, ...]:
+    """The names of the checks (:data:`CHECKS`) the success test of ``config`` applies,
+    judging as ``judging`` says (default: ``config``'s rule; a baseline judges each
+    candidate on its own trial, ``Judging("candidate")``)."""
+    judging = rule_of(config).judging if judging is None else judging
     if config.success_on == "noisy":
         checks: tuple[str, ...] = ("trial",)
-    elif rule.judging.candidate and (config.plant_jitter == 0.0 or config.robust):
+    elif judging.candidate and (config.plant_jitter == 0.0 or config.robust):
         # its trial is the noise-free run of the judged controller (on a jittered plant
         # with robust: a first filter, the robustness set decides)
         checks = ("trial",)
@@ -165,10 +168,10 @@ def success_checks(config: LearnerConfig) -> tuple[str, ...]:
     return checks
 
 
-def nominal_checked(config: LearnerConfig) -> bool:
+def nominal_checked(config: LearnerConfig, judging: Judging | None = None) -> bool:
     """Whether a check before the robustness set ran the judged controller noise-free on
     the nominal plant (then the set need not rerun its nominal case)."""
-    checks = success_checks(config)
+    checks = success_checks(config, judging)
     return "rerun" in checks or (
         config.success_on == "mean" and checks[0] == "trial" and config.plant_jitter == 0.0
     )
@@ -217,11 +220,9 @@ def learning_steps(
     simulations, seconds = 1, outcome.ended_at
     if judging.candidate:
         # the controller the trial ran (e.g. pgpe's perturbed p') is the one judged
-        W = np.asarray(plan.W, dtype=float)
-        controller = replace(template, theta_c=plan.theta_c)
+        W, theta_c = np.asarray(plan.W, dtype=float), plan.theta_c
     else:
-        W = np.array(state.W, dtype=float)
-        controller = replace(template, theta_c=state.theta_c)
+        W, theta_c = np.array(state.W, dtype=float), state.theta_c
     success = True
     checks: tuple[tuple[tuple[float, float], np.ndarray], ...] = ()
     for check in success_checks(config):
@@ -233,7 +234,7 @@ def learning_steps(
         if check == "robustness set":
             nominal = nominal_checked(config) and nominal_is_the_case(sim, config.action_every)
             verdict = yield from stop_check_steps(
-                controller,
+                replace(template, theta_c=theta_c),
                 plant,
                 sim.dt,
                 gains=W,
@@ -257,13 +258,14 @@ def learning_steps(
             (rerun,) = yield [
                 TrialRequest(
                     true_plant_i,
-                    controller,
+                    template,
                     sim,
                     protocol,
                     gains=W,
                     action_every=config.action_every,
                     model=model_i,
                     hardware=context.hardware,
+                    theta_c=theta_c,
                 )
             ]
             simulations += 1

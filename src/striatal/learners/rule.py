@@ -101,7 +101,7 @@ class TrialContext:
         one), with its gains, threshold, noise, trace and recording."""
         return TrialRequest(
             self.plant if plan.plant is None else plan.plant,
-            replace(self.template, theta_c=plan.theta_c),
+            self.template,
             self.sim,
             self.protocol,
             rng=plan.rng,
@@ -114,6 +114,7 @@ class TrialContext:
             hardware=self.hardware,
             record=plan.record,
             online=plan.online,
+            theta_c=plan.theta_c,
         )
 
 

@@ -358,7 +358,8 @@ class TrialRequest:
     ``rng``: the policy noise of eq 5 (None: the mean policy); ``mean_policy`` runs the
     mean policy even with a generator, which then draws only the sensor noise; ``trace``
     (6,): the eligibility trace D (eq 3), updated in place, with discount ``gamma``;
-    ``gains`` overrides ``controller.gains`` without validation (a learner's guarded W);
+    ``gains`` and ``theta_c`` override ``controller.gains`` and ``controller.theta_c``
+    without validation (a learner's guarded W and its threshold);
     ``model``: the plant the controller believes in (None: the true ``plant``);
     ``sensor``: noise on what the controller sees; ``hardware``: the motor's hold and
     limit and the track; ``record``: the outcome carries the trial's rows;
@@ -384,6 +385,7 @@ class TrialRequest:
     record: bool = False
     online: OnlineLearning | None = None
     state0: np.ndarray | None = None
+    theta_c: float | None = None
 
     @property
     def draws_actions(self) -> bool:
@@ -394,6 +396,11 @@ class TrialRequest:
     def W(self) -> np.ndarray:
         """The gains the trial starts from (6,)."""
         return np.asarray(self.controller.gains if self.gains is None else self.gains, dtype=float)
+
+    @property
+    def threshold(self) -> float:
+        """The switching threshold theta_c (eq 21) the trial runs with [rad]."""
+        return self.controller.theta_c if self.theta_c is None else self.theta_c
 
     @property
     def start(self) -> np.ndarray:
@@ -413,7 +420,7 @@ class TrialRequest:
         sim, hardware = self.sim, self.hardware
         return kernel.TrialArgs(
             self.start,
-            kernel.Gains(W=self.W, theta_c=self.controller.theta_c),
+            kernel.Gains(W=self.W, theta_c=self.threshold),
             plant_args(self.plant, sim.dt, self.model, hardware),
             control_args(
                 self.controller,
@@ -501,7 +508,7 @@ def batch_args(
         np.array([r.start for r in requests], dtype=float),
         kernel.Gains(
             W=np.array([r.W for r in requests], dtype=float),
-            theta_c=np.array([r.controller.theta_c for r in requests], dtype=float),
+            theta_c=np.array([r.threshold for r in requests], dtype=float),
         ),
         plant_args(first.plant, sim.dt, first.model, hardware),
         control_args(
