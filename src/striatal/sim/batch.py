@@ -1,20 +1,22 @@
 """Trials as requests: code that needs trials yields them, a driver runs them.
 
-A learning step, a pass-probability estimate or a whole sweep run is written once, as
-a generator that yields lists of :class:`TrialRequest` and receives their
+A learning step (with a rule's own simulations), a success check, a baseline's search,
+a pass-probability estimate or a whole sweep run is written once, as a generator that
+yields lists of :class:`~striatal.sim.rollout.TrialRequest` and receives their
 :class:`~striatal.sim.rollout.TrialOutcome` in the same order (:data:`Steps`). Two
 drivers run such a generator:
 
-- :func:`drive`: one generator, each request a call of
-  :func:`striatal.sim.rollout.run_trial` (what ``striatal train`` and the process
-  engine of ``striatal sweep`` do);
+- :func:`drive`: one generator, each request run on the scalar kernel
+  (:meth:`~striatal.sim.rollout.TrialRequest.run`: what ``striatal train`` and the
+  process engine of ``striatal sweep`` do);
 - :class:`Lockstep`: many generators side by side; the requests they have pending are
   grouped by what a kernel call shares (plant, readings, protocol, action rate, trace
-  decay, motor) and each group is one call of the batch kernel
-  (:func:`striatal.sim.kernel.run_trials_batch`, or the SIMD
-  :func:`striatal.sim.kernel.run_trials_lockstep`).
+  decay, motor, online learning) and each group is one call of a batch kernel
+  (:func:`striatal.sim.kernel.run_trials_batch`, the SIMD
+  :func:`striatal.sim.kernel.run_trials_lockstep`, or the online
+  :func:`striatal.sim.kernel.run_online_trials_batch`).
 
-Each request draws its noise from its own generator exactly as ``run_trial`` draws it,
+Each request draws its noise from its own generator exactly as ``TrialRequest.run`` does,
 in the order the requests were yielded, and ``run_trials_batch`` equals the scalar
 kernel bit for bit, so both drivers give the same outcomes (the SIMD kernel: within
 round-off). The rules, the loop and the evaluation therefore exist once, whichever

@@ -6,7 +6,7 @@
 pole mass, length, gravity) are what the controller believes, for eq 12 and the
 energy of eqs 15-16: the learned model has none. Every trial on it holds the motor
 force over a step, as the model was fitted. :func:`striatal.sim.rollout.run_trial`,
-:func:`~striatal.sim.rollout.simulate` and :class:`~striatal.sim.batch.TrialRequest`
+:func:`~striatal.sim.rollout.simulate` and :class:`~striatal.sim.rollout.TrialRequest`
 run it on :func:`striatal.sim.kernel.run_learned_trial`; the batch kernels do not take it.
 
 A model may also be *conditioned* on the plant's pole mass and length factors

@@ -1,7 +1,7 @@
 """The trial: the protocol's judge (eqs 24-25), the summary row, the scalar trial loop
 and its batch over cores.
 
-Build the arguments with :func:`striatal.sim.rollout.trial_args` and
+Build the arguments with :meth:`striatal.sim.rollout.TrialRequest.args` and
 :func:`striatal.sim.rollout.batch_args`.
 """
 
@@ -431,7 +431,7 @@ def run_trial(
 ) -> None:
     """Run one trial of the chapter's protocol (eqs 1-5, 13-14, 21-25) in place.
 
-    Build the arguments with :func:`striatal.sim.rollout.trial_args`. A new action
+    Build the arguments with :meth:`striatal.sim.rollout.TrialRequest.args`. A new action
     a = mu + sigma * noise.action[j] is drawn every ``control.action_every`` steps
     (eq 5) and held; at each draw the eligibility e (score of the Gaussian policy
     with the chapter's rescaling, docs/paper-notes.md section 2) enters the trace
