@@ -14,7 +14,7 @@ trial is appended to ``--out`` as it ends, then one line with the final W. Examp
         --out docs/data/neural_learn.jsonl
     python benchmarks/neural_learn.py --summary docs/data/neural_learn.jsonl
 
-``--backend brian2`` runs the network side on the compiled Brian2 program;
+``--simulator brian2`` runs the network side on the compiled Brian2 program;
 ``--compare FILES --trials N [--figure PNG]`` prints each arm's +10 rate with its
 Wilson interval and the paired tests, and draws the learning curves.
 """
@@ -56,7 +56,7 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
         "neurons_requested": args.neurons,
         "duration": args.duration,
         "alpha": args.alpha,
-        "backend": args.backend,
+        "simulator": args.simulator,
         "init": args.init,
     }
 
@@ -80,7 +80,7 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
         trials=args.trials,
         alpha=args.alpha,
         on_trial=on_trial,
-        backend=args.backend,
+        simulator=args.simulator,
     )
     append(
         args.out,
@@ -109,7 +109,7 @@ def run_loop_side(args: argparse.Namespace, seed: int) -> None:
         "neurons_requested": args.neurons,
         "duration": args.duration,
         "alpha": args.alpha,
-        "backend": args.backend,
+        "simulator": args.simulator,
     }
 
     def on_trial(_state: Any, rec: Any) -> None:
@@ -141,7 +141,7 @@ def run_loop_side(args: argparse.Namespace, seed: int) -> None:
         NetworkConfig(neurons=args.neurons),
         seed,
         trials=args.trials,
-        backend=args.backend,
+        simulator=args.simulator,
         on_trial=on_trial,
         alpha=args.alpha,
         **control,
@@ -208,7 +208,9 @@ def summarize(paths: list[Path]) -> None:
     rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
     groups: dict[tuple[str, float, int], list[dict]] = {}
     for r in rows:
-        side = r["side"] if r.get("backend", "nengo") == "nengo" else f"{r['side']}-{r['backend']}"
+        side = (
+            r["side"] if r.get("simulator", "nengo") == "nengo" else f"{r['side']}-{r['simulator']}"
+        )
         groups.setdefault((side, r["alpha"], r["duration"]), []).append(r)
     W0 = np.array(CHAPTER_INITIAL_W)
     for (side, alpha, dur), rs in sorted(groups.items(), key=lambda kv: (kv[0][0], str(kv[0][1]))):
@@ -249,15 +251,17 @@ def summarize(paths: list[Path]) -> None:
 
 
 def _groups(paths: list[Path], max_trial: int) -> dict[str, dict[int, list[bool]]]:
-    """``"side[-backend] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial."""
+    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial."""
     rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
     out: dict[str, dict[int, list[bool]]] = {}
     for r in sorted(
         (r for r in rows if r["kind"] == "trial" and r["trial"] <= max_trial),
         key=lambda r: r["trial"],
     ):
-        backend = r.get("backend", "nengo")
-        side = r["side"] if backend == "nengo" or r["side"] != "network" else f"network-{backend}"
+        simulator = r.get("simulator", "nengo")
+        side = (
+            r["side"] if simulator == "nengo" or r["side"] != "network" else f"network-{simulator}"
+        )
         init = "" if r.get("init", "chapter") == "chapter" else f" init={r['init']}"
         out.setdefault(f"{side}{init} alpha={r['alpha']:g}", {}).setdefault(r["seed"], []).append(
             r["reward"] > 0
@@ -409,7 +413,7 @@ def main() -> int:
     parser.add_argument("--out", type=Path)
     parser.add_argument("--figure", type=Path, help="with --summary: also draw W per trial here")
     parser.add_argument(
-        "--backend", choices=("nengo", "brian2"), default="nengo", help="the network's simulator"
+        "--simulator", choices=("nengo", "brian2"), default="nengo", help="the network's simulator"
     )
     args = parser.parse_args()
     if args.compare:

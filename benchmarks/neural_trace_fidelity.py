@@ -1,6 +1,6 @@
 """Where the spiking learner's trial differs from the rate learner's: traces and noise.
 
-For each seed: one exploring trial of the network (Brian2 backend, the chapter's W(0)
+For each seed: one exploring trial of the network (Brian2 simulator, the chapter's W(0)
 and theta_c(0) = 0.6, 30 s from theta = 3.12, the exploration of
 ``default_rng(seed)``, as a learning run's first trial) and, along the network's own
 states and the same exploration, what the rate learner would have accumulated:
@@ -61,7 +61,7 @@ def main() -> int:
         noise = np.random.default_rng(seed).standard_normal(sim.n_steps)
         elig = Eligibility(sigma, noise, args.gamma, 10)
         run = run_network(
-            ctrl, plant, sim, NetworkConfig(), seed, exploration=elig, backend="brian2"
+            ctrl, plant, sim, NetworkConfig(), seed, exploration=elig, simulator="brian2"
         )
         d_net = gain_eligibility(elig.trace, elig.sigma_trace, W, plant, ctrl.sign)
         d_rate = np.zeros(6)

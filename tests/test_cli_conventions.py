@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from conftest import cli_in_process
 
 from striatal.cli import build_parser, config, main, progress
 from striatal.cli.ablation import variant_line
@@ -179,6 +180,32 @@ def test_shared_options_have_one_default() -> None:
         }
         assert len(found) >= 2 and len(set(found.values())) == 1, (dest, found)
     assert sweeps.SEEDS == 100 and config.WORKERS == 1
+
+
+@pytest.mark.parametrize(
+    ("given", "named"),
+    [
+        (["--backend", "brian2"], "--simulator brian2"),
+        (["--backend=nengo"], "--simulator nengo"),
+        (["--backend", "ray"], "--simulator {nengo,brian2}"),
+        (["--backend"], "--simulator {nengo,brian2}"),
+    ],
+)
+def test_neural_refuses_backend_naming_simulator(
+    tmp_path: Path, given: list[str], named: str
+) -> None:
+    """--backend is sweep's and ablation's cluster backend; the network's simulator is
+    --simulator: one line naming it from the parser, exit 2, no folder made."""
+    out_dir = tmp_path / "o"
+    code, out, err = cli_in_process("neural", *given, "--chapter-final", "--out", str(out_dir))
+    assert code == 2 and out == "" and not out_dir.exists()
+    assert err.endswith("\n") and err.count("\n") == 1, err
+    assert err.startswith("striatal neural: error: --backend is the cluster backend")
+    assert err.rstrip().endswith(f"the network's simulator is {named}")
+    parser = build_parser(only="neural")
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    shown = sub.choices["neural"].format_help()
+    assert "--backend" not in shown and "--simulator {nengo,brian2}" in shown
 
 
 # ---- item 5: --json and progress

@@ -251,6 +251,9 @@ def test_cli_json_and_files(tmp_path, capsys) -> None:
     assert data["upright_last_10s"] is False
     assert {"success", "wall_per_sim_second", "settings"} <= set(data)
     assert data["settings"]["network"]["nengo_optimize"] is False  # one seed, one result
+    assert data["simulator"] == data["settings"]["network"]["simulator"] == "nengo"
+    assert "backend" not in data and "backend" not in data["settings"]["network"]
+    assert data["settings"]["integrator"].startswith("kernel.rk4_step")
     rows = (out / "trajectory.csv").read_text().splitlines()
     assert rows[0] == "t,x,x_dot,theta,theta_dot,u,force,mode"
     assert len(rows) == 1 + 101

@@ -1,4 +1,4 @@
-"""The Brian2 backend: its plant against the kernel, the same network as nengo's, the
+"""The Brian2 simulator: its plant against the kernel, the same network as nengo's, the
 dopamine update against the rate learner's, and the line a machine without Brian2 gets.
 
 The compiled program (2 500 neurons, 30-s runs) is compiled once per test session and
@@ -52,8 +52,8 @@ SEED = 1
 
 @pytest.fixture(scope="module")
 def brian_run() -> NeuralRun:
-    """Seed 1 of the chapter's final gains on the Brian2 backend, 30 s (compiles once)."""
-    return run_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, backend="brian2")
+    """Seed 1 of the chapter's final gains on the Brian2 simulator, 30 s (compiles once)."""
+    return run_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, simulator="brian2")
 
 
 def first_switch(run: NeuralRun) -> float:
@@ -78,7 +78,7 @@ def test_missing_brian2_gets_one_line_naming_the_extra(
 ) -> None:
     monkeypatch.setitem(sys.modules, "brian2", None)  # import brian2 raises ImportError
     code, out, err = cli(  # type: ignore[operator]
-        "neural", "--backend", "brian2", "--chapter-final", "--duration", "0.01"
+        "neural", "--simulator", "brian2", "--chapter-final", "--duration", "0.01"
     )
     assert code == 2 and out == ""
     assert err.strip().splitlines() == [f"striatal neural: error: {BRIAN2_INSTALL}"] or (
@@ -137,7 +137,7 @@ def test_brian2_plant_equals_the_kernel_over_60_s() -> None:
 
 def test_brian2_run_swings_up_and_holds(brian_run: NeuralRun) -> None:
     r = brian_run
-    assert r.backend == "brian2" and r.neurons == 2500 and not r.fault
+    assert r.simulator == "brian2" and r.neurons == 2500 and not r.fault
     # caught within the 30 s and balancing at the end (60-s runs: docs/neural.md)
     assert first_switch(r) < 25.0
     assert r.data[-1, 7] == kernel.MODE_BALANCE and abs(kernel.wrap_angle(r.data[-1, 3])) < 0.1
@@ -150,10 +150,10 @@ def test_brian2_run_swings_up_and_holds(brian_run: NeuralRun) -> None:
     assert before[:, names.index("gate_bal")].mean() > 100.0
 
 
-def test_the_two_backends_agree_on_one_seed(brian_run: NeuralRun) -> None:
+def test_the_two_simulators_agree_on_one_seed(brian_run: NeuralRun) -> None:
     """The same network on nengo and on Brian2, seed 1, 30 s. Stated tolerance: both
     switch to balancing and hold |theta| < 0.1 at T_f, their first switches are within
-    6 s (seeds of one backend spread over 11 s, docs/neural.md), and the readout's gain
+    6 s (seeds of one simulator spread over 11 s, docs/neural.md), and the readout's gain
     on the swing-up law (:func:`swing_gain`) is within 0.15 on both."""
     ref = run_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, record_rates=False)
     for r in (ref, brian_run):
@@ -166,9 +166,9 @@ def test_the_two_backends_agree_on_one_seed(brian_run: NeuralRun) -> None:
 
 
 def test_a_seed_reruns_to_the_same_bits(brian_run: NeuralRun) -> None:
-    again = run_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, backend="brian2")
+    again = run_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, simulator="brian2")
     assert np.array_equal(again.data, brian_run.data)
-    other = run_network(CTRL, PLANT, SIM, NetworkConfig(), SEED + 1, backend="brian2")
+    other = run_network(CTRL, PLANT, SIM, NetworkConfig(), SEED + 1, simulator="brian2")
     assert not np.array_equal(other.data, brian_run.data)
 
 
@@ -235,14 +235,14 @@ def test_learning_on_brian2_replays_the_traces_and_resumes_bit_for_bit(
     """Two learning trials on the program: the traces are filled, W moves by the chapter's
     update, the child's CPU time is counted; one trial resumed to two equals the two in
     one go (every recorded number but the times), and a resume of another seed is refused."""
-    res = learn_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, trials=2, backend="brian2")
+    res = learn_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, trials=2, simulator="brian2")
     first, second = res.trials
     assert tuple(CTRL.gains) == first.W and second.W != first.W
     assert np.any(np.array(first.pathway_trace) != 0.0)
     assert first.cpu_time > 0.0
-    part = learn_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, trials=1, backend="brian2")
+    part = learn_network(CTRL, PLANT, SIM, NetworkConfig(), SEED, trials=1, simulator="brian2")
     resumed = learn_network(
-        CTRL, PLANT, SIM, NetworkConfig(), SEED, trials=2, backend="brian2", resume=part
+        CTRL, PLANT, SIM, NetworkConfig(), SEED, trials=2, simulator="brian2", resume=part
     )
 
     def bits(r: NeuralLearning) -> list[dict[str, object]]:
@@ -254,10 +254,10 @@ def test_learning_on_brian2_replays_the_traces_and_resumes_bit_for_bit(
         learn_network(CTRL, PLANT, SIM, NetworkConfig(), 5, trials=2, resume=part)
 
 
-def test_cli_json_says_which_backend_ran(cli: object, brian_run: NeuralRun) -> None:
+def test_cli_json_says_which_simulator_ran(cli: object, brian_run: NeuralRun) -> None:
     code, out, _err = cli(  # type: ignore[operator]
         "neural",
-        "--backend",
+        "--simulator",
         "brian2",
         "--chapter-final",
         "--seed",
@@ -268,8 +268,8 @@ def test_cli_json_says_which_backend_ran(cli: object, brian_run: NeuralRun) -> N
     )
     assert code == 0
     summary = json.loads(out)
-    assert summary["backend"] == "brian2"
-    assert summary["settings"]["network"]["backend"] == "brian2"
+    assert summary["simulator"] == "brian2"
+    assert summary["settings"]["network"]["simulator"] == "brian2"
     assert summary["cpu_time_s"] > 0.0 and summary["compile_time_s"] >= 0.0
     assert summary["final_state"] == pytest.approx(list(brian_run.summary()["final_state"]))
 

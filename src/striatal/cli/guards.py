@@ -5,13 +5,16 @@ a value out of range, not finite, or not a number is one line on stderr and exit
 from the parser, so no command can build an array of that size or overflow on it.
 Every parser of the command line reads ``type=int`` as :func:`whole_number`, so no
 whole-number option exceeds :data:`MAX_WHOLE` (what a compiled int32 holds).
+``action=Refused, message=...``: an option that means something else in this command
+(another command's option, an old spelling), refused by name in one line when parsed.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from typing import Any
 
 #: The largest whole number any option takes: 2**31 - 1, an int32 (the kernel's counts).
 MAX_WHOLE = 2**31 - 1
@@ -68,3 +71,24 @@ def bounded_float(low: float, high: float, *, low_open: bool = True) -> Callable
     parse.__name__ = "number"
     parse.numeric = True  # type: ignore[attr-defined]
     return parse
+
+
+class Refused(argparse.Action):
+    """An option this command does not take under that name: ``message(value)`` as one
+    line on stderr and exit 2 from the parser, before anything is computed or written.
+    Hidden from ``--help``; its dest is never read."""
+
+    def __init__(
+        self, option_strings: Sequence[str], dest: str, message: Callable[[str], str], **kw: Any
+    ) -> None:
+        super().__init__(option_strings, dest, help=argparse.SUPPRESS, **kw)
+        self.message = message
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: str | Sequence[Any] | None,
+        option_string: str | None = None,
+    ) -> None:
+        parser.error(self.message(str(values)))

@@ -7,13 +7,13 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from striatal.cli import progress
+from striatal.cli import guards, progress
 from striatal.cli.helpformat import default_note
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, Simulation, SuccessTest, check_seed
 
-#: The backends of ``--backend`` (``striatal.neural.run.BACKENDS``, which imports numpy).
-BACKENDS = ("nengo", "brian2")
+#: The simulators of ``--simulator`` (``striatal.neural.run.SIMULATORS``, which imports numpy).
+SIMULATORS = ("nengo", "brian2")
 #: What the first run of a network size and run length on Brian2 says.
 COMPILE_NOTICE = (
     "striatal: compiling the Brian2 network (once per network size and run length, "
@@ -43,13 +43,13 @@ DESCRIPTION = (
     "between them (or, with --selection basal-ganglia, nengo's BasalGanglia + Thalamus). "
     "The plant is the project's kernel (RK4) stepped every 1 ms of network time. Reports the "
     "chapter's success test at T_f, whether |theta| < 0.1 over the last 10 s, the neuron "
-    "count and the wall and CPU time per simulated second. --backend brian2 runs the same "
+    "count and the wall and CPU time per simulated second. --simulator brian2 runs the same "
     "network as a compiled Brian2 program with the plant inside it (eqs 8-10, the force "
     "of eq 12 held per step), about 17 times less CPU."
 )
 
 
-#: How each backend steps the plant (the JSON's ``settings.integrator``).
+#: How each simulator steps the plant (the JSON's ``settings.integrator``).
 INTEGRATOR = {
     "nengo": "kernel.rk4_step every 1 ms of network time, u held over the step",
     "brian2": "Brian2 rk4 of eqs 8-9 every 1 ms of network time inside the compiled program, "
@@ -61,6 +61,16 @@ def announce_compile(where: Path) -> None:
     """Say on stderr, once, that the Brian2 program is compiling and where it is cached."""
     sys.stderr.write(COMPILE_NOTICE.format(where=where))
     sys.stderr.flush()
+
+
+def backend_refused(value: str) -> str:
+    """The one line that ``neural --backend VALUE`` gets (the option means the cluster
+    backend of sweep and ablation)."""
+    simulator = value if value in SIMULATORS else "{" + ",".join(SIMULATORS) + "}"
+    return (
+        "--backend is the cluster backend (local, ray) of sweep and ablation; the "
+        f"network's simulator is --simulator {simulator}"
+    )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -96,12 +106,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     net.add_argument("--synapse", type=float, default=0.005, help="synaptic time constant [s]")
     net.add_argument("--seed", type=int, default=0, help="network seed (encoders, gains, biases)")
     net.add_argument(
-        "--backend",
-        choices=BACKENDS,
+        "--simulator",
+        choices=SIMULATORS,
         default="nengo",
         help="nengo (the reference) or brian2: the same network, built by nengo's builder, "
         "run as a compiled Brian2 program with the plant inside it (compiled once per "
         "network size and run length, cached beside Numba's cache)",
+    )
+    # --backend is the cluster backend of sweep and ablation: refused here, naming --simulator
+    net.add_argument(
+        "--backend",
+        dest="refused_backend",
+        nargs="?",
+        action=guards.Refused,
+        message=backend_refused,
     )
     run_g = parser.add_argument_group("run")
     run_g.add_argument("--theta0", type=float, default=CHAPTER_THETA0, help="initial angle [rad]")
@@ -174,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
 
         check_image_path(args.circuit_figure, (".png", ".svg", ".pdf"))
     require_nengo()
-    if args.backend == "brian2":
+    if args.simulator == "brian2":
         from striatal.neural.brian import require_brian2
 
         require_brian2()
@@ -195,7 +213,7 @@ def run(args: argparse.Namespace) -> int:
             seed,
             record_rates=args.out is not None,
             on_progress=on_progress,
-            backend=args.backend,
+            simulator=args.simulator,
             on_compile=announce_compile,
         )
     finally:
@@ -216,9 +234,9 @@ def run(args: argparse.Namespace) -> int:
             "neuron_type": "LIF",
             "network_dt": 0.001,
             "nengo_optimize": config.optimize,
-            "backend": args.backend,
+            "simulator": args.simulator,
         },
-        "integrator": INTEGRATOR[args.backend],
+        "integrator": INTEGRATOR[args.simulator],
         "success_test": str(SuccessTest()),
         "upright_test": "|theta| < 0.1 at every 1-ms step of the last 10 s",
     }
@@ -247,7 +265,7 @@ def run(args: argparse.Namespace) -> int:
     th = wrap_angle(th)
     print(
         f"neurons: {result.neurons}  ({config.selection} switch, seed {seed}, "
-        f"{args.backend} backend)"
+        f"{args.simulator} simulator)"
     )
     print(f"upright_last_10s: {'yes' if result.upright_last_10s else 'no'}  (|theta| < 0.1)")
     print(
@@ -263,7 +281,7 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"time per simulated second: wall {result.wall_per_sim_second:.3f} s, "
         f"CPU {result.cpu_time / sim.duration:.4f} s (build {result.build_time:.1f} s"
-        + (f", compile {result.compile_time:.1f} s)" if args.backend == "brian2" else ")")
+        + (f", compile {result.compile_time:.1f} s)" if args.simulator == "brian2" else ")")
     )
     if result.fault:
         print("numerical fault: the state blew up")
@@ -307,7 +325,7 @@ def run_learning(
         trials=args.trials,
         alpha=args.alpha,
         on_trial=show,
-        backend=args.backend,
+        simulator=args.simulator,
         on_compile=announce_compile,
     )
     out = result.to_dict()
@@ -320,7 +338,7 @@ def run_learning(
             "neurons_requested": config.neurons,
             "selection": config.selection,
             "nengo_optimize": config.optimize,
-            "backend": args.backend,
+            "simulator": args.simulator,
         },
     }
     if args.out is not None:

@@ -59,7 +59,7 @@ __all__ = [
 ]
 
 #: What a machine without Brian2 is told.
-BRIAN2_INSTALL = "the Brian2 backend needs brian2: pip install 'striatal[neural]'"
+BRIAN2_INSTALL = "the Brian2 simulator needs brian2: pip install 'striatal[neural]'"
 #: The sensed-state rows' names, in the order of ``SENSED`` of the network module.
 _SENSED_VARS = ("x", "xd", "sin(th)", "cos(th)", "thd")
 

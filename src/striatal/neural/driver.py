@@ -32,7 +32,7 @@ from striatal.learners.loop import learning_steps
 from striatal.learners.state import LearnerState, TrialRecord
 from striatal.neural.learn import Eligibility, gain_eligibility, trial_outcome, trial_reward
 from striatal.neural.network import NetworkConfig
-from striatal.neural.run import Backend, run_network
+from striatal.neural.run import Simulator, run_network
 from striatal.params import CHAPTER_HARDWARE, Controller, Plant, Simulation, check_seed
 from striatal.sim import kernel
 from striatal.sim.batch import Steps, TrialRequest
@@ -44,7 +44,7 @@ T = TypeVar("T")
 
 
 def run_request(
-    r: TrialRequest, config: NetworkConfig, seed: int, backend: Backend, net_dt: float = 0.001
+    r: TrialRequest, config: NetworkConfig, seed: int, simulator: Simulator, net_dt: float = 0.001
 ) -> TrialOutcome:
     """One requested trial on the network (network seed ``seed``); ``r.trace`` updated."""
     if (
@@ -74,7 +74,7 @@ def run_request(
         net_dt=net_dt,
         record_rates=False,
         exploration=elig if explores else None,
-        backend=backend,
+        simulator=simulator,
     )
     if explores:
         d = gain_eligibility(elig.trace, elig.sigma_trace, W, r.plant, controller.sign)
@@ -84,12 +84,12 @@ def run_request(
     return outcome
 
 
-def network_drive(steps: Steps[T], config: NetworkConfig, seed: int, backend: Backend) -> T:
+def network_drive(steps: Steps[T], config: NetworkConfig, seed: int, simulator: Simulator) -> T:
     """Run ``steps`` to its end, each request on the network; its return value."""
     try:
         requests = next(steps)
         while True:
-            requests = steps.send([run_request(r, config, seed, backend) for r in requests])
+            requests = steps.send([run_request(r, config, seed, simulator) for r in requests])
     except StopIteration as stop:
         return stop.value  # type: ignore[no-any-return]
 
@@ -103,7 +103,7 @@ def learn_with_rule(
     seed: int,
     *,
     trials: int,
-    backend: Backend = "brian2",
+    simulator: Simulator = "brian2",
     on_trial: Callable[[LearnerState, TrialRecord], None] | None = None,
     state: LearnerState | None = None,
     **options: object,
@@ -127,7 +127,7 @@ def learn_with_rule(
     template = replace(controller)
     while state.trials_done < trials and not state.success:
         state, record = network_drive(
-            learning_steps(state, plant, template, sim, protocol, lc), config, seed, backend
+            learning_steps(state, plant, template, sim, protocol, lc), config, seed, simulator
         )
         if on_trial is not None:
             on_trial(state, record)

@@ -54,7 +54,7 @@ from striatal.learners.common import theta_c_rule
 from striatal.learners.config import LearnerConfig, pick
 from striatal.neural.interpret import pathway_coefficients
 from striatal.neural.network import NetworkConfig
-from striatal.neural.run import Backend, NeuralRun, run_network
+from striatal.neural.run import NeuralRun, Simulator, run_network
 from striatal.params import Controller, Plant, Simulation, check_gains, check_seed
 from striatal.sim import kernel
 from striatal.sim.rollout import Protocol, TrialOutcome
@@ -309,7 +309,7 @@ def learn_network(
     protocol: Protocol | None = None,
     on_trial: Callable[[NeuralTrial], None] | None = None,
     net_dt: float = 0.001,
-    backend: Backend = "nengo",
+    simulator: Simulator = "nengo",
     on_compile: Callable[[Path], None] | None = None,
     resume: NeuralLearning | None = None,
 ) -> NeuralLearning:
@@ -377,7 +377,7 @@ def learn_network(
             net_dt=net_dt,
             record_rates=False,
             exploration=elig,
-            backend=backend,
+            simulator=simulator,
             on_compile=on_compile,
         )
         wall = time.perf_counter() - t0

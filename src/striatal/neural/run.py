@@ -17,14 +17,14 @@ from striatal.params import Controller, Plant, Simulation, check_seed
 from striatal.sim import kernel
 
 __all__ = [
-    "BACKENDS",
     "NEURAL_TRAJ_COLUMNS",
+    "SIMULATORS",
     "UPRIGHT_THETA",
     "UPRIGHT_WINDOW",
-    "Backend",
     "KernelPlant",
     "MotorExploration",
     "NeuralRun",
+    "Simulator",
     "SpikeBins",
     "add_exploration",
     "frozen_at_fault",
@@ -81,8 +81,8 @@ class KernelPlant:
 class MotorExploration(Protocol):
     """What adds exploration to the motor command (see
     :class:`striatal.neural.learn.Eligibility`): called once per network step with the
-    pathways' presynaptic signals, returns the exploration added to u. The nengo backend
-    calls it inside the network; the compiled backend runs ``sigma * noise`` (one draw
+    pathways' presynaptic signals, returns the exploration added to u. The nengo simulator
+    calls it inside the network; the compiled simulator runs ``sigma * noise`` (one draw
     per ``every`` network steps) inside its program and makes the same calls after the
     run, with the pathway signals it recorded at each draw."""
 
@@ -114,8 +114,8 @@ class SpikeBins:
 
 
 #: The simulators ``run_network`` can use: nengo (the reference) or the Brian2 program.
-Backend = Literal["nengo", "brian2"]
-BACKENDS: tuple[str, ...] = ("nengo", "brian2")
+Simulator = Literal["nengo", "brian2"]
+SIMULATORS: tuple[str, ...] = ("nengo", "brian2")
 
 
 @dataclass(frozen=True)
@@ -144,7 +144,7 @@ class NeuralRun:
     sim: Simulation
     config: NetworkConfig
     seed: int
-    backend: str = "nengo"
+    simulator: str = "nengo"
     compile_time: float = 0.0
 
     @property
@@ -176,7 +176,7 @@ class NeuralRun:
             "wall_per_sim_second": self.wall_per_sim_second,
             "cpu_per_sim_second": self.cpu_time / self.sim.duration,
             "seed": self.seed,
-            "backend": self.backend,
+            "simulator": self.simulator,
         }
 
 
@@ -207,7 +207,7 @@ def run_network(
     record_rates: bool = True,
     on_progress: Callable[[float], None] | None = None,
     exploration: MotorExploration | None = None,
-    backend: Backend = "nengo",
+    simulator: Simulator = "nengo",
     on_compile: Callable[[Path], None] | None = None,
 ) -> NeuralRun:
     """Simulate the spiking controller on the plant from ``sim.initial_state``.
@@ -224,16 +224,16 @@ def run_network(
     Success is the chapter's test at T_f (``sim.success``, end of
     section 2.4) on the final state; ``upright_last_10s`` a looser test (|theta| <
     UPRIGHT_THETA over the last UPRIGHT_WINDOW s).
-    ``backend="brian2"`` runs the same network as a compiled Brian2 program with the
+    ``simulator="brian2"`` runs the same network as a compiled Brian2 program with the
     plant inside it (:mod:`striatal.neural.brian`); ``on_compile(folder)`` is called
     before it compiles (once per network size and run length; ``folder`` is the cache).
     """
-    if backend == "brian2":
+    if simulator == "brian2":
         return _run_compiled(
             controller, plant, sim, config, seed, net_dt, exploration, on_compile, on_progress
         )
-    if backend != "nengo":
-        raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if simulator != "nengo":
+        raise ParameterError(f"simulator must be one of {', '.join(SIMULATORS)}, got {simulator!r}")
     nengo = require_nengo()
     seed = check_seed(seed)
     n_net = int(round(sim.duration / net_dt))
@@ -263,14 +263,14 @@ def run_network(
                     )
         if exploration is not None:
             add_exploration(nengo, h, node, exploration, config.synapse)
-    simulator = _simulator(nengo, h.model, net_dt, seed, config)
+    nengo_sim = _simulator(nengo, h.model, net_dt, seed, config)
     t1 = time.perf_counter()
     c1 = time.process_time()
     chunk = max(1, int(round(1.0 / net_dt)))
-    with simulator:
+    with nengo_sim:
         for start in range(0, n_net, chunk):
             steps = min(chunk, n_net - start)
-            simulator.run_steps(steps)
+            nengo_sim.run_steps(steps)
             if on_progress is not None:
                 on_progress((start + steps) * net_dt)
     t2 = time.perf_counter()
@@ -313,12 +313,12 @@ def _assemble(
     wall: float,
     cpu: float,
     build: float,
-    backend: str = "nengo",
+    simulator: str = "nengo",
     compile_time: float = 0.0,
 ) -> NeuralRun:
     """A :class:`NeuralRun` from the plant's state at every network step (n_net + 1, 4)
     and u of every step: sampled every ``sim.dt``, the force of eq 12, the mode, the
-    chapter's success test and the upright test. One reading for both backends."""
+    chapter's success test and the upright test. One reading for both simulators."""
     n_net = net_states.shape[0] - 1
     states = net_states[::every]
     u = net_u[::every]
@@ -352,7 +352,7 @@ def _assemble(
         sim=sim,
         config=config,
         seed=seed,
-        backend=backend,
+        simulator=simulator,
         compile_time=compile_time,
     )
 
@@ -435,7 +435,7 @@ def _run_compiled(
         wall=r.wall_time,
         cpu=r.cpu_time,
         build=t1 - t0,
-        backend="brian2",
+        simulator="brian2",
         compile_time=program.compile_time,
     )
 

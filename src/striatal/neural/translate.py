@@ -71,7 +71,7 @@ def _tau(synapse: Any) -> float | None:
         return None
     tau = getattr(synapse, "tau", None)
     if tau is None:
-        raise ParameterError(f"the Brian2 backend takes low-pass synapses only, got {synapse}")
+        raise ParameterError(f"the Brian2 simulator takes low-pass synapses only, got {synapse}")
     return float(tau)
 
 
@@ -87,7 +87,7 @@ def translate(
     """
     if config.selection != "cerebellum":
         raise ParameterError(
-            "the Brian2 backend builds the cerebellar switch only (--selection cerebellum)"
+            "the Brian2 simulator builds the cerebellar switch only (--selection cerebellum)"
         )
     nengo = require_nengo()
     from nengo.builder import Model
@@ -107,7 +107,7 @@ def translate(
     n = 0
     for e in ensembles:
         if not isinstance(e.neuron_type, nengo.LIF):
-            raise ParameterError(f"the Brian2 backend takes LIF neurons, got {e.neuron_type}")
+            raise ParameterError(f"the Brian2 simulator takes LIF neurons, got {e.neuron_type}")
         offset[id(e)] = n
         n += e.n_neurons
     lif = ensembles[0].neuron_type
@@ -161,7 +161,7 @@ def translate(
             motor_tau = _tau(conn.synapse)
             continue
         if post is h.motor or (isinstance(post, nengo.Node) and post not in (h.mu_1, h.mu_2)):
-            raise ParameterError(f"the Brian2 backend cannot translate {conn}")
+            raise ParameterError(f"the Brian2 simulator cannot translate {conn}")
         if isinstance(pre, nengo.Ensemble):
             if conn.size_mid != 1:
                 raise ParameterError(f"decoded connections must be 1-D, got {conn}")
@@ -199,7 +199,7 @@ def translate(
                 tonic_row = new_row(2)
             drive(tonic_row, post, conn.post_slice, transform)
         else:
-            raise ParameterError(f"the Brian2 backend cannot translate {conn}")
+            raise ParameterError(f"the Brian2 simulator cannot translate {conn}")
     if motor_tau is None or np.any(pathway_rows < 0):
         raise ParameterError("the network has no motor output")
     tau_arr = np.array(taus)
