@@ -128,6 +128,24 @@ def test_in_unsafe_code_looks_at_the_whole_stack() -> None:
     assert not interrupts.in_unsafe_code(scope["caller"](sys._getframe))  # type: ignore[operator]
 
 
+def test_a_compiled_ufuncs_dispatch_is_not_unsafe_code() -> None:
+    """Numba's Python-level call of a compiled ``@vectorize`` ufunc (DUFunc.__call__) may
+    be interrupted: the forward learner's imagination calls one (``log10_libm``) in every
+    imagined trial's shaped reward, and a Ctrl-C waited there for the whole imagination.
+    A compilation it starts (deeper numba frames) stays unsafe."""
+    from striatal import interrupts
+
+    dufunc: dict[str, object] = {"__name__": "numba.np.ufunc.dufunc", "sys": sys}
+    exec("def __call__(f):\n    return f()\n", dufunc)
+    assert not interrupts.in_unsafe_code(dufunc["__call__"](sys._getframe))  # type: ignore[operator]
+    compiler: dict[str, object] = {"__name__": "numba.core.compiler", "call": dufunc["__call__"]}
+    exec("def compile_extra(f):\n    return call(f)\n", compiler)
+    assert interrupts.in_unsafe_code(compiler["compile_extra"](sys._getframe))  # type: ignore[operator]
+    other: dict[str, object] = {"__name__": "numba.np.ufunc.dufunc", "sys": sys}
+    exec("def _compile_for_args(f):\n    return f()\n", other)
+    assert interrupts.in_unsafe_code(other["_compile_for_args"](sys._getframe))  # type: ignore[operator]
+
+
 # Real compilations, each interrupted at a random moment: every Ctrl-C is delivered
 # (none swallowed by llvmlite's callbacks, none lost) and the process lives on.
 REAL_COMPILES = textwrap.dedent(

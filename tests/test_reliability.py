@@ -936,6 +936,8 @@ def interrupted_train(
                 and partial["trials"] == done
                 and history_rows == done
                 and "Traceback" not in err
+                # the first signal says that the run stops after the trial in progress
+                and "stopping after the trial in progress" in err
             )
             files = "checkpoint.json, result.json (interrupted: true) and history.csv agree"
         resumed = cli_process("train", "--resume", "--out", str(out), "--no-progress")

@@ -38,6 +38,12 @@ __all__ = ["first_only", "forget_unhandled", "install", "raise_when_safe", "rece
 _state: dict[str, object] = {"received": False, "pending": False}
 # top-level packages whose Python code owns LLVM objects in C: never interrupted
 _UNSAFE = frozenset({"numba", "llvmlite"})
+# Numba's Python-level dispatch of a compiled ufunc (a ``@vectorize`` call such as the
+# kernel's ``log10_libm``): it owns no LLVM object, and a compilation it starts runs in
+# deeper frames of numba.core and llvmlite, which stay unsafe. Code that calls such a
+# ufunc in a loop spends most of its bytecode there, so a Ctrl-C kept pending inside it
+# would wait until the loop ends.
+_SAFE_FRAMES = frozenset({("numba.np.ufunc.dufunc", "__call__")})
 # seconds between two looks at the stack while a Ctrl-C is pending
 RETRY_S = 0.02
 
@@ -54,7 +60,11 @@ def in_unsafe_code(frame: FrameType | None) -> bool:
     """Whether a frame of Numba or llvmlite is on the stack that ``frame`` ends."""
     while frame is not None:
         name = frame.f_globals.get("__name__")
-        if isinstance(name, str) and name.partition(".")[0] in _UNSAFE:
+        if (
+            isinstance(name, str)
+            and name.partition(".")[0] in _UNSAFE
+            and (name, frame.f_code.co_name) not in _SAFE_FRAMES
+        ):
             return True
         frame = frame.f_back
     return False

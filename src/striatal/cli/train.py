@@ -83,9 +83,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 class _StopRequest:
     """SIGINT/SIGTERM handler for the learning loop.
 
-    The first signal only sets ``requested``: the run stops after the trial in
-    progress, once its history row (and any checkpoint due) is written, so the final
-    checkpoint never counts a trial that history.csv lacks. A second signal stops at
+    The first signal only sets ``requested`` and says so in one line on stderr: the run
+    stops after the trial in progress (a forward learner's trial includes its
+    imagination, which can take minutes), once its history row (and any checkpoint due)
+    is written, so the final checkpoint never counts a trial that history.csv lacks. A
+    second signal stops at
     once (KeyboardInterrupt, as soon as no Numba code runs: see
     :func:`striatal.interrupts.raise_when_safe`); the run then keeps only the trials
     already recorded.
@@ -102,6 +104,11 @@ class _StopRequest:
             interrupts.raise_when_safe(frame)
             return
         self.requested = True
+        sys.stderr.write(
+            "striatal train: stopping after the trial in progress; "
+            "interrupt again to stop now (the trials recorded so far are kept)\n"
+        )
+        sys.stderr.flush()
 
     def __enter__(self) -> _StopRequest:
         # signal handlers can only be set from the main thread
