@@ -16,7 +16,16 @@ import pytest
 from striatal.cli.learner_options import add_learner_arguments, learner_config_from
 from striatal.errors import ParameterError
 from striatal.experiments import baselines, runner
-from striatal.experiments.ablation import VARIANTS, build, markdown_table, runs_of, summary, variant
+from striatal.experiments.ablation import (
+    VARIANTS,
+    build,
+    markdown_table,
+    runs_of,
+    seeds_of,
+    summary,
+    variant,
+)
+from striatal.experiments.spec import spawn_seeds
 from striatal.learners import random_initial_gains
 from striatal.params import Controller, Plant, Simulation
 
@@ -97,12 +106,16 @@ def test_summary_and_table() -> None:
 
 def test_ablation_cli_writes_table_and_runs(tmp_path: Path) -> None:
     out = tmp_path / "abl"
-    cmd = [sys.executable, "-m", "striatal", "ablation", "--seeds", "2", "--first-seed", "3"]
+    cmd = [sys.executable, "-m", "striatal", "ablation", "--seeds", "2", "--seed", "3"]
     cmd += ["--max-trials", "20", "--variants", "pgpe,random-search", "--workers", "1"]
     r = subprocess.run([*cmd, "--out", str(out)], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     runs = json.loads((out / "ablation.json").read_text())
-    assert [row["seed"] for row in runs["pgpe"]["runs"]] == [3, 4]
+    # the run seeds of root 3, as `striatal sweep --seed 3 --seeds 2` spawns them
+    assert tuple(row["seed"] for row in runs["pgpe"]["runs"]) == spawn_seeds(3, 2)
+    settings = json.loads((out / "sweep.json").read_text())
+    assert (settings["root_seed"], settings["seeds"]) == (3, 2)
+    assert settings["run_seeds"] == list(spawn_seeds(3, 2))
     assert r.stdout == (out / "ablation.md").read_text()
     assert r.stdout.count("\n") == 4
     assert "| 2/2 |" in r.stdout or "/2 | [" in r.stdout  # successes with their interval
@@ -114,6 +127,26 @@ def test_ablation_cli_writes_table_and_runs(tmp_path: Path) -> None:
     assert again.returncode == 0 and again.stdout == r.stdout
     bad = subprocess.run([*cmd[:4], "--variants", "nope"], capture_output=True, text=True)
     assert bad.returncode == 2 and "nope" in bad.stderr
+
+
+def test_ablation_seeds_are_the_sweep_s_seeds_of_the_same_root() -> None:
+    """One meaning of --seed: ablation and sweep spawn their runs' seeds from the root
+    alike (SeedSequence(root).spawn(n)), so root R's rows of the two share seeds."""
+    from striatal.experiments import sweeps
+
+    for root in (0, 1, 7):
+        sweep_plan = sweeps.plan("pgpe", seeds=3, seed=root, init="random", control=False)
+        assert tuple(sweep_plan.settings["run_seeds"]) == seeds_of(root, 3)
+    assert seeds_of(1, 5)[:3] == seeds_of(1, 3)  # a longer run extends a shorter one
+
+
+@pytest.mark.parametrize("value", ["", "100"])
+def test_ablation_refuses_first_seed_naming_seed(value: str) -> None:
+    """The old --first-seed S (seeds S..S+N-1) is refused in one line naming --seed."""
+    cmd = [sys.executable, "-m", "striatal", "ablation", "--first-seed"]
+    r = subprocess.run([*cmd, *([value] if value else [])], capture_output=True, text=True)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "--seed R" in r.stderr and r.stdout == ""
 
 
 @pytest.mark.parametrize("names", ["", " , ", "pgpe,pgpe"])

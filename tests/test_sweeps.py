@@ -51,6 +51,32 @@ def test_a_folder_the_api_wrote_resumes_from_the_command(tmp_path: Path, cli: An
     assert code == 0 and "ran 0 runs, 4 already in --out" in printed
 
 
+@pytest.mark.parametrize("engine", ["processes", "batch"])
+def test_on_run_sees_every_new_row_once_as_written(tmp_path: Path, engine: str) -> None:
+    """``sweep(on_run=f)`` gets each row as it is written to runs.csv, whatever the
+    engine; a resume does not replay the rows already in the folder."""
+    seen: list[dict[str, Any]] = []
+    out = tmp_path / "s"
+    kw: dict[str, Any] = {"seeds": 2, "max_trials": 3, "eval_draws": 0, "engine": engine}
+    kw["sim"] = striatal.Simulation(duration=5)
+    first = striatal.sweep(out=out, on_run=seen.append, **kw)
+    assert len(seen) == first.ran == 4
+    assert sorted((r["arm"], r["seed"]) for r in seen) == sorted(
+        (r["arm"], r["seed"]) for r in first.rows
+    )
+    from striatal.experiments.runs_csv import read_runs
+
+    written, _ = read_runs(out / "runs.csv")
+    assert _without_wall(sweeps.sort_rows(seen)) == _without_wall(sweeps.sort_rows(written))
+    again = striatal.sweep(out=out, on_run=seen.append, **kw)
+    assert again.ran == 0 and len(seen) == 4
+
+
+def test_on_run_must_be_callable() -> None:
+    with pytest.raises(ParameterError, match="on_run must be a function of one row"):
+        striatal.sweep(seeds=1, max_trials=1, on_run=5)  # type: ignore[arg-type]
+
+
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [

@@ -14,11 +14,18 @@ import sys
 from typing import Any
 
 from striatal import arguments
-from striatal.cli import config, options
+from striatal.cli import config, guards, options
 from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
 from striatal.experiments import pool, sweeps
-from striatal.experiments.ablation import VARIANT_NAMES, build, markdown_table, table_rows, variant
+from striatal.experiments.ablation import (
+    VARIANT_NAMES,
+    build,
+    markdown_table,
+    seeds_of,
+    table_rows,
+    variant,
+)
 from striatal.io.files import atomic_write_text, check_out_dir, dumps_json, write_json
 from striatal.io.rundir import RunDir
 from striatal.io.schema import AblationModel
@@ -28,11 +35,22 @@ OUT_FILES = ("sweep.json", "runs.csv", "summary.json", "ablation.json", "ablatio
 
 DESCRIPTION = (
     "Run each named learner variant from W(0) uniform in [-1, 1]^6 (as train --init random) "
-    "for seeds S..S+N-1 and tabulate success (mean policy, Wilson 95 % interval), trials "
+    "for N seeds spawned from --seed (SeedSequence, as sweep spawns them) and tabulate "
+    "success (mean policy, Wilson 95 % interval), trials "
     "and simulations to success (docs/ablation.md). The variants are arms of one sweep: "
     "with --out, runs.csv, summary.json, ablation.json and ablation.md are written there "
-    "and a rerun with the same options resumes."
+    "and a rerun with the same options resumes. Row seed S reruns alone as "
+    "'striatal train --init random --seed S' with the variant's options."
 )
+
+
+def first_seed_refused(value: str) -> str:
+    """The one line that ``ablation --first-seed VALUE`` gets: the seeds come from a root."""
+    return (
+        "--first-seed is gone: ablation's seeds are spawned from the root --seed R "
+        "(SeedSequence(R).spawn(N)), as sweep's are; for one run's seed use "
+        "'striatal train --init random --seed S'"
+    )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -40,10 +58,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--seeds", type=arguments.cli_type("seeds"), default=sweeps.SEEDS, help="number of seeds N"
     )
     parser.add_argument(
-        "--first-seed",
+        "--seed",
         type=arguments.cli_type("seed"),
         default=0,
-        help="seeds S..S+N-1 (a fresh set: S = 100)",
+        help="root seed R: the runs' seeds are SeedSequence(R).spawn(N), the seeds of "
+        "'sweep --seed R' (0 is the tuning root of the robust preset; 1, 2, ... evaluate)",
+    )
+    parser.add_argument(
+        "--first-seed",
+        dest="refused_first_seed",
+        nargs="?",
+        action=guards.Refused,
+        message=first_seed_refused,
     )
     parser.add_argument(
         "--max-trials",
@@ -114,8 +140,8 @@ def run(args: argparse.Namespace) -> int:
         args.eval_draws,
         "the ablation",
     )
-    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
-    specs, settings = build(chosen, seeds, args.max_trials, args.eval_draws)
+    seeds = seeds_of(args.seed, args.seeds)
+    specs, settings = build(chosen, seeds, args.max_trials, args.eval_draws, root=args.seed)
     settings["options"] = config.recorded_options(args)
     talk = not (args.no_progress or args.json)
     # the lock covers ablation.json and ablation.md too, written after the sweep

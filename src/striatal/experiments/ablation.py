@@ -25,7 +25,7 @@ import numpy as np
 from striatal.errors import ParameterError
 from striatal.experiments import runner, sweeps
 from striatal.experiments.results import Sweep
-from striatal.experiments.spec import RunSpec
+from striatal.experiments.spec import SEED_RULE, RunSpec, spawn_seeds
 from striatal.learners import LearnerConfig, control_config, default_config
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
@@ -180,10 +180,23 @@ def _control(v: Variant) -> dict[str, Any]:
     return dict(rule_of(v.learner).control)
 
 
+def seeds_of(root: int, n: int) -> tuple[int, ...]:
+    """The ablation's ``n`` run seeds from root seed ``root``: the seeds of
+    ``striatal sweep --seed root --seeds n`` (:func:`striatal.experiments.spec.spawn_seeds`)."""
+    return spawn_seeds(root, n)
+
+
 def build(
-    variants: Sequence[Variant], seeds: Sequence[int], max_trials: int, eval_draws: int = 0
+    variants: Sequence[Variant],
+    seeds: Sequence[int],
+    max_trials: int,
+    eval_draws: int = 0,
+    *,
+    root: int | None = None,
 ) -> tuple[list[RunSpec], dict[str, Any]]:
-    """(specs, settings) of the ablation sweep: every variant an arm, init "random"."""
+    """(specs, settings) of the ablation sweep: every variant an arm, init "random", on
+    the run ``seeds``; ``root``: the root seed they were spawned from
+    (:func:`seeds_of`), recorded in the settings."""
     if not variants:
         raise ParameterError("no variant to run: name at least one")
     arms = [v.arm(max_trials) for v in variants]
@@ -198,7 +211,10 @@ def build(
     )
     settings = {
         "command": "striatal ablation",
-        "seeds": list(seeds),
+        "root_seed": root,
+        "seeds": len(seeds),
+        "run_seeds": list(seeds),
+        "seed_rule": SEED_RULE if root is not None else "the run seeds given",
         "init": "random",
         "theta_c0": CHAPTER_INITIAL_THETA_C,
         "max_trials": max_trials,

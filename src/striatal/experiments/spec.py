@@ -53,6 +53,10 @@ class RunSpec:
         return (self.arm, self.init, self.seed)
 
 
+#: How a sweep's (and an ablation's) run seeds follow from its root seed, as recorded.
+SEED_RULE = "SeedSequence(root_seed).spawn(seeds)[i].generate_state(1)[0]"
+
+
 def spawn_seeds(root: int, n: int) -> tuple[int, ...]:
     """The n integer run seeds of root seed ``root``: SeedSequence(root).spawn(n)[i]."""
     if n < 1:

@@ -44,7 +44,7 @@ from striatal.experiments.runner import (
     control_note,
 )
 from striatal.experiments.runs_csv import read_runs, row_text, sort_rows
-from striatal.experiments.spec import Init, RunSpec, initial_gains, spawn_seeds
+from striatal.experiments.spec import SEED_RULE, Init, RunSpec, initial_gains, spawn_seeds
 from striatal.io.files import atomic_write_text, check_out_dir
 from striatal.io.rundir import RunDir
 from striatal.learners import LearnerConfig, default_config, rule_of
@@ -538,7 +538,7 @@ def plan(
         "root_seed": root,
         "seeds": seeds,
         "run_seeds": list(run_seeds),
-        "seed_rule": "SeedSequence(root_seed).spawn(seeds)[i].generate_state(1)[0]",
+        "seed_rule": SEED_RULE,
         "inits": list(inits),
         "theta_c0": template.theta_c,
         "max_trials": config.max_trials,
@@ -704,6 +704,7 @@ def sweep(
     address: str | None = None,
     connect_timeout: float = CONNECT_TIMEOUT,
     progress: bool = False,
+    on_run: Callable[[dict[str, Any]], None] | None = None,
 ) -> Sweep:
     """Many learning runs over seeds, as ``striatal sweep`` runs them (same defaults).
 
@@ -719,7 +720,9 @@ def sweep(
     table the command line uses (:mod:`striatal.arguments`, LearnerConfig's fields).
     Every arm runs on the same seeds: the learner, its no-learning control and the
     baselines. With ``out``, runs.csv, sweep.json and summary.json are written there and
-    a rerun resumes (:func:`run_sweep`). Returns a
+    a rerun resumes (:func:`run_sweep`). ``on_run(row)`` is called with each run's row
+    (a dict of runs.csv's columns) as it finishes, in this process, whatever the engine
+    or backend; rows already in ``out`` from an earlier call are not replayed. Returns a
     :class:`~striatal.experiments.results.Sweep`: its ``.runs`` (rows sorted by (arm, init,
     seed)), ``.arms`` (each rate with its interval), ``.summary`` and ``.plot()`` (the
     performance profiles).
@@ -729,6 +732,8 @@ def sweep(
     >>> result.plot().savefig("profiles.png")  # doctest: +SKIP
     """
     given = dict(locals())
+    if on_run is not None and not callable(on_run):
+        raise ParameterError(f"on_run must be a function of one row, got {on_run!r}")
     if out is not None and (
         not isinstance(out, str | os.PathLike) or not str(os.fspath(out)).strip()
     ):
@@ -767,4 +772,5 @@ def sweep(
         connect_timeout=checked["connect_timeout"],
         progress=checked["progress"],
         engine=checked["engine"],
+        on_run=on_run,
     )
