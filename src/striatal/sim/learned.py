@@ -7,7 +7,9 @@ pole mass, length, gravity) are what the controller believes, for eq 12 and the
 energy of eqs 15-16: the learned model has none. Every trial on it holds the motor
 force over a step, as the model was fitted. :func:`striatal.sim.rollout.run_trial`,
 :func:`~striatal.sim.rollout.simulate` and :class:`~striatal.sim.rollout.TrialRequest`
-run it on :func:`striatal.sim.kernel.run_learned_trial`; the batch kernels do not take it.
+run it on :func:`striatal.sim.kernel.run_learned_trial`, and
+:func:`striatal.sim.batch.run_requests` runs trials on the same model in one call of
+:func:`striatal.sim.kernel.run_learned_trials_batch`.
 
 A model may also be *conditioned* on the plant's pole mass and length factors
 (:class:`ConditionedDynamics`: two more inputs, constant over a trial). At given

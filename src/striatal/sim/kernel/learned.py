@@ -9,7 +9,8 @@ q = (x_dot, sin theta, cos theta, theta_dot, f), f the motor force held over the
     a_k(z) = C_k phi(z) + c_k,    phi_j(z) = prod_i z_i ** P[j, i],
 
 and the step takes the members' mean. Velocities advance by dt a, positions and
-angles by the trapezoid of the old and new velocities.
+angles by the trapezoid of the old and new velocities. Each step writes the powers
+z_i^p once into a small table and reads every monomial's factors from it.
 """
 
 from __future__ import annotations
@@ -21,7 +22,17 @@ from numba import njit
 
 from striatal.sim.kernel.plant import PlantTerms, State, StepInputs
 
-__all__ = ["MAX_POWER", "N_FEATURES", "LearnedArgs", "learned_accelerations", "learned_step"]
+__all__ = [
+    "MAX_POWER",
+    "N_FEATURES",
+    "LearnedArgs",
+    "LearnedStep",
+    "accelerations_into",
+    "learned_accelerations",
+    "learned_step",
+    "power_table",
+    "step_into",
+]
 
 #: Inputs of the learned model: x_dot, sin theta, cos theta, theta_dot, f.
 N_FEATURES = 5
@@ -43,39 +54,63 @@ class LearnedArgs(NamedTuple):
 MAX_POWER = 6
 
 
-@njit(cache=True, inline="always")
-def _powers(z: float) -> tuple[float, float, float, float, float, float, float]:
-    """(1, z, z^2, ..., z^MAX_POWER)."""
-    z2 = z * z
-    z3 = z2 * z
-    return (1.0, z, z2, z3, z2 * z2, z3 * z2, z3 * z3)
+class LearnedStep(NamedTuple):
+    """What a trial on a learned plant carries to each step: the ``model`` and a scratch
+    ``table`` (N_FEATURES, MAX_POWER + 1) of the standardised inputs' powers, written at
+    every step (:func:`power_table`; one per trial, so parallel trials do not share it)."""
+
+    model: LearnedArgs
+    table: np.ndarray
 
 
 @njit(cache=True)
-def learned_accelerations(
-    x_dot: float, s: float, c: float, theta_dot: float, f: float, model: LearnedArgs
+def power_table() -> np.ndarray:
+    """A scratch table for :func:`accelerations_into` (N_FEATURES, MAX_POWER + 1)."""
+    return np.empty((N_FEATURES, MAX_POWER + 1))
+
+
+@njit(cache=True, inline="always")
+def _fill_powers(table: np.ndarray, i: int, z: float) -> None:
+    """Row i of ``table``: 1, z, z^2, ..., z^MAX_POWER."""
+    v = 1.0
+    for p in range(MAX_POWER + 1):
+        table[i, p] = v
+        v *= z
+
+
+@njit(cache=True)
+def accelerations_into(
+    x_dot: float,
+    s: float,
+    c: float,
+    theta_dot: float,
+    f: float,
+    model: LearnedArgs,
+    table: np.ndarray,
 ) -> tuple[float, float]:
     """(x_ddot, theta_ddot): the members' mean of ``model`` at (x_dot, s = sin theta,
-    c = cos theta, theta_dot, f) [m/s^2, rad/s^2]."""
+    c = cos theta, theta_dot, f) [m/s^2, rad/s^2], the inputs' powers written to
+    ``table`` (:func:`power_table`) and each monomial read from it."""
     m = model.mean
     sc = model.scale
-    z0 = (x_dot - m[0]) / sc[0]
-    z1 = (s - m[1]) / sc[1]
-    z2 = (c - m[2]) / sc[2]
-    z3 = (theta_dot - m[3]) / sc[3]
-    z4 = (f - m[4]) / sc[4]
-    t0 = _powers(z0)
-    t1 = _powers(z1)
-    t2 = _powers(z2)
-    t3 = _powers(z3)
-    t4 = _powers(z4)
+    _fill_powers(table, 0, (x_dot - m[0]) / sc[0])
+    _fill_powers(table, 1, (s - m[1]) / sc[1])
+    _fill_powers(table, 2, (c - m[2]) / sc[2])
+    _fill_powers(table, 3, (theta_dot - m[3]) / sc[3])
+    _fill_powers(table, 4, (f - m[4]) / sc[4])
     P = model.powers
     C = model.coef
     K = C.shape[0]
     ax = 0.0
     ath = 0.0
     for j in range(P.shape[0]):
-        phi = t0[P[j, 0]] * t1[P[j, 1]] * t2[P[j, 2]] * t3[P[j, 3]] * t4[P[j, 4]]
+        phi = (
+            table[0, P[j, 0]]
+            * table[1, P[j, 1]]
+            * table[2, P[j, 2]]
+            * table[3, P[j, 3]]
+            * table[4, P[j, 4]]
+        )
         for k in range(K):
             ax += C[k, 0, j] * phi
             ath += C[k, 1, j] * phi
@@ -86,14 +121,29 @@ def learned_accelerations(
 
 
 @njit(cache=True)
-def learned_step(state: State, inputs: StepInputs, pt: PlantTerms, model: LearnedArgs) -> State:
+def learned_accelerations(
+    x_dot: float, s: float, c: float, theta_dot: float, f: float, model: LearnedArgs
+) -> tuple[float, float]:
+    """:func:`accelerations_into` with a table of its own."""
+    return accelerations_into(x_dot, s, c, theta_dot, f, model, power_table())
+
+
+@njit(cache=True)
+def step_into(state: State, inputs: StepInputs, pt: PlantTerms, carried: LearnedStep) -> State:
     """One control step pt.dt of the learned plant from ``state`` (x, x_dot, theta,
-    theta_dot) under the motor force f held; ``inputs`` (sin theta, cos theta, the action
-    a, f): a enters only through f."""
+    theta_dot) under the motor force f held, by ``carried.model`` (its powers written to
+    ``carried.table``); ``inputs`` (sin theta, cos theta, the action a, f): a enters only
+    through f. The step a trial loop calls (:func:`striatal.sim.kernel.run_learned_trial`)."""
     x, x_dot, theta, theta_dot = state
     s, c, _, f = inputs
     dt = pt.dt
-    ax, ath = learned_accelerations(x_dot, s, c, theta_dot, f, model)
+    ax, ath = accelerations_into(x_dot, s, c, theta_dot, f, carried.model, carried.table)
     v = x_dot + dt * ax
     w = theta_dot + dt * ath
     return x + 0.5 * dt * (x_dot + v), v, theta + 0.5 * dt * (theta_dot + w), w
+
+
+@njit(cache=True)
+def learned_step(state: State, inputs: StepInputs, pt: PlantTerms, model: LearnedArgs) -> State:
+    """:func:`step_into` of ``model`` with a table of its own."""
+    return step_into(state, inputs, pt, LearnedStep(model, power_table()))
