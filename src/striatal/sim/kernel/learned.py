@@ -78,6 +78,18 @@ def _fill_powers(table: np.ndarray, i: int, z: float) -> None:
         v *= z
 
 
+@njit(cache=True, inline="always")
+def _monomial(table: np.ndarray, P: np.ndarray, j: int) -> float:
+    """phi_j = prod_i z_i ** P[j, i], the powers read from ``table``."""
+    return (
+        table[0, P[j, 0]]
+        * table[1, P[j, 1]]
+        * table[2, P[j, 2]]
+        * table[3, P[j, 3]]
+        * table[4, P[j, 4]]
+    )
+
+
 @njit(cache=True)
 def accelerations_into(
     x_dot: float,
@@ -103,17 +115,21 @@ def accelerations_into(
     K = C.shape[0]
     ax = 0.0
     ath = 0.0
-    for j in range(P.shape[0]):
-        phi = (
-            table[0, P[j, 0]]
-            * table[1, P[j, 1]]
-            * table[2, P[j, 2]]
-            * table[3, P[j, 3]]
-            * table[4, P[j, 4]]
-        )
-        for k in range(K):
-            ax += C[k, 0, j] * phi
-            ath += C[k, 1, j] * phi
+    if K == 1:
+        # one member (imagination's mean and each member alone): the same sums, without
+        # a loop over members inside the loop over monomials
+        cx = C[0, 0]
+        cth = C[0, 1]
+        for j in range(P.shape[0]):
+            phi = _monomial(table, P, j)
+            ax += cx[j] * phi
+            ath += cth[j] * phi
+    else:
+        for j in range(P.shape[0]):
+            phi = _monomial(table, P, j)
+            for k in range(K):
+                ax += C[k, 0, j] * phi
+                ath += C[k, 1, j] * phi
     for k in range(K):
         ax += model.intercept[k, 0]
         ath += model.intercept[k, 1]
