@@ -292,3 +292,42 @@ def test_the_learned_batch_kernel_equals_the_scalar_kernel_bit_for_bit(noisy: bo
     sa = scalar.args(scalar.noise()[0] if noisy else None)
     kernel.run_learned_trial(plant.dynamics.args, sa)  # type: ignore[union-attr]
     assert np.array_equal(args.outs[0], sa.buffers.out)
+
+
+def test_the_monomials_read_from_their_non_zero_powers_are_the_full_products_bit_for_bit() -> None:
+    """learned_step_of lists each cubic monomial's table entries at its non-zero powers;
+    the product of those equals the product over all five inputs (the z^0 = 1 entries
+    change no bit), for one member and for several; a monomial of four inputs makes the
+    step read all five."""
+    rng = np.random.default_rng(2)
+    pytest.importorskip("sklearn")
+    from striatal.learners.forward.model import generic_powers
+
+    powers = generic_powers(3, conditioned=False)
+    for members in (1, 3):
+        args = kernel.LearnedArgs(
+            mean=rng.normal(size=5),
+            scale=rng.uniform(0.5, 2.0, 5),
+            powers=powers,
+            coef=rng.normal(size=(members, 2, len(powers))),
+            intercept=rng.normal(size=(members, 2)),
+        )
+        fast = kernel.learned_step_of(args)
+        assert fast.factors.shape == (len(powers), kernel.N_FACTORS)
+        full = fast._replace(factors=np.zeros((0, kernel.N_FACTORS), dtype=np.int64))
+        for q in rng.normal(size=(200, 5)) * 3.0:
+            a = kernel.accelerations_into(*q, fast)
+            b = kernel.accelerations_into(*q, full)
+            assert a == b
+    wide = kernel.LearnedArgs(
+        mean=np.zeros(5),
+        scale=np.ones(5),
+        powers=np.array([[1, 1, 1, 1, 0], [0, 0, 0, 0, 1]], dtype=np.int64),
+        coef=np.array([[[2.0, 1.0], [0.0, 1.0]]]),
+        intercept=np.zeros((1, 2)),
+    )
+    assert kernel.learned_step_of(wide).factors.shape == (0, kernel.N_FACTORS)
+    q = (0.5, -0.3, 0.8, 1.5, 2.0)
+    assert kernel.learned_accelerations(*q, wide) == pytest.approx(
+        (2.0 * 0.5 * -0.3 * 0.8 * 1.5 + 2.0, 2.0)
+    )

@@ -14,7 +14,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from striatal.sim.kernel.learned import LearnedArgs, LearnedStep, power_table, step_into
+from striatal.sim.kernel.learned import LearnedArgs, LearnedStep, learned_step_of, step_into
 from striatal.sim.kernel.libm import wrap_angle
 from striatal.sim.kernel.plant import (
     PlantArgs,
@@ -468,9 +468,9 @@ def run_trial(
 def run_learned_trial(model: LearnedArgs, args: TrialArgs) -> None:
     """:func:`run_trial` on a learned plant: each step is
     :func:`~striatal.sim.kernel.learned_step` of ``model`` (:func:`step_into`, with one
-    scratch table for the trial) under the held motor force (eq 12 with ``plant.model``,
+    :func:`learned_step_of` for the trial) under the held motor force (eq 12 with ``plant.model``,
     clipped to ``plant.max_force``); ``args.plant.plant`` is not used."""
-    trial_loop(step_into, LearnedStep(model, power_table()), args)
+    trial_loop(step_into, learned_step_of(model), args)
 
 
 @njit(cache=True, inline="always")
