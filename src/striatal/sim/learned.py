@@ -21,6 +21,7 @@ like a physical plant, the controller still believing the same parameters.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -80,6 +81,18 @@ class LearnedDynamics:
                 intercept=np.ascontiguousarray(a.intercept[k : k + 1]),
             )
         )
+
+    def gained(self, theta: float) -> LearnedDynamics:
+        """The model with its angular acceleration (theta_ddot: readout and intercept)
+        multiplied by ``theta`` > 0: a pole that answers the same inputs more or less
+        strongly than the data say. No cart-pole equation enters."""
+        if not (math.isfinite(theta) and theta > 0):
+            raise ParameterError(f"the gain must be finite and > 0, got {theta}")
+        a = self.args
+        coef, intercept = a.coef.copy(), a.intercept.copy()
+        coef[:, 1, :] *= theta
+        intercept[:, 1] *= theta
+        return LearnedDynamics(a._replace(coef=coef, intercept=intercept))
 
     def mean(self) -> LearnedDynamics:
         """The members' mean as one member (the same predictions, one evaluation a step:
