@@ -1,9 +1,9 @@
 """Wall and CPU time of the generic forward learner, one run at a time, on the tuning root.
 
     python benchmarks/forward_generic_wall.py [--root 0] [--first 0] [--seeds 8]
-        [--imagine-trials 2000]
+        [--imagine-trials 2000] [--forward-model generic]
 
-Runs ``striatal.train("forward", forward_model="generic", robust=True, init="random",
+Runs ``striatal.train("forward", forward_model=..., robust=True, init="random",
 max_trials=300)`` on the run seeds ``spawn_seeds(root, first + seeds)[first:]`` (root 0
 is the tuning root), one after the other in this process, and prints per run its
 real trials, real simulated seconds, imagined simulations, wall seconds and CPU
@@ -33,6 +33,7 @@ def main() -> None:
     parser.add_argument("--first", type=int, default=0)
     parser.add_argument("--seeds", type=int, default=8)
     parser.add_argument("--imagine-trials", type=int, default=2000)
+    parser.add_argument("--forward-model", default="generic")
     args = parser.parse_args()
     print(f"load average before: {os.getloadavg()}")
     seeds = spawn_seeds(args.root, args.first + args.seeds)[args.first :]
@@ -44,7 +45,7 @@ def main() -> None:
             init="random",
             seed=seed,
             robust=True,
-            forward_model="generic",
+            forward_model=args.forward_model,
             max_trials=300,
             imagine_trials=args.imagine_trials,
         )
