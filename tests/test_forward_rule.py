@@ -25,6 +25,7 @@ from striatal.params import (
     Simulation,
 )
 from striatal.sim import kernel
+from striatal.sim.learned import LearnedPlant
 from striatal.sim.robust import ROBUST_HARDWARE, check_robust
 from striatal.sim.rollout import simulate
 
@@ -231,6 +232,60 @@ def test_generic_imagination_cannot_rehearse_other_plants_and_the_real_check_say
     assert refused
 
 
+def test_generic_gains_checks_candidates_on_the_mean_with_the_pole_answering_slower_and_faster(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """--forward-model generic-gains: the world of the generic model plus its mean with
+    theta_ddot (and nothing else) times each of RESPONSE_GAINS in the family; the run
+    counts its imagination apart like generic's, and its real trials alone."""
+    pytest.importorskip("sklearn")
+    sim = Simulation(duration=20.0)
+    data = Transitions.of(
+        [
+            simulate(Plant(), c, sim, hardware=ROBUST_HARDWARE)
+            for c in (
+                Controller(gains=CHAPTER_FINAL_W, theta_c=CHAPTER_FINAL_THETA_C),
+                Controller(theta_c=CHAPTER_INITIAL_THETA_C),
+            )
+        ]
+    )
+    model = forward.fit_generic(data, np.random.default_rng(0))
+    plain = forward.generic_world(model, Plant())
+    world = forward.generic_world(model, Plant(), forward.RESPONSE_GAINS)
+    assert len(plain.family) == 5  # the members
+    assert len(world.family) == 7 and not world.rehearse
+    states, forces = data.states[::50], data.forces[::50]
+    mean = model.accelerations(states, forces).mean(axis=0)
+    for plant, g in zip(world.family[-2:], forward.RESPONSE_GAINS, strict=True):
+        assert isinstance(plant, LearnedPlant) and plant.believed == Plant()
+        assert plant.dynamics is not None
+        got = np.array(
+            [
+                kernel.learned_accelerations(
+                    s[1], np.sin(s[2]), np.cos(s[2]), s[3], f, plant.dynamics.args
+                )
+                for s, f in zip(states, forces, strict=True)
+            ]
+        )
+        assert np.allclose(got[:, 0], mean[:, 0], rtol=1e-12, atol=1e-12)
+        assert np.allclose(got[:, 1], g * mean[:, 1], rtol=1e-12, atol=1e-12)
+    seen: list[int] = []
+    real = forward.generic_world
+
+    def noting(m: Any, believed: Plant, gains: tuple[float, ...] = ()) -> Any:
+        seen.append(len(gains))
+        return real(m, believed, gains)
+
+    monkeypatch.setattr(forward, "generic_world", noting)
+    config = default_config(
+        "forward", robust=True, max_trials=2, imagine_trials=60, forward_model="generic-gains"
+    )
+    result = learn(Plant(), start(101), config, 101)
+    assert seen and set(seen) == {2}
+    assert result.get("imagined")[0] > 0
+    assert result.simulations >= 2
+
+
 def test_the_generic_model_without_scikit_learn_is_refused_before_any_trial(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -248,7 +303,10 @@ def test_the_generic_model_without_scikit_learn_is_refused_before_any_trial(
         default_config("forward", forward_model="generic")
     with pytest.raises(
         ParameterError,
-        match="forward_model must be 'structured', 'generic' or 'conditioned', got 'neural'",
+        match=(
+            "forward_model must be 'structured', 'generic', 'generic-gains' or 'conditioned', "
+            "got 'neural'"
+        ),
     ):
         default_config("forward", forward_model="neural")
     with pytest.raises(ParameterError, match="does not use forward_model"):

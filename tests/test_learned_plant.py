@@ -158,10 +158,19 @@ def test_a_learned_plant_refuses_what_it_cannot_be() -> None:
     hash(plant)
     with pytest.raises(ParameterError, match="cannot be scaled"):
         plant.scaled(pole_mass=0.8)
-    with pytest.raises(ParameterError, match="physical plants only"):
-        batch_args([TrialRequest(plant, FINAL, Simulation(), Protocol())] * 2)
     request = TrialRequest(plant, FINAL, Simulation(duration=1.0), NO_PROTOCOL)
-    assert request.batch_key() is None
+    # a learned plant shares a kernel call only with trials on the same model
+    same = TrialRequest(
+        LearnedPlant.of(model, Plant(pole_mass=0.2)), FINAL, request.sim, NO_PROTOCOL
+    )
+    other = TrialRequest(
+        LearnedPlant.of(hand_model([[0, 0, 0, 0, 1]], [[1.0], [0.0]]), Plant(pole_mass=0.2)),
+        FINAL,
+        request.sim,
+        NO_PROTOCOL,
+    )
+    assert request.batch_key() == same.batch_key() != other.batch_key()
+    assert TrialRequest(plant, FINAL, request.sim, NO_PROTOCOL, record=True).batch_key() is None
     assert request.run() == run_trial(
         TrialRequest(
             plant,
@@ -201,3 +210,124 @@ def test_bad_learned_arrays_are_refused(change: dict, message: str) -> None:
     )
     with pytest.raises(ParameterError, match=message):
         LearnedDynamics(good._replace(**change))
+
+
+def _generic_plant(true: Plant) -> LearnedPlant:
+    """The generic ensemble's mean fitted on two recorded trials of ``true``."""
+    pytest.importorskip("sklearn")
+    from striatal.learners.forward.model import Transitions, fit_generic
+
+    sim = Simulation(duration=20.0)
+    data = Transitions.of(
+        [simulate(true, c, sim, model=Plant(), hardware=ROBUST_HARDWARE) for c in (FINAL, INITIAL)]
+    )
+    return fit_generic(data, np.random.default_rng(3)).plant(Plant())
+
+
+@pytest.mark.parametrize("noisy", [False, True], ids=["mean", "noisy"])
+def test_the_learned_batch_kernel_equals_the_scalar_kernel_bit_for_bit(noisy: bool) -> None:
+    """Trials on one learned model, run together (:func:`run_requests`, one call of
+    run_learned_trials_batch) and one by one (TrialRequest.run): the same summary rows
+    and traces to the last bit, successes, early checks, faults and track ends alike,
+    and the same noise drawn from each generator."""
+    from striatal.params import Hardware
+    from striatal.sim.batch import run_requests
+
+    plant = _generic_plant(Plant(pole_mass=0.12, length=0.9))
+    rng = np.random.default_rng(7)
+    starts = [(0.0, 0.0, math.pi, 0.0), (0.5, 0.0, 0.3, 0.0), (0.0, 1.0, -2.5, 1.0)]
+    controllers = [
+        FINAL,
+        INITIAL,
+        Controller(gains=tuple(rng.uniform(-1.0, 1.0, 6)), theta_c=0.7),
+    ]
+    hardware = Hardware(hold="force", track=4.0)
+
+    def requests() -> list[TrialRequest]:
+        seeds = iter(range(100))
+        return [
+            TrialRequest(
+                plant,
+                c,
+                Simulation(duration=40.0),
+                Protocol(),
+                rng=np.random.default_rng(next(seeds)) if noisy else None,
+                gamma=0.9,
+                trace=np.full(6, 0.1),
+                state0=np.array(s0),
+                hardware=hardware,
+            )
+            for c in controllers
+            for s0 in starts
+        ]
+
+    one, many = requests(), requests()
+    alone = [r.run() for r in one]
+    calls: list[int] = []
+    real = kernel.run_learned_trials_batch
+
+    def noting(*args: object) -> None:
+        calls.append(args[1].shape[0])  # type: ignore[attr-defined]
+        real(*args)
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(kernel, "run_learned_trials_batch", noting)
+    try:
+        together = run_requests(many)
+    finally:
+        mp.undo()
+    assert calls == [len(many)]
+    assert together == alone
+    for a, b in zip(one, many, strict=True):
+        assert np.array_equal(a.trace, b.trace)
+        assert (a.rng is None) or a.rng.random() == b.rng.random()  # type: ignore[union-attr]
+    reasons = {o.end_reason for o in alone}
+    assert len(reasons) >= 2, reasons
+    # a batch of one on the kernel directly equals the scalar kernel too
+    r = requests()[4]
+    noise = r.noise()[0]
+    args = batch_args([r], noise[None, :] if noisy else None)
+    kernel.run_learned_trials_batch(plant.dynamics.args, *args)  # type: ignore[union-attr]
+    scalar = requests()[4]
+    sa = scalar.args(scalar.noise()[0] if noisy else None)
+    kernel.run_learned_trial(plant.dynamics.args, sa)  # type: ignore[union-attr]
+    assert np.array_equal(args.outs[0], sa.buffers.out)
+
+
+def test_the_monomials_read_from_their_non_zero_powers_are_the_full_products_bit_for_bit() -> None:
+    """learned_step_of lists each cubic monomial's table entries at its non-zero powers;
+    the product of those equals the product over all five inputs (the z^0 = 1 entries
+    change no bit), for one member and for several; a monomial of four inputs makes the
+    step read all five."""
+    rng = np.random.default_rng(2)
+    pytest.importorskip("sklearn")
+    from striatal.learners.forward.model import generic_powers
+
+    powers = generic_powers(3, conditioned=False)
+    for members in (1, 3):
+        args = kernel.LearnedArgs(
+            mean=rng.normal(size=5),
+            scale=rng.uniform(0.5, 2.0, 5),
+            powers=powers,
+            coef=rng.normal(size=(members, 2, len(powers))),
+            intercept=rng.normal(size=(members, 2)),
+        )
+        fast = kernel.learned_step_of(args)
+        assert fast.factors.shape == (len(powers), kernel.N_FACTORS)
+        full = fast._replace(factors=np.zeros((0, kernel.N_FACTORS), dtype=np.int64))
+        for q in rng.normal(size=(200, 5)) * 3.0:
+            a = kernel.accelerations_into(*q, fast)
+            b = kernel.accelerations_into(*q, full)
+            assert a == b
+    wide = kernel.LearnedArgs(
+        mean=np.zeros(5),
+        scale=np.ones(5),
+        powers=np.array([[1, 1, 1, 1, 0], [0, 0, 0, 0, 1]], dtype=np.int64),
+        coef=np.array([[[2.0, 1.0], [0.0, 1.0]]]),
+        intercept=np.zeros((1, 2)),
+    )
+    assert kernel.learned_step_of(wide).factors.shape == (0, kernel.N_FACTORS)
+    q = (0.5, -0.3, 0.8, 1.5, 2.0)
+    assert kernel.learned_accelerations(*q, wide) == pytest.approx(
+        (2.0 * 0.5 * -0.3 * 0.8 * 1.5 + 2.0, 2.0)
+    )

@@ -47,6 +47,39 @@ def test_shaped_reward_closeness_is_the_libm_formula() -> None:
     assert 0.0 < got.min() < got.max() <= 1.0  # states inside and outside the box
 
 
+def test_the_shaped_reward_sums_the_closeness_of_every_instant_with_far_ones_at_zero() -> None:
+    """The upright term reads the closeness only at the instants near upright; the sum is
+    the one over every instant with the far ones at 0, bit for bit, on trials that pass
+    near upright and on one that never does."""
+    from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant
+    from striatal.sim.rollout import Protocol, TrialRequest
+
+    sim, protocol = Simulation(duration=20.0), Protocol()
+    rng = np.random.default_rng(5)
+    controllers = [Controller(gains=CHAPTER_FINAL_W, theta_c=CHAPTER_FINAL_THETA_C)]
+    for _ in range(6):
+        g = rng.uniform(-1.0, 1.0, 6)
+        g[0] = abs(g[0]) + 0.01
+        controllers.append(Controller(gains=tuple(g), theta_c=0.6))
+    nears = []
+    for i, c in enumerate(controllers):
+        rng_i = np.random.default_rng(i)
+        o = TrialRequest(Plant(), c, sim, protocol, rng=rng_i, record=True).run()
+        assert o.rows is not None
+        got = common.shaped_reward(o.rows, o, Plant(), sim, protocol)
+        # the reference: every term over all instants (common.shaped_reward's docstring)
+        d, n = o.rows, sim.n_steps + 1
+        theta = kernel.wrap_angles(d[:, 3])
+        states = np.stack([d[:, 1], d[:, 2], theta, d[:, 4]], axis=1)
+        near = np.abs(theta) < protocol.goal_theta
+        nears.append(bool(near.any()))
+        upright = float(np.sum(common._closeness(states, sim) * near)) / n
+        w = common.SHAPED_WEIGHTS
+        rest = common.shaped_reward(o.rows, o, Plant(), sim, protocol, (*w[:3], 0.0))
+        assert got == rest + w[3] * upright or (o.fault and got == 0.0)
+    assert any(nears) and not all(nears)
+
+
 @pytest.mark.parametrize("rate", [0.2, 1.0, 5.0])
 def test_pgpe_spread_update_uses_libm_exp(rate: float) -> None:
     """adapt_explore: s exp(clip(rate f (z^2 - 1), -1, 1)) with the C library's exp,

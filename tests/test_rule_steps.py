@@ -138,11 +138,18 @@ class KernelCalls:
 
     def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
         self.sizes: dict[str, list[int]] = {}
-        for name in ("run_trials_batch", "run_trials_lockstep", "run_online_trials_batch"):
+        for name in (
+            "run_trials_batch",
+            "run_trials_lockstep",
+            "run_online_trials_batch",
+            "run_learned_trials_batch",
+        ):
             real = getattr(kernel, name)
 
             def noting(*args: Any, _real: Any = real, _name: str = name) -> None:
-                self.sizes.setdefault(_name, []).append(args[0].shape[0])
+                # the learned batch kernel takes its model first
+                first = args[1] if _name == "run_learned_trials_batch" else args[0]
+                self.sizes.setdefault(_name, []).append(first.shape[0])
                 _real(*args)
 
             monkeypatch.setattr(kernel, name, noting)
@@ -153,8 +160,11 @@ class KernelCalls:
     [
         default_config("ac", max_trials=4),
         default_config("forward", max_trials=3, imagine_trials=12),
+        default_config(
+            "forward", max_trials=2, imagine_trials=12, robust=True, forward_model="generic"
+        ),
     ],
-    ids=["ac", "forward"],
+    ids=["ac", "forward", "forward-generic"],
 )
 def test_rules_with_their_own_simulations_give_the_process_rows_under_batch(
     config: LearnerConfig, monkeypatch: pytest.MonkeyPatch
@@ -173,6 +183,13 @@ def test_rules_with_their_own_simulations_give_the_process_rows_under_batch(
     if config.learner == "ac":
         # the online trials of several runs in one call
         assert max(calls.sizes["run_online_trials_batch"]) >= len(specs) // (2 * LANES)
+    elif config.forward_model == "generic":
+        # imagined trials on learned plants, counted apart: the rows (their simulations
+        # included) are the process engine's, and the physical batch kernel ran no more
+        # trials than the rows count (real trials, checks and evaluations)
+        assert any(r["imagined_simulations"] > 0 for r in batch)
+        real = sum(r["simulations"] + r["eval_simulations"] for r in batch)
+        assert 0 < sum(calls.sizes["run_trials_batch"]) <= real
     else:
         assert any(r["imagined_simulations"] > 0 for r in batch)
         # the imagined trials of the runs share kernel calls

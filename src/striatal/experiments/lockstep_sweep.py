@@ -10,7 +10,8 @@ a rule's own simulations such as ac's online trial and forward's imagined learni
 baseline's candidates, the evaluation's draws) run in batched kernel calls, and a run's
 row is yielded as soon as it is finished, so the sweep writes it to runs.csv and a
 rerun skips it. The trials no batch kernel takes (recorded ones, for the shaped reward
-or forward's model; those on a learned plant) run one by one on the scalar kernel.
+or forward's model) run one by one on the scalar kernel; trials on one learned model
+share a call of :func:`striatal.sim.kernel.run_learned_trials_batch`.
 
 ``--engine batch``: :func:`striatal.sim.kernel.run_trials_batch`,
 a parallel loop over the scalar kernel that equals it bit for bit; every run draws its

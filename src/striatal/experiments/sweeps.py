@@ -595,7 +595,7 @@ def lqr_settings(plant: Plant) -> dict[str, Any]:
 def check_libraries(config: LearnerConfig) -> None:
     """ParameterError, before any run or file, if a library the runs need does not load
     (not merely missing: a broken install fails only on import)."""
-    if config.learner == "forward" and config.forward_model == "generic":
+    if config.learner == "forward" and config.forward_model != "structured":
         try:
             import sklearn.linear_model
             import sklearn.pipeline
@@ -603,7 +603,8 @@ def check_libraries(config: LearnerConfig) -> None:
         except Exception as exc:
             first = (str(exc).splitlines() or [type(exc).__name__])[0][:200]
             raise ParameterError(
-                f"--forward-model generic needs scikit-learn, which does not load ({first}): "
+                f"--forward-model {config.forward_model} needs scikit-learn, which does not load "
+                f"({first}): "
                 "pip install 'striatal[model]'"
             ) from None
 

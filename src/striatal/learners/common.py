@@ -138,7 +138,11 @@ def shaped_reward(
     centre = np.sum(1.0 - np.minimum(np.abs(x) / protocol.check_x, 1.0)) / n
     final = 0.0 if outcome.early else float(_closeness(np.array(outcome.final_state), sim))
     near = np.abs(theta) < protocol.goal_theta
-    upright = float(np.sum(_closeness(states, sim) * near)) / n
+    # the closeness at the near instants only (the others count 0): the same sum
+    close = np.zeros(len(states))
+    if near.any():
+        close[near] = _closeness(states[near], sim)
+    upright = float(np.sum(close)) / n
     w = weights
     return float(w[0] * energy + w[1] * centre + w[2] * final + w[3] * upright)
 

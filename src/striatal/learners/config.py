@@ -46,7 +46,7 @@ Eq21Rule = Literal["swingup", "trial", "clamped", "fixed"]
 ThetaCRule = Literal[Eq21Rule, "learned"]
 Eligibility = Literal["score", "chapter"]
 RewardKind = Literal["sparse", "shaped"]
-ForwardModel = Literal["structured", "generic", "conditioned"]
+ForwardModel = Literal["structured", "generic", "generic-gains", "conditioned"]
 
 #: The largest value of a count field: 2**31 - 1, what the compiled kernel's int32 holds.
 MAX_COUNT = 2**31 - 1
@@ -206,7 +206,9 @@ class LearnerConfig:
         "structured",
         "forward: the forward model imagination runs on: 'structured' (the cart-pole's "
         "equations, pole mass, length, cart mass and friction fitted), 'generic' (no "
-        "cart-pole equations: a scikit-learn ensemble of polynomial ridge regressions) or "
+        "cart-pole equations: a scikit-learn ensemble of polynomial ridge regressions), "
+        "'generic-gains' (the same, a candidate also checked on its mean with the pole's "
+        "angular acceleration scaled by 1/1.2 and 1/0.8) or "
         "'conditioned' (the generic ensemble with the plant's pole mass and length factors "
         "as inputs, learned from the real trials and the real robust checks, rehearsing "
         "the corners it has seen)",

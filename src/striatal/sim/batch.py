@@ -13,8 +13,9 @@ drivers run such a generator:
   grouped by what a kernel call shares (plant, readings, protocol, action rate, trace
   decay, motor, online learning) and each group is one call of a batch kernel
   (:func:`striatal.sim.kernel.run_trials_batch`, the SIMD
-  :func:`striatal.sim.kernel.run_trials_lockstep`, or the online
-  :func:`striatal.sim.kernel.run_online_trials_batch`).
+  :func:`striatal.sim.kernel.run_trials_lockstep`, the online
+  :func:`striatal.sim.kernel.run_online_trials_batch`, or, on a learned plant, one
+  model's :func:`striatal.sim.kernel.run_learned_trials_batch`).
 
 Each request draws its noise from its own generator exactly as ``TrialRequest.run`` does,
 in the order the requests were yielded, and ``run_trials_batch`` equals the scalar
@@ -37,6 +38,7 @@ import numpy as np
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_HARDWARE
 from striatal.sim import kernel
+from striatal.sim.learned import LearnedPlant
 from striatal.sim.noise import row_parts, run_parts
 from striatal.sim.rollout import (
     TrialOutcome,
@@ -101,7 +103,8 @@ def run_requests(
 
     The action noise of each request is drawn from its generator in the order of
     ``requests`` (what :func:`drive` would draw); traces are updated in place. "simd"
-    runs a group on the SIMD kernel unless its motor or track needs the exact one.
+    runs a group on the SIMD kernel unless its motor or track needs the exact one;
+    trials on a learned plant always run on the exact learned batch kernel.
     """
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
@@ -132,6 +135,9 @@ def run_requests(
         try:
             if critic is not None:
                 kernel.run_online_trials_batch(*args[:7], critic, args.outs)
+            elif isinstance(first.plant, LearnedPlant):
+                assert first.plant.dynamics is not None
+                kernel.run_learned_trials_batch(first.plant.dynamics.args, *args)
             elif engine == "simd" and first.hardware == CHAPTER_HARDWARE:
                 # a block per thread when the trials are few
                 block = -(-len(group) // numba.get_num_threads())

@@ -7,7 +7,9 @@ pole mass, length, gravity) are what the controller believes, for eq 12 and the
 energy of eqs 15-16: the learned model has none. Every trial on it holds the motor
 force over a step, as the model was fitted. :func:`striatal.sim.rollout.run_trial`,
 :func:`~striatal.sim.rollout.simulate` and :class:`~striatal.sim.rollout.TrialRequest`
-run it on :func:`striatal.sim.kernel.run_learned_trial`; the batch kernels do not take it.
+run it on :func:`striatal.sim.kernel.run_learned_trial`, and
+:func:`striatal.sim.batch.run_requests` runs trials on the same model in one call of
+:func:`striatal.sim.kernel.run_learned_trials_batch`.
 
 A model may also be *conditioned* on the plant's pole mass and length factors
 (:class:`ConditionedDynamics`: two more inputs, constant over a trial). At given
@@ -19,6 +21,7 @@ like a physical plant, the controller still believing the same parameters.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -78,6 +81,18 @@ class LearnedDynamics:
                 intercept=np.ascontiguousarray(a.intercept[k : k + 1]),
             )
         )
+
+    def gained(self, theta: float) -> LearnedDynamics:
+        """The model with its angular acceleration (theta_ddot: readout and intercept)
+        multiplied by ``theta`` > 0: a pole that answers the same inputs more or less
+        strongly than the data say. No cart-pole equation enters."""
+        if not (math.isfinite(theta) and theta > 0):
+            raise ParameterError(f"the gain must be finite and > 0, got {theta}")
+        a = self.args
+        coef, intercept = a.coef.copy(), a.intercept.copy()
+        coef[:, 1, :] *= theta
+        intercept[:, 1] *= theta
+        return LearnedDynamics(a._replace(coef=coef, intercept=intercept))
 
     def mean(self) -> LearnedDynamics:
         """The members' mean as one member (the same predictions, one evaluation a step:

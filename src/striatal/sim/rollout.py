@@ -463,9 +463,12 @@ class TrialRequest:
 
     def batch_key(self) -> tuple[object, ...] | None:
         """What a batched kernel call shares with this trial; None if it runs alone
-        (sensor noise: the batch kernel has none; a learned plant: it takes none; a
-        recorded trial: it records none)."""
-        if self.sensor.active or self.record or isinstance(self.plant, LearnedPlant):
+        (sensor noise: the batch kernel has none; a recorded trial: it records none; an
+        online trial on a learned plant: no kernel runs it). The plant is part of the key,
+        so learned plants share a call only with the same model (a learned model is
+        equal only to itself)."""
+        learned = isinstance(self.plant, LearnedPlant)
+        if self.sensor.active or self.record or (learned and self.online is not None):
             return None
         c = self.controller
         return (
@@ -497,11 +500,10 @@ def batch_args(
     ``noise`` (B, n_draws): their action normals (None: the mean policy). Each row of
     the gains, theta_c and traces is its request's; the traces are copies (write them
     back with :func:`striatal.sim.batch.run_requests`). The kernel writes
-    ``args.outs`` (B, N_OUT).
+    ``args.outs`` (B, N_OUT). On a learned plant the arguments follow its model in
+    :func:`striatal.sim.kernel.run_learned_trials_batch` (``args.plant.plant`` unused).
     """
     first = requests[0]
-    if isinstance(first.plant, LearnedPlant):
-        raise ParameterError("the batch kernels run physical plants only, not a learned plant")
     B = len(requests)
     sim, hardware = first.sim, first.hardware
     return kernel.BatchArgs(

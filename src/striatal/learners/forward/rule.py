@@ -11,7 +11,8 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    (state, held motor force, next state) fit the forward model ``forward_model``:
    "structured", :func:`striatal.learners.forward.model.fit_structured` (the cart-pole's
    equations with cart mass, pole mass, length and cart friction unknown, started from
-   the nominal :class:`~striatal.params.Plant`, gravity known), or "generic",
+   the nominal :class:`~striatal.params.Plant`, gravity known), or "generic" (and
+   "generic-gains", the same model),
    :func:`~striatal.learners.forward.model.fit_generic` (no cart-pole equations: an
    ensemble of polynomial ridge regressions, run as a
    :class:`~striatal.sim.learned.LearnedPlant`).
@@ -23,8 +24,10 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    also pass the set on each plant the fit cannot rule out (:meth:`StructuredFit.family`).
    Generic: on the ensemble's mean, with ``robust`` pgpe's plain preset (a learned plant
    has no pole mass to jitter); a candidate must also pass every start of the robustness
-   set on each member (:func:`striatal.sim.robust.family_check`). Else imagination goes
-   on. The candidate, found or not, is the next real trial's controller.
+   set on each member (:func:`striatal.sim.robust.family_check`), and with
+   "generic-gains" on the mean with its angular acceleration times each of
+   :data:`RESPONSE_GAINS`. Else imagination goes on. The candidate, found or not, is the
+   next real trial's controller.
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
 imagined simulations and simulated seconds; history column ``imagined``), never in
@@ -69,6 +72,7 @@ from striatal.sim.rollout import Protocol
 __all__ = [
     "FORWARD",
     "MAX_TRANSITIONS",
+    "RESPONSE_GAINS",
     "ForwardConfig",
     "ForwardRule",
     "World",
@@ -88,6 +92,11 @@ _WIDTH = 11
 
 #: The rule that learns in imagination.
 INNER = "pgpe"
+#: The gains on the generic model's angular acceleration that ``generic-gains`` also
+#: checks a candidate on: the robustness set's pole lengths x1.2 and x0.8 read as a pole
+#: that turns 1/1.2 and 1/0.8 as fast (the one piece of prior knowledge it adds: a
+#: longer pole turns slower; its pole masses are left to the real checks).
+RESPONSE_GAINS = (1.0 / 1.2, 1.0 / 0.8)
 
 
 @dataclass(frozen=True)
@@ -179,10 +188,12 @@ def structured_world(fit: StructuredFit) -> World:
     return World(fit.plant, fit.family(), jitter=True, family_model=None)
 
 
-def generic_world(model: GenericModel, believed: Plant) -> World:
+def generic_world(model: GenericModel, believed: Plant, gains: tuple[float, ...] = ()) -> World:
     """The generic ensemble, the controller believing ``believed`` throughout: learn on
-    its mean (one evaluation a step), check on each member (the ensemble's doubt). A
-    model conditioned on the plant factors is also checked on its mean at each plant
+    its mean (one evaluation a step), check on each member (the ensemble's doubt) and on
+    its mean with the angular acceleration times each of ``gains``
+    (:meth:`~striatal.sim.learned.LearnedDynamics.gained`; not for a conditioned model).
+    A model conditioned on the plant factors is also checked on its mean at each plant
     the data hold (the corners the real checks ran), and a candidate a family plant
     refuses is learned on that plant next (``rehearse``)."""
     if model.conditioned:
@@ -197,7 +208,9 @@ def generic_world(model: GenericModel, believed: Plant) -> World:
         return World(mean, members + corners, False, believed, rehearse=True)
     dynamics = model.dynamics()
     members = tuple(LearnedPlant.of(dynamics.member(k), believed) for k in range(dynamics.members))
-    return World(LearnedPlant.of(dynamics.mean(), believed), members, False, believed)
+    average = dynamics.mean()
+    gained = tuple(LearnedPlant.of(average.gained(g), believed) for g in gains)
+    return World(LearnedPlant.of(average, believed), members + gained, False, believed)
 
 
 def imagine_steps(
@@ -341,7 +354,7 @@ class ForwardRule(Rule):
             sim = context.sim
             template = replace(context.template, gains=W, theta_c=theta_c)
             seed = int(plan.scratch["seed"][0])
-            if c.forward_model in ("generic", "conditioned"):
+            if c.forward_model != "structured":
                 transitions = Transitions(
                     data[:, :4], data[:, 4], data[:, 5:9], sim.dt, data[:, 9:]
                 )
@@ -350,7 +363,8 @@ class ForwardRule(Rule):
                     np.random.default_rng(seed),
                     conditioned=c.forward_model == "conditioned",
                 )
-                world = generic_world(model, believed_plant(context.plant))
+                gains = RESPONSE_GAINS if c.forward_model == "generic-gains" else ()
+                world = generic_world(model, believed_plant(context.plant), gains)
                 fitted = (math.nan, math.nan)
             else:
                 nominal = (data[:, 9:] == 1.0).all(axis=1)

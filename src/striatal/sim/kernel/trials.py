@@ -14,7 +14,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from striatal.sim.kernel.learned import LearnedArgs, learned_step
+from striatal.sim.kernel.learned import LearnedArgs, LearnedStep, learned_step_of, step_into
 from striatal.sim.kernel.libm import wrap_angle
 from striatal.sim.kernel.plant import (
     PlantArgs,
@@ -75,6 +75,7 @@ __all__ = [
     "load_trace",
     "next_action",
     "run_learned_trial",
+    "run_learned_trials_batch",
     "run_trial",
     "run_trials_batch",
     "store_trace",
@@ -171,7 +172,8 @@ class TrialArgs(NamedTuple):
 
 class BatchArgs(NamedTuple):
     """The arguments of the batch kernels (:func:`run_trials_batch`,
-    :func:`striatal.sim.kernel.run_trials_lockstep`), in their order: row b of
+    :func:`striatal.sim.kernel.run_trials_lockstep`, after the model
+    :func:`run_learned_trials_batch`), in their order: row b of
     ``states0`` (B, 4), ``gains``, ``noise`` (B, n_draws), ``learning.trace`` (B, 6) and
     ``outs`` (B, N_OUT) is trial b's; :func:`striatal.sim.rollout.batch_args` builds them."""
 
@@ -464,17 +466,18 @@ def run_trial(
 
 @njit(cache=True)
 def run_learned_trial(model: LearnedArgs, args: TrialArgs) -> None:
-    """:func:`run_trial` on a learned plant: each step is :func:`learned_step` of ``model``
-    under the held motor force (eq 12 with ``plant.model``, clipped to
-    ``plant.max_force``); ``args.plant.plant`` is not used."""
-    trial_loop(learned_step, model, args)
+    """:func:`run_trial` on a learned plant: each step is
+    :func:`~striatal.sim.kernel.learned_step` of ``model`` (:func:`step_into`, with one
+    :func:`learned_step_of` for the trial) under the held motor force (eq 12 with ``plant.model``,
+    clipped to ``plant.max_force``); ``args.plant.plant`` is not used."""
+    trial_loop(step_into, learned_step_of(model), args)
 
 
 @njit(cache=True, inline="always")
-def trial_loop(step: Callable[..., State], dynamics: int | LearnedArgs, args: TrialArgs) -> None:
+def trial_loop(step: Callable[..., State], dynamics: int | LearnedStep, args: TrialArgs) -> None:
     """The trial loop of :func:`run_trial` with the plant's step ``step(state, inputs, pt,
     dynamics)`` (:data:`State`, :data:`StepInputs`, :class:`PlantTerms`, and what the step
-    carries besides: a learned plant's :class:`LearnedArgs`, 0 for the physical plant's),
+    carries besides: a learned plant's :class:`LearnedStep`, 0 for the physical plant's),
     returning the next :data:`State`: the one loop of a scalar trial, whatever
     integrates the plant. Inlined where it is called, so that each caller compiles it
     with its step function resolved (a step passed at run time cannot be cached)."""
@@ -566,4 +569,40 @@ def run_trials_batch(
             NoiseArgs(noise[b], no_sensor, 0.0, 0.0),
             TraceArgs(learning.gamma, learning.trace[b]),
             Buffers(outs[b], no_traj),
+        )
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def run_learned_trials_batch(
+    model: LearnedArgs,
+    states0: np.ndarray,
+    gains: Gains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
+    noise: np.ndarray,
+    learning: TraceArgs,
+    outs: np.ndarray,
+) -> None:
+    """:func:`run_learned_trial` of one learned ``model`` for B independent trials at
+    once, parallel over cores: :func:`run_trials_batch` with each step the learned
+    one (each trial with its own scratch table). The arguments after ``model`` are
+    :func:`run_trials_batch`'s (:func:`striatal.sim.rollout.batch_args`); no sensor
+    noise, nothing recorded. The result of each row equals the scalar kernel's bit for
+    bit."""
+    no_sensor = np.empty((0, 2))
+    no_traj = np.empty((0, N_TRAJ))
+    for b in prange(states0.shape[0]):
+        run_learned_trial(
+            model,
+            TrialArgs(
+                states0[b],
+                Gains(gains.W[b], gains.theta_c[b]),
+                plant,
+                control,
+                protocol,
+                NoiseArgs(noise[b], no_sensor, 0.0, 0.0),
+                TraceArgs(learning.gamma, learning.trace[b]),
+                Buffers(outs[b], no_traj),
+            ),
         )
