@@ -3,7 +3,7 @@
 Both sides: the chapter's W(0) and theta_c(0) = 0.6, the chapter learner's options
 (alpha 5, gamma 0.999, b = 0, sparse reward of eq 25), ``--trials`` trials of
 ``--duration`` s from theta0 = 3.12, per seed. ``--side network`` runs
-:func:`striatal.neural.learn.learn_network` (seed: network and exploration noise);
+:func:`striatal.neural.driver.learn_network` (seed: network and exploration noise);
 ``--side rate`` runs ``striatal.train`` (seed: its policy noise). One JSON line per
 trial is appended to ``--out`` as it ends, then one line with the final W. Example
 (what docs/neural.md reports):
@@ -46,7 +46,7 @@ def append(path: Path, row: dict[str, Any]) -> None:
 
 
 def run_network_side(args: argparse.Namespace, seed: int) -> None:
-    from striatal.neural.learn import NeuralTrial, learn_network
+    from striatal.neural.driver import NeuralTrial, learn_network
     from striatal.neural.network import NetworkConfig
     from striatal.params import Plant
 
@@ -409,7 +409,14 @@ def main() -> int:
     parser.add_argument("--trials", type=int, default=20)
     parser.add_argument("--duration", type=float, default=30.0)
     parser.add_argument("--neurons", type=int, default=1500)
-    parser.add_argument("--alpha", type=float, default=5.0)
+    parser.add_argument(
+        "--alpha",
+        type=float,
+        nargs="+",
+        default=[5.0],
+        help="learning rate(s); with several, each seed runs every one in turn (so an "
+        "interrupted run leaves the arms with the same seeds)",
+    )
     parser.add_argument("--out", type=Path)
     parser.add_argument("--figure", type=Path, help="with --summary: also draw W per trial here")
     parser.add_argument(
@@ -429,9 +436,10 @@ def main() -> int:
     if args.out is None or args.side is None:
         parser.error("--side and --out are required")
     args.out.parent.mkdir(parents=True, exist_ok=True)
+    side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
     for seed in args.seeds:
-        side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
-        side[args.side](args, seed)
+        for alpha in args.alpha:
+            side[args.side](argparse.Namespace(**{**vars(args), "alpha": alpha}), seed)
     return 0
 
 

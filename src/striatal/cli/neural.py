@@ -300,7 +300,7 @@ def run_learning(
 ) -> int:
     """``--learn``: the dopamine stage over trials; one line per trial, or one JSON object."""
     from striatal.io.files import dumps_json, write_csv, write_json
-    from striatal.neural.learn import NeuralTrial, learn_network
+    from striatal.neural.driver import NeuralTrial, learn_network
 
     if args.circuit_figure is not None:
         raise ParameterError("--circuit-figure cannot be combined with --learn")
