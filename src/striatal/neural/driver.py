@@ -45,6 +45,7 @@ __all__ = [
     "NetworkTrial",
     "NeuralLearning",
     "NeuralTrial",
+    "check_network_learning",
     "learn_network",
     "learn_with_rule",
     "network_drive",
@@ -154,6 +155,22 @@ def network_drive(
         return stop.value  # type: ignore[no-any-return]
 
 
+def check_network_learning(config: LearnerConfig, sim: Simulation) -> None:
+    """ParameterError (one line) unless the network can run ``config``'s learning trials
+    of ``sim``: the sparse reward of eq 25, a rule whose trials the loop yields, trials of
+    at most 30 s (the check of eq 24 at 30 s is not applied to the network)."""
+    if getattr(rule_of(config), "runs_trial", False):
+        raise ParameterError(f"learner {config.learner!r} runs its own trials: not on the network")
+    if config.reward != "sparse":
+        raise ParameterError("the network's trials give the sparse reward of eq 25 only")
+    check_time = Protocol().check_time
+    if 0.0 <= check_time < sim.duration or not math.isfinite(sim.duration):
+        raise ParameterError(
+            f"learning trials of the network must be at most {check_time:g} s "
+            f"(the eq-24 check is not applied to it), got {sim.duration:g}"
+        )
+
+
 def learn_with_rule(
     learner: str,
     controller: Controller,
@@ -181,15 +198,8 @@ def learn_with_rule(
     if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
         raise ParameterError(f"trials must be a whole number >= 1, got {trials!r}")
     lc: LearnerConfig = default_config(learner, reward="sparse", max_trials=trials, **options)
-    rule = rule_of(lc)
-    if getattr(rule, "runs_trial", False):
-        raise ParameterError(f"learner {learner!r} runs its own trials: not on the network")
+    check_network_learning(lc, sim)
     protocol = Protocol()
-    if 0.0 <= protocol.check_time < sim.duration or not math.isfinite(sim.duration):
-        raise ParameterError(
-            f"learning trials of the network must be at most {protocol.check_time:g} s "
-            f"(the eq-24 check is not applied to it), got {sim.duration:g}"
-        )
     if state is None:
         state = initial_state(controller.gains, controller.theta_c, seed)
     template = replace(controller)
