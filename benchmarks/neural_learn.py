@@ -162,7 +162,7 @@ def run_rate_side(args: argparse.Namespace, seed: int) -> None:
     import striatal
 
     base = {
-        "side": "rate",
+        "side": "rate" if args.learner == "chapter" else f"rate-{args.learner}",
         "seed": seed,
         "duration": args.duration,
         "alpha": args.alpha,
@@ -186,14 +186,17 @@ def run_rate_side(args: argparse.Namespace, seed: int) -> None:
 
     from striatal.experiments.spec import initial_gains
 
+    control = {"sigma_rate": 0.0} if args.learner == "pgpe" and args.alpha == 0 else {}
     run = striatal.train(
-        "chapter",
+        args.learner,
         init_gains=initial_gains(args.init, seed),
         seed=seed,
         sim=Simulation(duration=args.duration),
         max_trials=args.trials,
         alpha=args.alpha,
+        reward="sparse",
         on_trial=on_trial,
+        **control,
     )
     append(
         args.out,
@@ -251,9 +254,13 @@ def summarize(paths: list[Path]) -> None:
 
 
 def _groups(paths: list[Path], max_trial: int) -> dict[str, dict[int, list[bool]]]:
-    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial."""
+    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial.
+
+    A run that passed the chapter's success test ended there (as ``striatal train`` does);
+    its later trials count as +10 (the success box at T_f lies inside eq 25's)."""
     rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
     out: dict[str, dict[int, list[bool]]] = {}
+    solved: dict[str, set[int]] = {}
     for r in sorted(
         (r for r in rows if r["kind"] == "trial" and r["trial"] <= max_trial),
         key=lambda r: r["trial"],
@@ -263,9 +270,14 @@ def _groups(paths: list[Path], max_trial: int) -> dict[str, dict[int, list[bool]
             r["side"] if simulator == "nengo" or r["side"] != "network" else f"network-{simulator}"
         )
         init = "" if r.get("init", "chapter") == "chapter" else f" init={r['init']}"
-        out.setdefault(f"{side}{init} alpha={r['alpha']:g}", {}).setdefault(r["seed"], []).append(
-            r["reward"] > 0
-        )
+        name = f"{side}{init} alpha={r['alpha']:g}"
+        out.setdefault(name, {}).setdefault(r["seed"], []).append(r["reward"] > 0)
+        if r["success"]:
+            solved.setdefault(name, set()).add(r["seed"])
+    for name, seeds in solved.items():
+        for s in seeds:
+            got = out[name][s]
+            got.extend([True] * (max_trial - len(got)))
     return out
 
 
@@ -398,7 +410,12 @@ def main() -> int:
         "files (with --figure: the learning curves) and stop",
     )
     parser.add_argument("--side", choices=("network", "rate", "loop"))
-    parser.add_argument("--learner", default="pgpe", help="with --side loop: the rule")
+    parser.add_argument(
+        "--learner",
+        default=None,
+        help="the rule: with --side loop (default pgpe) or --side rate (default chapter; "
+        "another rule's side is named rate-RULE)",
+    )
     parser.add_argument(
         "--init",
         choices=("chapter", "random"),
@@ -437,6 +454,8 @@ def main() -> int:
         parser.error("--side and --out are required")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
+    if args.learner is None:
+        args.learner = "pgpe" if args.side == "loop" else "chapter"
     for seed in args.seeds:
         for alpha in args.alpha:
             side[args.side](argparse.Namespace(**{**vars(args), "alpha": alpha}), seed)
