@@ -303,9 +303,30 @@ def compare(paths: list[Path], max_trial: int) -> None:
             f"(95 % Wilson {ci.low or 0:.2f}-{ci.high or 0:.2f}); last trial +10 in "
             f"{sum(last)}/{len(last)} seeds"
         )
+        third = min(len(v) for v in seeds.values()) // 3
+        if third >= 1:
+            parts = []
+            for label, cut in (("first", slice(0, third)), ("last", slice(-third, None))):
+                kk = sum(sum(v[cut]) for v in seeds.values())
+                nn = third * len(seeds)
+                c = wilson_interval(kk, nn)
+                parts.append(
+                    f"{label} {third} trials {kk}/{nn} = {kk / nn:.2f} "
+                    f"({c.low or 0:.2f}-{c.high or 0:.2f})"
+                )
+            print("  +10 in the " + ", in the ".join(parts))
+
+    def rule(side: str) -> str:
+        return "pgpe" if "pgpe" in side else "chapter"
+
+    def init(side: str) -> str:
+        return side.split(" init=")[1] if " init=" in side else "chapter"
+
     for a, b in itertools.combinations(sorted(groups), 2):
         sa, sb = a.split(" alpha="), b.split(" alpha=")
-        if sa[0] != sb[0] and sa[1] != sb[1]:
+        same_arm_pair = sa[0] == sb[0]  # learning against its control
+        same_rule = sa[1] == sb[1] and rule(sa[0]) == rule(sb[0]) and init(sa[0]) == init(sb[0])
+        if not (same_arm_pair or same_rule):  # or the network against the rate learner
             continue
         shared = sorted(set(groups[a]) & set(groups[b]))
         shared = [s for s in shared if len(groups[a][s]) == len(groups[b][s])]
