@@ -5,14 +5,18 @@ rule plans a trial, the loop yields it as a :class:`~striatal.sim.batch.TrialReq
 a driver runs it, the rule updates. :func:`network_drive` is a driver that runs each
 request on the network (nengo or the Brian2 program) instead of the kernel, so any rule
 whose trials the loop yields (the chapter's, pgpe, ...) learns the pathway weights with
-its own update; :func:`learn_with_rule` runs a learning run that way.
+its own update; :func:`learn_with_rule` runs a learning run that way, and
+:func:`learn_network` is its chapter rule with each trial's network run recorded (the
+dopamine stage of :mod:`striatal.neural.learn`).
 
 What the network gives the loop: the action noise drawn from the request's generator
 as the kernel draws it (``rollout.noise_arrays``), so the generator's state after a
 trial is the kernel's; the eligibility trace D of eq 3 from the pathways' traces
 (``D <- gamma^n D + (J^T E, E_6)``, :mod:`striatal.neural.learn`); the outcome with the
-reward of eq 25 at T_f. Requests the network cannot run (another plant, a model, sensor
-noise, the chapter's printed eligibility, a motor limit, held actions) are refused.
+reward of eq 25 at T_f. The request's own gains and threshold (``TrialRequest.W``,
+``.threshold``) set the pathways and the switch. Requests the network cannot run (a
+model, sensor noise, the chapter's printed eligibility, a motor limit, held actions,
+online learning, another start) are refused.
 """
 
 from __future__ import annotations
