@@ -170,3 +170,22 @@ def test_worker_processes_give_the_same_rows(finished: Path, tmp_path: Path) -> 
                          "--workers", "2", "--out", str(out))  # fmt: skip
     assert ran.rc == 0, ran.err
     assert without_time(rows(out)) == without_time(rows(finished))
+
+
+def test_the_command_offers_the_rules_the_network_runs() -> None:
+    from striatal.cli.neural import NETWORK_LEARNERS
+    from striatal.errors import ParameterError
+    from striatal.neural.driver import NETWORK_RULES
+
+    assert NETWORK_LEARNERS == NETWORK_RULES
+    for learner in ("ac", "forward"):
+        with pytest.raises(ParameterError, match="cannot learn on the network"):
+            learn_with_rule(
+                learner,
+                Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
+                Plant(),
+                Simulation(duration=0.6),
+                NetworkConfig(neurons=300),
+                0,
+                trials=1,
+            )

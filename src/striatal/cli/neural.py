@@ -16,7 +16,7 @@ from striatal.params import CHAPTER_THETA0, Simulation, SuccessTest, check_seed
 
 #: The simulators of ``--simulator`` (``striatal.neural.run.SIMULATORS``, which imports numpy).
 SIMULATORS = ("nengo", "brian2")
-#: The rules ``--learn --seeds`` offers: those whose trials the learning loop yields.
+#: The rules ``--learn --seeds`` offers (``striatal.neural.driver.NETWORK_RULES``, tested).
 NETWORK_LEARNERS = ("chapter", "pgpe", "rpe")
 #: What the first run of a network size and run length on Brian2 says.
 COMPILE_NOTICE = (
@@ -111,7 +111,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="slope [1/rad] of the criterion clip(gamma (theta_c - |theta|), -1, 1)",
     )
     net.add_argument("--synapse", type=float, default=0.005, help="synaptic time constant [s]")
-    net.add_argument("--seed", type=int, default=0, help="network seed (encoders, gains, biases)")
+    net.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="network seed (encoders, gains, biases) and, with --learn, the exploration's; "
+        "with --seeds, the root of the runs' seeds",
+    )
     net.add_argument(
         "--simulator",
         choices=SIMULATORS,

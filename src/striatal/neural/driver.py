@@ -31,7 +31,7 @@ from typing import TypeVar
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.learners import default_config, rule_of
+from striatal.learners import default_config
 from striatal.learners.common import initial_state
 from striatal.learners.config import LearnerConfig
 from striatal.learners.loop import learning_steps
@@ -46,6 +46,7 @@ from striatal.sim.batch import Steps, TrialRequest
 from striatal.sim.rollout import Protocol, TrialOutcome
 
 __all__ = [
+    "NETWORK_RULES",
     "NetworkTrial",
     "NeuralLearning",
     "NeuralTrial",
@@ -57,6 +58,11 @@ __all__ = [
 ]
 
 T = TypeVar("T")
+
+#: The rules whose every trial the network runs: the Gaussian policy of eq 5 per step
+#: (chapter, rpe) or noise-free candidates (pgpe). ac learns within its trial and forward
+#: imagines on a model: their requests are not the network's.
+NETWORK_RULES: tuple[str, ...] = ("chapter", "pgpe", "rpe")
 
 
 @dataclass(frozen=True)
@@ -161,10 +167,13 @@ def network_drive(
 
 def check_network_learning(config: LearnerConfig, sim: Simulation) -> None:
     """ParameterError (one line) unless the network can run ``config``'s learning trials
-    of ``sim``: the sparse reward of eq 25, a rule whose trials the loop yields, trials of
+    of ``sim``: the sparse reward of eq 25, a rule of :data:`NETWORK_RULES`, trials of
     at most 30 s (the check of eq 24 at 30 s is not applied to the network)."""
-    if getattr(rule_of(config), "runs_trial", False):
-        raise ParameterError(f"learner {config.learner!r} runs its own trials: not on the network")
+    if config.learner not in NETWORK_RULES:
+        raise ParameterError(
+            f"learner {config.learner!r} cannot learn on the network (it learns within the "
+            f"trial or on a model); choose from {', '.join(NETWORK_RULES)}"
+        )
     if config.reward != "sparse":
         raise ParameterError("the network's trials give the sparse reward of eq 25 only")
     check_time = Protocol().check_time
