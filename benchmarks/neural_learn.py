@@ -3,7 +3,7 @@
 Both sides: the chapter's W(0) and theta_c(0) = 0.6, the chapter learner's options
 (alpha 5, gamma 0.999, b = 0, sparse reward of eq 25), ``--trials`` trials of
 ``--duration`` s from theta0 = 3.12, per seed. ``--side network`` runs
-:func:`striatal.neural.learn.learn_network` (seed: network and exploration noise);
+:func:`striatal.neural.driver.learn_network` (seed: network and exploration noise);
 ``--side rate`` runs ``striatal.train`` (seed: its policy noise). One JSON line per
 trial is appended to ``--out`` as it ends, then one line with the final W. Example
 (what docs/neural.md reports):
@@ -46,7 +46,7 @@ def append(path: Path, row: dict[str, Any]) -> None:
 
 
 def run_network_side(args: argparse.Namespace, seed: int) -> None:
-    from striatal.neural.learn import NeuralTrial, learn_network
+    from striatal.neural.driver import NeuralTrial, learn_network
     from striatal.neural.network import NetworkConfig
     from striatal.params import Plant
 
@@ -162,7 +162,7 @@ def run_rate_side(args: argparse.Namespace, seed: int) -> None:
     import striatal
 
     base = {
-        "side": "rate",
+        "side": "rate" if args.learner == "chapter" else f"rate-{args.learner}",
         "seed": seed,
         "duration": args.duration,
         "alpha": args.alpha,
@@ -186,14 +186,17 @@ def run_rate_side(args: argparse.Namespace, seed: int) -> None:
 
     from striatal.experiments.spec import initial_gains
 
+    control = {"sigma_rate": 0.0} if args.learner == "pgpe" and args.alpha == 0 else {}
     run = striatal.train(
-        "chapter",
+        args.learner,
         init_gains=initial_gains(args.init, seed),
         seed=seed,
         sim=Simulation(duration=args.duration),
         max_trials=args.trials,
         alpha=args.alpha,
+        reward="sparse",
         on_trial=on_trial,
+        **control,
     )
     append(
         args.out,
@@ -251,9 +254,13 @@ def summarize(paths: list[Path]) -> None:
 
 
 def _groups(paths: list[Path], max_trial: int) -> dict[str, dict[int, list[bool]]]:
-    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial."""
+    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial.
+
+    A run that passed the chapter's success test ended there (as ``striatal train`` does);
+    its later trials count as +10 (the success box at T_f lies inside eq 25's)."""
     rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
     out: dict[str, dict[int, list[bool]]] = {}
+    solved: dict[str, set[int]] = {}
     for r in sorted(
         (r for r in rows if r["kind"] == "trial" and r["trial"] <= max_trial),
         key=lambda r: r["trial"],
@@ -263,9 +270,14 @@ def _groups(paths: list[Path], max_trial: int) -> dict[str, dict[int, list[bool]
             r["side"] if simulator == "nengo" or r["side"] != "network" else f"network-{simulator}"
         )
         init = "" if r.get("init", "chapter") == "chapter" else f" init={r['init']}"
-        out.setdefault(f"{side}{init} alpha={r['alpha']:g}", {}).setdefault(r["seed"], []).append(
-            r["reward"] > 0
-        )
+        name = f"{side}{init} alpha={r['alpha']:g}"
+        out.setdefault(name, {}).setdefault(r["seed"], []).append(r["reward"] > 0)
+        if r["success"]:
+            solved.setdefault(name, set()).add(r["seed"])
+    for name, seeds in solved.items():
+        for s in seeds:
+            got = out[name][s]
+            got.extend([True] * (max_trial - len(got)))
     return out
 
 
@@ -291,9 +303,30 @@ def compare(paths: list[Path], max_trial: int) -> None:
             f"(95 % Wilson {ci.low or 0:.2f}-{ci.high or 0:.2f}); last trial +10 in "
             f"{sum(last)}/{len(last)} seeds"
         )
+        third = min(len(v) for v in seeds.values()) // 3
+        if third >= 1:
+            parts = []
+            for label, cut in (("first", slice(0, third)), ("last", slice(-third, None))):
+                kk = sum(sum(v[cut]) for v in seeds.values())
+                nn = third * len(seeds)
+                c = wilson_interval(kk, nn)
+                parts.append(
+                    f"{label} {third} trials {kk}/{nn} = {kk / nn:.2f} "
+                    f"({c.low or 0:.2f}-{c.high or 0:.2f})"
+                )
+            print("  +10 in the " + ", in the ".join(parts))
+
+    def rule(side: str) -> str:
+        return "pgpe" if "pgpe" in side else "chapter"
+
+    def init(side: str) -> str:
+        return side.split(" init=")[1] if " init=" in side else "chapter"
+
     for a, b in itertools.combinations(sorted(groups), 2):
         sa, sb = a.split(" alpha="), b.split(" alpha=")
-        if sa[0] != sb[0] and sa[1] != sb[1]:
+        same_arm_pair = sa[0] == sb[0]  # learning against its control
+        same_rule = sa[1] == sb[1] and rule(sa[0]) == rule(sb[0]) and init(sa[0]) == init(sb[0])
+        if not (same_arm_pair or same_rule):  # or the network against the rate learner
             continue
         shared = sorted(set(groups[a]) & set(groups[b]))
         shared = [s for s in shared if len(groups[a][s]) == len(groups[b][s])]
@@ -398,7 +431,12 @@ def main() -> int:
         "files (with --figure: the learning curves) and stop",
     )
     parser.add_argument("--side", choices=("network", "rate", "loop"))
-    parser.add_argument("--learner", default="pgpe", help="with --side loop: the rule")
+    parser.add_argument(
+        "--learner",
+        default=None,
+        help="the rule: with --side loop (default pgpe) or --side rate (default chapter; "
+        "another rule's side is named rate-RULE)",
+    )
     parser.add_argument(
         "--init",
         choices=("chapter", "random"),
@@ -409,7 +447,14 @@ def main() -> int:
     parser.add_argument("--trials", type=int, default=20)
     parser.add_argument("--duration", type=float, default=30.0)
     parser.add_argument("--neurons", type=int, default=1500)
-    parser.add_argument("--alpha", type=float, default=5.0)
+    parser.add_argument(
+        "--alpha",
+        type=float,
+        nargs="+",
+        default=[5.0],
+        help="learning rate(s); with several, each seed runs every one in turn (so an "
+        "interrupted run leaves the arms with the same seeds)",
+    )
     parser.add_argument("--out", type=Path)
     parser.add_argument("--figure", type=Path, help="with --summary: also draw W per trial here")
     parser.add_argument(
@@ -429,9 +474,12 @@ def main() -> int:
     if args.out is None or args.side is None:
         parser.error("--side and --out are required")
     args.out.parent.mkdir(parents=True, exist_ok=True)
+    side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
+    if args.learner is None:
+        args.learner = "pgpe" if args.side == "loop" else "chapter"
     for seed in args.seeds:
-        side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
-        side[args.side](args, seed)
+        for alpha in args.alpha:
+            side[args.side](argparse.Namespace(**{**vars(args), "alpha": alpha}), seed)
     return 0
 
 

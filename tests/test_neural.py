@@ -306,13 +306,13 @@ def test_a_seed_gives_the_same_bits_run_after_run() -> None:
 # --------------------------------------------------------------------------- dopamine stage
 
 from striatal.learners.chapter import gain_update  # noqa: E402
+from striatal.neural.driver import learn_network  # noqa: E402
 from striatal.neural.learn import (  # noqa: E402
     PATHWAYS,
     Eligibility,
     coefficient_jacobian,
     gain_eligibility,
     gains_from_transforms,
-    learn_network,
     network_transforms,
     pathway_coefficients,
 )
@@ -502,6 +502,36 @@ def test_cli_learn_json_and_files(tmp_path, capsys) -> None:
     ],
 )
 def test_cli_learn_bad_input_exits_2(argv, capsys) -> None:
-    assert main(["neural", *argv]) == 2
+    try:  # the parser's refusals (--trials 0) exit from it, the command's return 2
+        code = main(["neural", *argv])
+    except SystemExit as stop:
+        code = stop.code
+    assert code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1
+
+
+def test_a_request_runs_on_the_network_with_its_own_gains_and_threshold(monkeypatch) -> None:
+    """The learning loop passes a trial's W and theta_c in the request (``gains``,
+    ``theta_c``), not in its controller template: the network runs with those."""
+    from striatal.neural import driver
+    from striatal.sim.rollout import Protocol, TrialRequest
+
+    class RanError(Exception):
+        pass
+
+    seen: list[Controller] = []
+
+    def fake_run(controller: Controller, *args: object, **kwargs: object) -> None:
+        seen.append(controller)
+        raise RanError
+
+    monkeypatch.setattr(driver, "run_network", fake_run)
+    W = (0.9, -0.2, -0.7, 0.4, 0.6, 0.3)
+    r = TrialRequest(PLANT, START, SHORT, Protocol(), gains=np.array(W), theta_c=0.75)
+    with pytest.raises(RanError):
+        driver.run_request(r, NetworkConfig(neurons=300), 0, "nengo")
+    assert seen[0].gains == W and seen[0].theta_c == 0.75
+    moved = TrialRequest(PLANT, START, SHORT, Protocol(), state0=np.zeros(4))
+    with pytest.raises(ParameterError, match="chapter's trial only"):
+        driver.run_request(moved, NetworkConfig(neurons=300), 0, "nengo")

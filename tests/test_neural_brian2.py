@@ -32,13 +32,9 @@ b2 = pytest.importorskip("brian2")
 from brian2.devices.device import reset_device  # noqa: E402
 
 from striatal.neural.brian import BRIAN2_INSTALL, FORCE_OF_U, PLANT_EQUATIONS  # noqa: E402
+from striatal.neural.driver import NeuralLearning, learn_network  # noqa: E402
 from striatal.neural.interpret import pathway_coefficients  # noqa: E402
-from striatal.neural.learn import (  # noqa: E402
-    Eligibility,
-    NeuralLearning,
-    gain_eligibility,
-    learn_network,
-)
+from striatal.neural.learn import Eligibility, gain_eligibility  # noqa: E402
 from striatal.neural.network import NetworkConfig  # noqa: E402
 from striatal.neural.run import NeuralRun, frozen_at_fault, run_network  # noqa: E402
 from striatal.neural.translate import translate  # noqa: E402

@@ -7,13 +7,17 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from striatal.cli import guards, progress
+from striatal import arguments
+from striatal.cli import options, progress
 from striatal.cli.helpformat import default_note
+from striatal.cli.lists import CommaList
 from striatal.errors import ParameterError
 from striatal.params import CHAPTER_THETA0, Simulation, SuccessTest, check_seed
 
 #: The simulators of ``--simulator`` (``striatal.neural.run.SIMULATORS``, which imports numpy).
 SIMULATORS = ("nengo", "brian2")
+#: The rules ``--learn --seeds`` offers (``striatal.neural.driver.NETWORK_RULES``, tested).
+NETWORK_LEARNERS = ("chapter", "pgpe", "rpe")
 #: What the first run of a network size and run length on Brian2 says.
 COMPILE_NOTICE = (
     "striatal: compiling the Brian2 network (once per network size and run length, "
@@ -32,6 +36,8 @@ OUT_FILES = (
     "activity.png",
     "learn_history.csv",
     "learn_summary.json",
+    "sweep.json",
+    "runs.csv",
 )
 
 DESCRIPTION = (
@@ -63,18 +69,19 @@ def announce_compile(where: Path) -> None:
     sys.stderr.flush()
 
 
-def backend_refused(value: str) -> str:
-    """The one line that ``neural --backend VALUE`` gets (the option means the cluster
-    backend of sweep and ablation)."""
-    simulator = value if value in SIMULATORS else "{" + ",".join(SIMULATORS) + "}"
+def simulator_meant(value: str) -> str | None:
+    """The one line that ``neural --backend nengo|brian2`` gets (the option means the
+    cluster backend, local or ray); None for any other value."""
+    if value not in SIMULATORS:
+        return None
     return (
-        "--backend is the cluster backend (local, ray) of sweep and ablation; the "
-        f"network's simulator is --simulator {simulator}"
+        "--backend is the cluster backend (local, ray) of --learn --seeds; the "
+        f"network's simulator is --simulator {value}"
     )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from striatal.cli import options
+    from striatal.experiments import pool
 
     options.add_controller_arguments(parser, gains_required=True)
     parser.add_argument(
@@ -104,7 +111,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="slope [1/rad] of the criterion clip(gamma (theta_c - |theta|), -1, 1)",
     )
     net.add_argument("--synapse", type=float, default=0.005, help="synaptic time constant [s]")
-    net.add_argument("--seed", type=int, default=0, help="network seed (encoders, gains, biases)")
+    net.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="network seed (encoders, gains, biases) and, with --learn, the exploration's; "
+        "with --seeds, the root of the runs' seeds",
+    )
     net.add_argument(
         "--simulator",
         choices=SIMULATORS,
@@ -112,14 +125,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="nengo (the reference) or brian2: the same network, built by nengo's builder, "
         "run as a compiled Brian2 program with the plant inside it (compiled once per "
         "network size and run length, cached beside Numba's cache)",
-    )
-    # --backend is the cluster backend of sweep and ablation: refused here, naming --simulator
-    net.add_argument(
-        "--backend",
-        dest="refused_backend",
-        nargs="?",
-        action=guards.Refused,
-        message=backend_refused,
     )
     run_g = parser.add_argument_group("run")
     run_g.add_argument("--theta0", type=float, default=CHAPTER_THETA0, help="initial angle [rad]")
@@ -136,7 +141,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "the chapter's update (eqs 1-5) of W and so of the transforms between trials",
     )
     learn.add_argument(
-        "--trials", type=int, default=20, help="learning trials (with --learn; at most 30 s each)"
+        "--trials",
+        type=arguments.cli_type("max_trials"),
+        default=20,
+        help="learning trials (with --learn; at most 30 s each)",
     )
     learn.add_argument(
         "--alpha",
@@ -144,6 +152,34 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="learning rate of eq 4 (with --learn; 0: no learning) "
         + default_note("the chapter learner's, 5.0"),
+    )
+    runs = parser.add_argument_group(
+        "many seeds (with --learn: a sweep of the learner and its control on the network)"
+    )
+    runs.add_argument(
+        "--seeds",
+        type=arguments.cli_type("seeds"),
+        default=None,
+        help="run the learner and its no-learning control on N seeds each, the seeds "
+        "SeedSequence(--seed).spawn(N), on the experiment runner as striatal sweep: "
+        "runs.csv and summary.json in --out (a rerun resumes), --workers or --backend ray",
+    )
+    runs.add_argument(
+        "--init",
+        action=CommaList,
+        names=("chapter", "random"),
+        default=("chapter",),
+        help="with --seeds: W(0), the chapter's and/or uniform in [-1, 1]^6 per seed "
+        "(give --chapter-initial; theta_c(0) is --theta-c's)",
+    )
+    runs.add_argument(
+        "--learner",
+        choices=NETWORK_LEARNERS,
+        default="chapter",
+        help="with --seeds: the rule on the pathway weights (its preset, the sparse reward)",
+    )
+    options.add_worker_arguments(
+        runs, connect_timeout=pool.CONNECT_TIMEOUT, refuse_backend=simulator_meant
     )
     options.add_plant_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -174,6 +210,24 @@ def run(args: argparse.Namespace) -> int:
     controller, plant = options.controller_and_plant(args)
     if not args.learn and args.alpha is not None:
         raise ParameterError("--alpha needs --learn")
+    if args.seeds is not None and not args.learn:
+        raise ParameterError("--seeds needs --learn")
+    if args.seeds is None:
+        given = [
+            name
+            for name, value, default in (
+                ("--init", args.init, ("chapter",)),
+                ("--learner", args.learner, "chapter"),
+                ("--backend", args.backend, "local"),
+                ("--workers", args.workers, 1),
+                ("--address", args.address, None),
+            )
+            if value != default
+        ]
+        if given:
+            raise ParameterError(f"{', '.join(given)} needs --learn --seeds N")
+    else:
+        options.check_worker_arguments(args)
     duration = args.duration if args.duration is not None else (30.0 if args.learn else 60.0)
     sim = Simulation(theta0=args.theta0, x0=args.x0, duration=duration, dt=0.01)
     seed = check_seed(args.seed)
@@ -187,6 +241,10 @@ def run(args: argparse.Namespace) -> int:
     )
     if args.out is not None:
         check_out_dir(args.out)
+        if args.seeds is None and (args.out / "sweep.json").exists():
+            raise ParameterError(
+                f"--out {args.out} holds a sweep (of --learn --seeds): write this run elsewhere"
+            )
     if args.circuit_figure is not None:
         from striatal.viz.plots import check_image_path
 
@@ -196,6 +254,8 @@ def run(args: argparse.Namespace) -> int:
         from striatal.neural.brian import require_brian2
 
         require_brian2()
+    if args.learn and args.seeds is not None:
+        return run_learning_sweep(args, controller, plant, sim, config, seed)
     if args.learn:
         return run_learning(args, controller, plant, sim, config, seed)
     shown = progress.bar(args, total=sim.duration, unit="s")
@@ -300,7 +360,7 @@ def run_learning(
 ) -> int:
     """``--learn``: the dopamine stage over trials; one line per trial, or one JSON object."""
     from striatal.io.files import dumps_json, write_csv, write_json
-    from striatal.neural.learn import NeuralTrial, learn_network
+    from striatal.neural.driver import NeuralTrial, learn_network
 
     if args.circuit_figure is not None:
         raise ParameterError("--circuit-figure cannot be combined with --learn")
@@ -378,4 +438,54 @@ def run_learning(
     )
     if args.out is not None:
         print(f"wrote {args.out}/learn_history.csv, learn_summary.json")
+    return 0
+
+
+def run_learning_sweep(
+    args: argparse.Namespace,
+    controller: Controller,
+    plant: Plant,
+    sim: Simulation,
+    config: NetworkConfig,
+    seed: int,
+) -> int:
+    """``--learn --seeds N``: the learner and its control on N seeds each, on the
+    experiment runner (:func:`striatal.experiments.network.network_sweep`)."""
+    from striatal.experiments import report
+    from striatal.experiments.network import network_sweep
+    from striatal.io.files import dumps_json
+    from striatal.params import CHAPTER_INITIAL_W
+
+    if args.circuit_figure is not None:
+        raise ParameterError("--circuit-figure cannot be combined with --learn")
+    if tuple(controller.gains) != CHAPTER_INITIAL_W:
+        raise ParameterError(
+            "with --seeds, W(0) is --init's (chapter or random): give --chapter-initial"
+        )
+    changes = {} if args.alpha is None else {"alpha": args.alpha}
+    result = network_sweep(
+        args.learner,
+        network=config,
+        simulator=args.simulator,
+        seeds=args.seeds,
+        seed=seed,
+        init=args.init,
+        max_trials=args.trials,
+        sim=sim,
+        plant=plant,
+        template=controller,
+        out=args.out,
+        **options.worker_options(args),
+        progress=progress.shown(args),
+        **changes,
+    )
+    if args.json:
+        sys.stdout.write(dumps_json(result.summary))
+        return 0
+    sys.stdout.write(report.markdown_table(result.summary))
+    for note in result.summary["notes"]:
+        print(f"\n{note}")
+    print(f"ran {result.ran} runs, {result.skipped} already in --out")
+    if args.out is not None:
+        print(f"wrote {args.out / 'runs.csv'}, {args.out / 'summary.json'}")
     return 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -264,13 +264,29 @@ def controller_and_plant(args: argparse.Namespace) -> tuple[Controller, Plant]:
 
 
 def add_worker_arguments(
-    group: argparse.ArgumentParser | argparse._ArgumentGroup, *, connect_timeout: float
+    group: argparse.ArgumentParser | argparse._ArgumentGroup,
+    *,
+    connect_timeout: float,
+    refuse_backend: Callable[[str], str | None] | None = None,
 ) -> None:
     """--backend, --address, --connect-timeout and --workers of a command that runs many
-    learning runs (sweep, ablation); check them with :func:`check_worker_arguments`."""
+    learning runs (sweep, ablation, neural --learn --seeds); check them with
+    :func:`check_worker_arguments`. ``refuse_backend(value)``: the one line a --backend
+    value gets that this command's user may have meant as another option (None: the
+    parser's own "invalid choice")."""
+    backends = ("local", "ray")
+
+    def backend(text: str) -> str:
+        if text not in backends and refuse_backend is not None:
+            message = refuse_backend(text)
+            if message is not None:
+                raise argparse.ArgumentTypeError(message)
+        return text
+
     group.add_argument(
         "--backend",
-        choices=("local", "ray"),
+        type=backend,
+        choices=backends,
         default="local",
         help="local worker processes, or a Ray cluster (--address)",
     )

@@ -48,9 +48,12 @@ __all__ = ["BATCH_ENGINES", "check_specs", "execute_batch"]
 
 
 def check_specs(specs: Sequence[RunSpec]) -> None:
-    """ParameterError (one line) unless every spec's config is one its rule accepts."""
+    """ParameterError (one line) unless every spec's config is one its rule accepts and
+    its trials run on the kernel (not on the spiking network)."""
     for s in specs:
         check_config(s.config)
+        if s.network is not None:
+            raise ParameterError("runs on the spiking network take --engine processes only")
 
 
 def execute_batch(

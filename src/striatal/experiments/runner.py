@@ -138,8 +138,16 @@ def search(spec: RunSpec, W0: tuple[float, ...]) -> Steps[dict[str, Any]]:
 
 
 def run_one(spec: RunSpec) -> dict[str, Any]:
-    """One run -> one row (RUN_COLUMNS), its trials on the scalar kernel. Pure: the same
-    spec gives the same row (except wall_seconds). :func:`run_steps` for other drivers."""
+    """One run -> one row (RUN_COLUMNS), its trials on the scalar kernel, or on the
+    spiking network of ``spec.network`` (:func:`striatal.neural.driver.network_drive`,
+    network seed = the run's seed). Pure: the same spec gives the same row (except
+    wall_seconds). :func:`run_steps` for other drivers."""
+    if spec.network is not None:
+        from striatal.neural.driver import network_drive
+
+        return network_drive(
+            run_steps(spec), spec.network.config, spec.seed, spec.network.simulator
+        )
     return drive(run_steps(spec))
 
 

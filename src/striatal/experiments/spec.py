@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -24,9 +24,28 @@ from striatal.params import (
     check_seed,
 )
 
-__all__ = ["Init", "RunSpec", "floor_w1", "initial_gains", "spawn_seeds"]
+if TYPE_CHECKING:
+    from striatal.neural.network import NetworkConfig
+    from striatal.neural.run import Simulator
+
+__all__ = ["Init", "NetworkTrials", "RunSpec", "floor_w1", "initial_gains", "spawn_seeds"]
 
 Init = Literal["chapter", "random"]
+
+
+@dataclass(frozen=True)
+class NetworkTrials:
+    """Where a run's trials go when not on the kernel: the spiking network of ``config``
+    on ``simulator`` ("nengo" or "brian2"), network seed = the run's seed
+    (:func:`striatal.neural.driver.network_drive`)."""
+
+    config: NetworkConfig
+    simulator: Simulator
+
+    def to_dict(self) -> dict[str, object]:
+        from dataclasses import asdict
+
+        return {**asdict(self.config), "simulator": self.simulator}
 
 
 @dataclass(frozen=True)
@@ -34,7 +53,8 @@ class RunSpec:
     """One run: an arm (learner settings or a baseline), a start and a seed.
 
     ``template`` carries theta_c(0) and the readings (balance sign, switch,
-    inhibition); its gains are replaced by W(0) of ``init``.
+    inhibition); its gains are replaced by W(0) of ``init``. ``network``: the trials
+    run on the spiking network instead of the kernel (None: the kernel).
     """
 
     arm: str
@@ -47,6 +67,7 @@ class RunSpec:
     sim: Simulation
     role: str = "learner"
     eval_draws: int = 0
+    network: NetworkTrials | None = None
 
     @property
     def key(self) -> tuple[str, str, int]:

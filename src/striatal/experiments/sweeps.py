@@ -350,6 +350,8 @@ def settings_id(spec: RunSpec, trial_kernel: str | None = None) -> str:
                 "sim": asdict(spec.sim),
                 "eval_draws": spec.eval_draws,
                 "trial_kernel": trial_kernel,
+                # only when set, so the ids of the kernel's runs stay as they were
+                **({} if spec.network is None else {"network": spec.network.to_dict()}),
             }
         ),
         sort_keys=True,

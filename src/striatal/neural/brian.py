@@ -156,8 +156,23 @@ _SIGNAL_VALUE = "v = y + a0 * xp + a1 * xdp + a2 * sin(thp) + a3 * cos(thp) + a4
 _LIF_STEP = """
 ref = ref - dt
 dtt = clip(dt - ref, 0 * second, dt)
-v = v - (J + bias - v) * (exp(-dtt / tau_rc) - 1)
+v = v - (J + bias - v) * lif_decay(dtt, 1 / tau_rc)
 v = v * int(v > 0)
+"""
+#: exp(-dtt / tau_rc) - 1 of the LIF step, as the generated code writes it, with the last
+#: value kept: every neuron outside its refractory period has dtt = dt, so the exponential
+#: is computed about once per step instead of once per neuron (the same bits).
+_LIF_DECAY_CPP = """
+double lif_decay(const double dtt, const double inv_tau)
+{
+    static double last_dtt = -1.0;
+    static double last = 0.0;
+    if (dtt != last_dtt) {
+        last_dtt = dtt;
+        last = (-1.0) + exp(inv_tau * (-dtt));
+    }
+    return last;
+}
 """
 _LIF_RESET = """
 ref = tau_ref + dt + tau_rc * log(1 - (v - 1) / (J + bias - 1))
@@ -165,10 +180,22 @@ v = 0
 """
 
 
+def _lif_decay_function(b2: Any) -> Any:
+    """``lif_decay(dtt, 1 / tau_rc)`` = exp(-dtt / tau_rc) - 1 for Brian2's C++ code."""
+
+    @b2.implementation("cpp", _LIF_DECAY_CPP)
+    @b2.check_units(dtt=b2.second, inv_tau=b2.Hz, result=1)
+    def lif_decay(dtt: Any, inv_tau: Any) -> Any:
+        return np.expm1(-np.asarray(dtt) * np.asarray(inv_tau))
+
+    return lif_decay
+
+
 def _program_version() -> str:
     """The program's code and Brian2's version: a change to either is a new cache entry."""
     b2 = require_brian2()
-    text = "".join((PLANT_EQUATIONS, FORCE_OF_U, _SIGNAL_EQS, _SIGNAL_VALUE, _LIF_STEP, _LIF_RESET))
+    parts = (PLANT_EQUATIONS, FORCE_OF_U, _SIGNAL_EQS, _SIGNAL_VALUE, _LIF_STEP, _LIF_RESET)
+    text = "".join((*parts, _LIF_DECAY_CPP))
     return hashlib.sha256((text + b2.__version__).encode()).hexdigest()[:12]
 
 
@@ -219,7 +246,11 @@ class CompiledNetwork:
         b2.prefs.devices.cpp_standalone.openmp_threads = 0
         b2.defaultclock.dt = tr.net_dt * b2.second
         second = b2.second
-        ns = {"tau_rc": tr.tau_rc * second, "tau_ref": tr.tau_ref * second}
+        ns = {
+            "tau_rc": tr.tau_rc * second,
+            "tau_ref": tr.tau_ref * second,
+            "lif_decay": _lif_decay_function(b2),
+        }
         n_path = int(tr.pathway_rows.shape[0])
 
         noise = b2.TimedArray(np.zeros(self.n_control + 1), dt=self.control_dt * second)

@@ -1,4 +1,4 @@
-"""Dopamine, the second stage: the chapter's rule (eqs 1-5) on the network's pathway weights.
+"""Dopamine, the second stage: the pieces of the chapter's rule (eqs 1-5) on the pathways.
 
 The weights that learn are the transforms of the seven pathway projections of
 :func:`striatal.neural.network.build` (``Handles.pathways``): c_theta, c_thetadot,
@@ -31,31 +31,22 @@ function c_i(W) of the gains (:func:`pathway_coefficients`). One learning trial:
    transforms c(W): a rebuild is how nengo changes a connection's transform.
    :func:`gains_from_transforms` reads W back from a built network's transforms.
 
-A trial that passes the chapter's success test (on the noisy trial, as the chapter
-learner judges it) keeps W and theta_c and ends the run, as ``striatal train`` does.
-Trials are at most 30 s: the check of eq 24 at 30 s is not applied to the network.
+This module holds the stage's pieces (the Node, the chain rule, the reward and the
+outcome). The learning run is the project's one learning loop with the chapter's rule,
+its trials run on the network: :func:`striatal.neural.driver.learn_network`.
 """
 
 from __future__ import annotations
 
 import math
-import time
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.learners import default_config
-from striatal.learners.chapter import ChapterConfig, chapter_gain_update
-from striatal.learners.common import theta_c_rule
-from striatal.learners.config import LearnerConfig, pick
 from striatal.neural.interpret import pathway_coefficients
-from striatal.neural.network import NetworkConfig
-from striatal.neural.run import NeuralRun, Simulator, run_network
-from striatal.params import Controller, Plant, Simulation, check_gains, check_seed
+from striatal.neural.run import NeuralRun
+from striatal.params import Plant, check_gains
 from striatal.sim import kernel
 from striatal.sim.rollout import Protocol, TrialOutcome
 
@@ -63,12 +54,9 @@ __all__ = [
     "N_PATHWAYS",
     "PATHWAYS",
     "Eligibility",
-    "NeuralLearning",
-    "NeuralTrial",
     "coefficient_jacobian",
     "gain_eligibility",
     "gains_from_transforms",
-    "learn_network",
     "network_transforms",
     "pathway_coefficients",
     "trial_outcome",
@@ -219,205 +207,4 @@ def trial_outcome(run: NeuralRun, reward: float, theta_c: float) -> TrialOutcome
         max_abs_x=float(np.max(np.abs(run.data[:, 1]))),
         max_abs_force=float(np.max(np.abs(run.data[:, 6]))),
         success=run.success,
-    )
-
-
-@dataclass(frozen=True)
-class NeuralTrial:
-    """One learning trial: the gains it ran with, what it earned, the traces it left."""
-
-    trial: int
-    W: tuple[float, ...]
-    theta_c: float
-    transforms: tuple[float, ...]
-    reward: float
-    success: bool
-    upright_last_10s: bool
-    fault: bool
-    final_state: tuple[float, float, float, float]
-    first_switch: float
-    pathway_trace: tuple[float, ...]
-    eligibility: tuple[float, ...]
-    cpu_time: float
-    wall_time: float
-
-    def to_dict(self) -> dict[str, object]:
-        return {
-            "trial": self.trial,
-            "W": list(self.W),
-            "theta_c": self.theta_c,
-            "transforms": list(self.transforms),
-            "reward": self.reward,
-            "success": self.success,
-            "upright_last_10s": self.upright_last_10s,
-            "fault": self.fault,
-            "final_state": list(self.final_state),
-            "first_switch": self.first_switch,
-            "pathway_trace": list(self.pathway_trace),
-            "eligibility": list(self.eligibility),
-            "cpu_time_s": self.cpu_time,
-            "wall_time_s": self.wall_time,
-        }
-
-
-@dataclass(frozen=True)
-class NeuralLearning:
-    """A learning run of the network: its trials, and the W and theta_c it ended with."""
-
-    trials: tuple[NeuralTrial, ...]
-    W: tuple[float, ...]
-    theta_c: float
-    W0: tuple[float, ...]
-    theta_c0: float
-    solved: bool
-    seed: int
-    neurons: int
-    config: LearnerConfig
-    settings: dict[str, object] = field(default_factory=dict)
-
-    def to_dict(self) -> dict[str, object]:
-        return {
-            "W0": list(self.W0),
-            "theta_c0": self.theta_c0,
-            "W": list(self.W),
-            "theta_c": self.theta_c,
-            "solved": self.solved,
-            "trials_run": len(self.trials),
-            "successes": sum(t.success for t in self.trials),
-            "rewards": [t.reward for t in self.trials],
-            "seed": self.seed,
-            "neurons": self.neurons,
-            "learner": {
-                k: self.config.to_dict()[k]
-                for k in ("alpha", "gamma", "baseline", "max_step", "w1_floor", "theta_c_rule")
-            },
-            "reward": "sparse (eq 25: +10 / -5 at T_f)",
-            "history": [t.to_dict() for t in self.trials],
-            **self.settings,
-        }
-
-
-def learn_network(
-    controller: Controller,
-    plant: Plant,
-    sim: Simulation,
-    config: NetworkConfig,
-    seed: int,
-    *,
-    trials: int,
-    alpha: float | None = None,
-    protocol: Protocol | None = None,
-    on_trial: Callable[[NeuralTrial], None] | None = None,
-    net_dt: float = 0.001,
-    simulator: Simulator = "nengo",
-    on_compile: Callable[[Path], None] | None = None,
-    resume: NeuralLearning | None = None,
-) -> NeuralLearning:
-    """Run ``trials`` learning trials of the network from ``controller``'s W and theta_c.
-
-    The chapter learner's options (``striatal.learners.default_config("chapter")``:
-    alpha 5, gamma 0.999 per draw, b = 0, max step 1, eq 21 under the swing-up) with
-    ``alpha`` replaced if given (alpha = 0: no learning, W stays). ``seed`` fixes the
-    network (the same neurons every trial) and the exploration noise
-    (``numpy.random.default_rng(seed)``, one standard normal per control step).
-    ``resume``: an earlier run of the same start, seed and options, continued up to
-    ``trials`` trials in all: its trials are kept, its W and theta_c go on, and the
-    noise generator skips the draws its trials used, so that the continued run equals
-    one run of ``trials`` trials.
-    """
-    seed = check_seed(seed)
-    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
-        raise ParameterError(f"trials must be a whole number >= 1, got {trials!r}")
-    protocol = Protocol() if protocol is None else protocol
-    if 0.0 <= protocol.check_time < sim.duration:
-        raise ParameterError(
-            f"learning trials of the network must be at most {protocol.check_time:g} s "
-            f"(the eq-24 check is not applied to it), got {sim.duration:g}"
-        )
-    lc = default_config("chapter") if alpha is None else default_config("chapter", alpha=alpha)
-    chapter = pick(ChapterConfig, lc)
-    every = max(1, int(round(sim.dt / net_dt)))
-    rng = np.random.default_rng(seed)
-    W = np.array(controller.gains, dtype=float)
-    theta_c = controller.theta_c
-    sign = controller.sign
-    history: list[NeuralTrial] = []
-    solved = False
-    neurons = 0
-    if resume is not None:
-        same = (
-            resume.seed == seed
-            and tuple(float(w) for w in controller.gains) == resume.W0
-            and resume.theta_c0 == float(controller.theta_c)
-            and resume.config.to_dict() == lc.to_dict()
-        )
-        if not same:
-            raise ParameterError(
-                "the run to resume has another seed, start or learner options than this one"
-            )
-        if resume.solved or len(resume.trials) >= trials:
-            return resume
-        history = list(resume.trials)
-        neurons = resume.neurons
-        for _ in history:
-            rng.standard_normal(sim.n_steps)
-        W = np.array(resume.W, dtype=float)
-        theta_c = resume.theta_c
-    for k in range(len(history) + 1, trials + 1):
-        ctrl = controller.with_gains(W, theta_c)
-        sigma = kernel.sigma_of(W[5])
-        elig = Eligibility(sigma, rng.standard_normal(sim.n_steps), chapter.gamma, every)
-        t0 = time.perf_counter()
-        run = run_network(
-            ctrl,
-            plant,
-            sim,
-            config,
-            seed,
-            net_dt=net_dt,
-            record_rates=False,
-            exploration=elig,
-            simulator=simulator,
-            on_compile=on_compile,
-        )
-        wall = time.perf_counter() - t0
-        neurons = run.neurons
-        reward = trial_reward(run, protocol)
-        D = gain_eligibility(elig.trace, elig.sigma_trace, W, plant, sign)
-        x, xd, th, thd = (float(v) for v in run.data[-1, 1:5])
-        sw = run.switch_times
-        rec = NeuralTrial(
-            trial=k,
-            W=tuple(float(w) for w in W),
-            theta_c=float(theta_c),
-            transforms=tuple(float(c) for c in pathway_coefficients(W, plant, sign)),
-            reward=reward,
-            success=run.success,
-            upright_last_10s=run.upright_last_10s,
-            fault=run.fault,
-            final_state=(x, xd, float(kernel.wrap_angle(th)), thd),
-            first_switch=sw[0] if sw else math.nan,
-            pathway_trace=tuple(float(v) for v in elig.trace),
-            eligibility=tuple(float(v) for v in D),
-            cpu_time=run.cpu_time,
-            wall_time=wall,
-        )
-        history.append(rec)
-        if on_trial is not None:
-            on_trial(rec)
-        if run.success:
-            solved = True
-            break
-        W = chapter_gain_update(W, D, reward, chapter)
-        theta_c = theta_c_rule(trial_outcome(run, reward, theta_c), theta_c, chapter.theta_c_rule)
-    return NeuralLearning(
-        trials=tuple(history),
-        W=tuple(float(w) for w in W),
-        theta_c=float(theta_c),
-        W0=tuple(float(w) for w in controller.gains),
-        theta_c0=float(controller.theta_c),
-        solved=solved,
-        seed=seed,
-        neurons=neurons,
-        config=lc,
     )

@@ -226,7 +226,7 @@ class SweepModel(BaseModel):
     """
 
     model_config = _MODEL
-    command: Literal["striatal sweep", "striatal ablation"] | None = None
+    command: Literal["striatal sweep", "striatal ablation", "striatal neural"] | None = None
     seeds: Count | list[Seed] | None = None
     max_trials: Annotated[int, Field(ge=1, le=MAX_COUNT)] | None = None
     eval_draws: Count | None = None
