@@ -29,6 +29,7 @@ import functools
 import time
 from collections.abc import Callable, Generator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
 from typing import Any, Literal, ParamSpec, TypeVar
 
 import numba
@@ -48,11 +49,15 @@ from striatal.sim.rollout import (
 __all__ = [
     "BATCH_ENGINES",
     "LANES",
+    "Calls",
+    "KernelCall",
     "Lockstep",
     "Steps",
     "TrialRequest",
+    "draw_ahead",
     "drive",
     "driven",
+    "prepare",
     "run_requests",
 ]
 
@@ -71,6 +76,10 @@ PARALLEL_NORMALS = 50_000
 #: The groups of generators :class:`Lockstep` runs in turn (one group's trials on the
 #: kernel while the main thread advances the others).
 LANES = 2
+#: At most this many normals a generator's round draws on the main thread
+#: (:func:`draw_ahead`), while the kernel runs the other lane; more (an evaluation's
+#: chunk of noisy trials) are drawn on threads before the kernel call.
+AHEAD_NORMALS = 4 * 6000
 
 
 def driven(steps: Callable[P, Steps[T]]) -> Callable[P, T]:
@@ -94,66 +103,123 @@ def drive(steps: Steps[T]) -> T:
 
 
 def run_requests(
-    requests: Sequence[TrialRequest], engine: Literal["batch", "simd"] = "batch"
+    requests: Sequence[TrialRequest],
+    engine: Literal["batch", "simd"] = "batch",
+    drawn: Sequence[np.ndarray | None] | None = None,
 ) -> list[TrialOutcome]:
     """The outcomes of ``requests``, in their order, from as few batched kernel calls as
     their :meth:`TrialRequest.batch_key` allow.
 
     The action noise of each request is drawn from its generator in the order of
-    ``requests`` (what :func:`drive` would draw); traces are updated in place. "simd"
-    runs a group on the SIMD kernel unless its motor or track needs the exact one.
+    ``requests`` (what :func:`drive` would draw), unless ``drawn[i]`` holds request i's
+    normals already (:func:`draw_ahead`); traces are updated in place. "simd" runs a
+    group on the SIMD kernel unless its motor or track needs the exact one. The three
+    stages, :func:`prepare`, :meth:`Calls.run` and :meth:`Calls.outcomes`, can run on
+    different threads (:class:`Lockstep`).
     """
+    calls = prepare(requests, engine, drawn)
+    calls.run()
+    return calls.outcomes()
+
+
+@dataclass(frozen=True)
+class KernelCall:
+    """One batched kernel call: the indices of its requests, its arguments, and the
+    online trials' stacked critics (None: not online)."""
+
+    members: list[int]
+    args: kernel.BatchArgs
+    critic: kernel.CriticArgs | None
+
+
+@dataclass(frozen=True)
+class Calls:
+    """The kernel calls of a list of requests (:func:`prepare`); ``done`` holds the
+    outcomes of the requests that ran alone, by index."""
+
+    requests: Sequence[TrialRequest]
+    engine: Literal["batch", "simd"]
+    calls: list[KernelCall]
+    done: dict[int, TrialOutcome]
+
+    def run(self) -> None:
+        """Make the kernel calls: they release the GIL, so this can run on a thread
+        of its own while Python runs elsewhere."""
+        old = numba.set_parallel_chunksize(CHUNK)
+        try:
+            for call in self.calls:
+                args, critic = call.args, call.critic
+                first = self.requests[call.members[0]]
+                if critic is not None:
+                    kernel.run_online_trials_batch(*args[:7], critic, args.outs)
+                elif self.engine == "simd" and first.hardware == CHAPTER_HARDWARE:
+                    # a block per thread when the trials are few
+                    block = -(-len(call.members) // numba.get_num_threads())
+                    kernel.run_trials_lockstep(*args, block)
+                else:
+                    kernel.run_trials_batch(*args)
+        finally:
+            numba.set_parallel_chunksize(old)
+
+    def outcomes(self) -> list[TrialOutcome]:
+        """The outcomes in the requests' order, after :meth:`run`; the traces (and an
+        online trial's critic) written back to each request's arrays."""
+        outcomes = dict(self.done)
+        for call in self.calls:
+            args, critic = call.args, call.critic
+            sim = self.requests[call.members[0]].sim
+            for j, i in enumerate(call.members):
+                r = self.requests[i]
+                r.trace[:] = args.learning.trace[j]
+                if critic is not None and r.online is not None:
+                    o = r.online
+                    for mine, rows in (
+                        (o.critic, critic.weights),
+                        (o.critic_trace, critic.trace),
+                        (o.stats, critic.stats),
+                        (o.square, critic.square),
+                        (o.gains_end, critic.gains_end),
+                    ):
+                        mine[:] = rows[j]
+                outcomes[i] = TrialOutcome.from_row(args.outs[j], sim)
+        return [outcomes[i] for i in range(len(self.requests))]
+
+
+def prepare(
+    requests: Sequence[TrialRequest],
+    engine: Literal["batch", "simd"] = "batch",
+    drawn: Sequence[np.ndarray | None] | None = None,
+) -> Calls:
+    """The batched kernel calls of ``requests`` (:func:`run_requests`): grouped by
+    :meth:`TrialRequest.batch_key`, their noise drawn (but ``drawn``'s), their arguments
+    built. A request that runs alone runs here, on the scalar kernel, in its order."""
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
-    outcomes: list[TrialOutcome | None] = [None] * len(requests)
+    done: dict[int, TrialOutcome] = {}
     groups: dict[tuple[object, ...], list[int]] = {}
-    noise: dict[int, np.ndarray] = {}
+    noise: list[np.ndarray | None] = [None] * len(requests) if drawn is None else list(drawn)
     keys = [r.batch_key() for r in requests]
     if any(key is None for key in keys):
         # a trial that runs alone draws as it runs: keep every draw in request order
         for i, (r, key) in enumerate(zip(requests, keys, strict=True)):
             if key is None:
-                outcomes[i] = r.run()
+                done[i] = r.run()
                 continue
-            noise[i] = r.noise()[0]
+            if noise[i] is None and r.draws_actions:
+                noise[i] = r.noise()[0]
             groups.setdefault(key, []).append(i)
     else:
         for i, key in enumerate(keys):
             groups.setdefault(key, []).append(i)  # type: ignore[arg-type]
-        noise = _draw_noise(requests)
+        _draw_noise(requests, noise)
+    calls = []
     for members in groups.values():
         group = [requests[i] for i in members]
         first = group[0]
-        args = batch_args(
-            group, np.array([noise[i] for i in members]) if first.draws_actions else None
-        )
+        rows = np.array([noise[i] for i in members]) if first.draws_actions else None
         critic = None if first.online is None else _critics(group)
-        old = numba.set_parallel_chunksize(CHUNK)
-        try:
-            if critic is not None:
-                kernel.run_online_trials_batch(*args[:7], critic, args.outs)
-            elif engine == "simd" and first.hardware == CHAPTER_HARDWARE:
-                # a block per thread when the trials are few
-                block = -(-len(group) // numba.get_num_threads())
-                kernel.run_trials_lockstep(*args, block)
-            else:
-                kernel.run_trials_batch(*args)
-        finally:
-            numba.set_parallel_chunksize(old)
-        for j, (i, r) in enumerate(zip(members, group, strict=True)):
-            r.trace[:] = args.learning.trace[j]
-            if critic is not None and r.online is not None:
-                o = r.online
-                for mine, rows in (
-                    (o.critic, critic.weights),
-                    (o.critic_trace, critic.trace),
-                    (o.stats, critic.stats),
-                    (o.square, critic.square),
-                    (o.gains_end, critic.gains_end),
-                ):
-                    mine[:] = rows[j]
-            outcomes[i] = TrialOutcome.from_row(args.outs[j], first.sim)
-    return outcomes  # type: ignore[return-value]
+        calls.append(KernelCall(members, batch_args(group, rows), critic))
+    return Calls(requests, engine, calls, done)
 
 
 def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
@@ -169,16 +235,37 @@ def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
     )
 
 
-def _draw_noise(requests: Sequence[TrialRequest]) -> dict[int, np.ndarray]:
-    """The action normals of every request that draws them, by index: each generator's
-    requests in their order (what run_trial draws), different generators on threads
-    (:func:`striatal.sim.noise.run_parts`) once there are enough normals to pay."""
+def draw_ahead(requests: Sequence[TrialRequest]) -> list[np.ndarray | None] | None:
+    """The action normals of one generator's requests (:meth:`Lockstep.run`: one run's
+    round), drawn now in their order, as :func:`run_requests` would draw them; None
+    (draw them in :func:`run_requests`) if a request runs alone (it draws as it runs)
+    or the requests draw more than :data:`AHEAD_NORMALS` (drawn there on threads)."""
+    if not any(r.draws_actions for r in requests):
+        return None
+    if any(r.runs_alone for r in requests):
+        return None
+    sizes = [action_draws(r.sim, r.action_every) if r.draws_actions else 0 for r in requests]
+    if sum(sizes) > AHEAD_NORMALS:
+        return None
+    return [
+        r.rng.standard_normal(n) if n and r.rng is not None else None
+        for r, n in zip(requests, sizes, strict=True)
+    ]
+
+
+def _draw_noise(requests: Sequence[TrialRequest], noise: list[np.ndarray | None]) -> None:
+    """Fill ``noise[i]`` with the action normals of every request that draws them and has
+    none yet: each generator's requests in their order (what run_trial draws), different
+    generators on threads (:func:`striatal.sim.noise.run_parts`) once there are enough
+    normals to pay."""
     by_rng: dict[int, list[int]] = {}
-    noise: dict[int, np.ndarray] = {}
+    todo = 0
     for i, r in enumerate(requests):
-        if r.draws_actions:
+        if r.draws_actions and noise[i] is None:
             by_rng.setdefault(id(r.rng), []).append(i)
-            noise[i] = np.empty(action_draws(r.sim, r.action_every))
+            n = action_draws(r.sim, r.action_every)
+            noise[i] = np.empty(n)
+            todo += n
     chains = list(by_rng.values())
 
     def part(chain_ids: range) -> Callable[[], None]:
@@ -189,11 +276,10 @@ def _draw_noise(requests: Sequence[TrialRequest]) -> dict[int, np.ndarray]:
 
         return fill
 
-    if sum(a.size for a in noise.values()) < PARALLEL_NORMALS:
+    if todo < PARALLEL_NORMALS:
         part(range(len(chains)))()
     else:
         run_parts([part(ids) for ids in row_parts(len(chains))])
-    return noise
 
 
 class Lockstep:
@@ -221,32 +307,47 @@ class Lockstep:
         self.engine = engine
         self.seconds = np.zeros(len(self.steps))
 
-    def _advance(self, i: int, outcomes: list[TrialOutcome] | None) -> list[TrialRequest]:
+    def _advance(self, i: int, outcomes: list[TrialOutcome] | None) -> _Round:
+        """Generator i's next requests, and their normals where :func:`draw_ahead` draws
+        them (on this thread, while the kernel runs another lane)."""
         t0 = time.perf_counter()
         try:
             step = self.steps[i]
-            return next(step) if outcomes is None else step.send(outcomes)
+            requests = next(step) if outcomes is None else step.send(outcomes)
+            return requests, draw_ahead(requests)
         finally:
             self.seconds[i] += time.perf_counter() - t0
 
-    def _call(self, pending: dict[int, list[TrialRequest]]) -> _Call:
-        """Run the requests of ``pending`` (on the worker thread): their outcomes by
-        generator, each generator's share of the call's wall time added."""
+    def _prepare(self, pending: dict[int, _Round]) -> _Lane:
+        """The kernel calls of ``pending``'s requests (:func:`prepare`), on this thread."""
         order = list(pending)
-        flat = [r for i in order for r in pending[i]]
+        flat = [r for i in order for r in pending[i][0]]
+        drawn = [
+            row
+            for i in order
+            for row in (pending[i][1] or [None] * len(pending[i][0]))  # type: ignore[list-item]
+        ]
         t0 = time.perf_counter()
-        outcomes = run_requests(flat, self.engine)
-        share = (time.perf_counter() - t0) / max(len(flat), 1)
+        calls = prepare(flat, self.engine, drawn)
+        return order, [len(pending[i][0]) for i in order], calls, time.perf_counter() - t0
+
+    def _outcomes(self, lane: _Lane, seconds: float) -> dict[int, list[TrialOutcome]]:
+        """The outcomes of a lane's calls by generator, each generator's share of their
+        time (``seconds`` and this thread's preparing and reading) added."""
+        order, counts, calls, prepared = lane
+        t0 = time.perf_counter()
+        outcomes = calls.outcomes()
+        spent = prepared + seconds + time.perf_counter() - t0
+        share = spent / max(len(outcomes), 1)
         out: dict[int, list[TrialOutcome]] = {}
         at = 0
-        for i in order:
-            n = len(pending[i])
+        for i, n in zip(order, counts, strict=True):
             self.seconds[i] += share * n
             out[i], at = outcomes[at : at + n], at + n
         return out
 
     def run(self) -> Generator[tuple[int, Any], None, None]:
-        lanes: list[dict[int, list[TrialRequest]]] = [{} for _ in range(LANES)]
+        lanes: list[dict[int, _Round]] = [{} for _ in range(LANES)]
         for i in range(len(self.steps)):
             try:
                 lanes[i % LANES][i] = self._advance(i, None)
@@ -254,24 +355,40 @@ class Lockstep:
                 yield i, stop.value
         worker = ThreadPoolExecutor(1, thread_name_prefix="lockstep")
         try:
-            calls: list[Future[_Call] | None] = [
-                worker.submit(self._call, lane) if lane else None for lane in lanes
-            ]
+            calls: list[tuple[_Lane, Future[float]] | None] = [None] * LANES
+            for g, lane in enumerate(lanes):
+                if lane:
+                    prepared = self._prepare(lane)
+                    calls[g] = prepared, worker.submit(_timed, prepared[2])
             while any(call is not None for call in calls):
                 for g, call in enumerate(calls):
                     if call is None:
                         continue
                     # the other lanes' kernel calls run meanwhile
-                    pending: dict[int, list[TrialRequest]] = {}
-                    for i, mine in call.result().items():
+                    prepared, future = call
+                    pending: dict[int, _Round] = {}
+                    for i, mine in self._outcomes(prepared, future.result()).items():
                         try:
                             pending[i] = self._advance(i, mine)
                         except StopIteration as stop:
                             yield i, stop.value
-                    calls[g] = worker.submit(self._call, pending) if pending else None
+                    calls[g] = None
+                    if pending:
+                        prepared = self._prepare(pending)
+                        calls[g] = prepared, worker.submit(_timed, prepared[2])
         finally:
             worker.shutdown(wait=True, cancel_futures=True)
 
 
-#: The outcomes of one lane's kernel calls, by generator.
-_Call = dict[int, list[TrialOutcome]]
+def _timed(calls: Calls) -> float:
+    """Run ``calls``' kernels (on the worker thread): the wall time they took [s]."""
+    t0 = time.perf_counter()
+    calls.run()
+    return time.perf_counter() - t0
+
+
+#: A lane's prepared round: its generators in order, their request counts, the kernel
+#: calls, and the seconds spent preparing them.
+_Lane = tuple[list[int], list[int], Calls, float]
+#: A generator's round: its requests, and their normals if drawn ahead (:func:`draw_ahead`).
+_Round = tuple[list[TrialRequest], list[np.ndarray | None] | None]

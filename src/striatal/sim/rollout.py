@@ -461,11 +461,16 @@ class TrialRequest:
         rows = traj[: int(out[kernel.OUT_END_STEP]) + 1] if self.record else None
         return TrialOutcome.from_row(out, self.sim, rows)
 
+    @property
+    def runs_alone(self) -> bool:
+        """Whether no batch kernel takes the trial (sensor noise: the batch kernels have
+        none; a learned plant: they take none; a recorded trial: they record none)."""
+        return self.sensor.active or self.record or isinstance(self.plant, LearnedPlant)
+
     def batch_key(self) -> tuple[object, ...] | None:
-        """What a batched kernel call shares with this trial; None if it runs alone
-        (sensor noise: the batch kernel has none; a learned plant: it takes none; a
-        recorded trial: it records none)."""
-        if self.sensor.active or self.record or isinstance(self.plant, LearnedPlant):
+        """What a batched kernel call shares with this trial; None if it
+        :attr:`runs_alone`."""
+        if self.runs_alone:
             return None
         c = self.controller
         return (
