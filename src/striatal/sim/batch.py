@@ -54,7 +54,6 @@ __all__ = [
     "Lockstep",
     "Steps",
     "TrialRequest",
-    "draw_ahead",
     "drive",
     "driven",
     "prepare",
@@ -76,10 +75,6 @@ PARALLEL_NORMALS = 50_000
 #: The groups of generators :class:`Lockstep` runs in turn (one group's trials on the
 #: kernel while the main thread advances the others).
 LANES = 2
-#: At most this many normals a generator's round draws on the main thread
-#: (:func:`draw_ahead`), while the kernel runs the other lane; more (an evaluation's
-#: chunk of noisy trials) are drawn on threads before the kernel call.
-AHEAD_NORMALS = 4 * 6000
 
 
 def driven(steps: Callable[P, Steps[T]]) -> Callable[P, T]:
@@ -105,19 +100,17 @@ def drive(steps: Steps[T]) -> T:
 def run_requests(
     requests: Sequence[TrialRequest],
     engine: Literal["batch", "simd"] = "batch",
-    drawn: Sequence[np.ndarray | None] | None = None,
 ) -> list[TrialOutcome]:
     """The outcomes of ``requests``, in their order, from as few batched kernel calls as
     their :meth:`TrialRequest.batch_key` allow.
 
     The action noise of each request is drawn from its generator in the order of
-    ``requests`` (what :func:`drive` would draw), unless ``drawn[i]`` holds request i's
-    normals already (:func:`draw_ahead`); traces are updated in place. "simd" runs a
+    ``requests`` (what :func:`drive` would draw); traces are updated in place. "simd" runs a
     group on the SIMD kernel unless its motor or track needs the exact one. The three
     stages, :func:`prepare`, :meth:`Calls.run` and :meth:`Calls.outcomes`, can run on
     different threads (:class:`Lockstep`).
     """
-    calls = prepare(requests, engine, drawn)
+    calls = prepare(requests, engine)
     calls.run()
     return calls.outcomes()
 
@@ -188,16 +181,15 @@ class Calls:
 def prepare(
     requests: Sequence[TrialRequest],
     engine: Literal["batch", "simd"] = "batch",
-    drawn: Sequence[np.ndarray | None] | None = None,
 ) -> Calls:
     """The batched kernel calls of ``requests`` (:func:`run_requests`): grouped by
-    :meth:`TrialRequest.batch_key`, their noise drawn (but ``drawn``'s), their arguments
-    built. A request that runs alone runs here, on the scalar kernel, in its order."""
+    :meth:`TrialRequest.batch_key`, their noise drawn, their arguments built. A request
+    that :attr:`~TrialRequest.runs_alone` runs here, on the scalar kernel, in its order."""
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
     done: dict[int, TrialOutcome] = {}
     groups: dict[tuple[object, ...], list[int]] = {}
-    noise: list[np.ndarray | None] = [None] * len(requests) if drawn is None else list(drawn)
+    noise: list[np.ndarray | None] = [None] * len(requests)
     keys = [r.batch_key() for r in requests]
     if any(key is None for key in keys):
         # a trial that runs alone draws as it runs: keep every draw in request order
@@ -205,7 +197,7 @@ def prepare(
             if key is None:
                 done[i] = r.run()
                 continue
-            if noise[i] is None and r.draws_actions:
+            if r.draws_actions:
                 noise[i] = r.noise()[0]
             groups.setdefault(key, []).append(i)
     else:
@@ -235,33 +227,15 @@ def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
     )
 
 
-def draw_ahead(requests: Sequence[TrialRequest]) -> list[np.ndarray | None] | None:
-    """The action normals of one generator's requests (:meth:`Lockstep.run`: one run's
-    round), drawn now in their order, as :func:`run_requests` would draw them; None
-    (draw them in :func:`run_requests`) if a request runs alone (it draws as it runs)
-    or the requests draw more than :data:`AHEAD_NORMALS` (drawn there on threads)."""
-    if not any(r.draws_actions for r in requests):
-        return None
-    if any(r.runs_alone for r in requests):
-        return None
-    sizes = [action_draws(r.sim, r.action_every) if r.draws_actions else 0 for r in requests]
-    if sum(sizes) > AHEAD_NORMALS:
-        return None
-    return [
-        r.rng.standard_normal(n) if n and r.rng is not None else None
-        for r, n in zip(requests, sizes, strict=True)
-    ]
-
-
 def _draw_noise(requests: Sequence[TrialRequest], noise: list[np.ndarray | None]) -> None:
-    """Fill ``noise[i]`` with the action normals of every request that draws them and has
-    none yet: each generator's requests in their order (what run_trial draws), different
+    """Fill ``noise[i]`` with the action normals of every request that draws them: each
+    generator's requests in their order (what run_trial draws), different
     generators on threads (:func:`striatal.sim.noise.run_parts`) once there are enough
     normals to pay."""
     by_rng: dict[int, list[int]] = {}
     todo = 0
     for i, r in enumerate(requests):
-        if r.draws_actions and noise[i] is None:
+        if r.draws_actions:
             by_rng.setdefault(id(r.rng), []).append(i)
             n = action_draws(r.sim, r.action_every)
             noise[i] = np.empty(n)
@@ -287,12 +261,14 @@ class Lockstep:
     one run in batched kernel calls (:func:`run_requests`).
 
     The generators are split into :data:`LANES` groups that take turns: while one
-    group's trials run (their noise drawn and the kernel called on a worker thread, the
-    kernels releasing the GIL), the main thread advances the other group's generators
-    with the outcomes of its last call (their Python: the rules' plans and updates, the
-    success tests). The kernel's threads and the runs' Python then overlap instead of
-    taking turns. A generator is always in the same group, so its trials, and the order
-    in which its generator draws their noise, are what they would be alone.
+    group's kernel calls run on a worker thread (:meth:`Calls.run`, the kernels
+    releasing the GIL), the main thread advances the other group's generators with the
+    outcomes of its last calls (their Python: the rules' plans and updates, the success
+    tests) and prepares their next calls (:func:`prepare`: grouping, noise, arguments).
+    The kernel's threads and the runs' Python and noise then overlap instead of taking
+    turns, and the kernel waits for no Python between a lane's calls. A generator is
+    always in the same group, so its trials, and the order in which its generator draws
+    their noise, are what they would be alone.
 
     :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value.
     ``seconds[i]``: the wall time spent on generator i, its own Python plus an even
@@ -307,29 +283,20 @@ class Lockstep:
         self.engine = engine
         self.seconds = np.zeros(len(self.steps))
 
-    def _advance(self, i: int, outcomes: list[TrialOutcome] | None) -> _Round:
-        """Generator i's next requests, and their normals where :func:`draw_ahead` draws
-        them (on this thread, while the kernel runs another lane)."""
+    def _advance(self, i: int, outcomes: list[TrialOutcome] | None) -> list[TrialRequest]:
         t0 = time.perf_counter()
         try:
             step = self.steps[i]
-            requests = next(step) if outcomes is None else step.send(outcomes)
-            return requests, draw_ahead(requests)
+            return next(step) if outcomes is None else step.send(outcomes)
         finally:
             self.seconds[i] += time.perf_counter() - t0
 
-    def _prepare(self, pending: dict[int, _Round]) -> _Lane:
+    def _prepare(self, pending: dict[int, list[TrialRequest]]) -> _Lane:
         """The kernel calls of ``pending``'s requests (:func:`prepare`), on this thread."""
         order = list(pending)
-        flat = [r for i in order for r in pending[i][0]]
-        drawn = [
-            row
-            for i in order
-            for row in (pending[i][1] or [None] * len(pending[i][0]))  # type: ignore[list-item]
-        ]
         t0 = time.perf_counter()
-        calls = prepare(flat, self.engine, drawn)
-        return order, [len(pending[i][0]) for i in order], calls, time.perf_counter() - t0
+        calls = prepare([r for i in order for r in pending[i]], self.engine)
+        return order, [len(pending[i]) for i in order], calls, time.perf_counter() - t0
 
     def _outcomes(self, lane: _Lane, seconds: float) -> dict[int, list[TrialOutcome]]:
         """The outcomes of a lane's calls by generator, each generator's share of their
@@ -347,7 +314,7 @@ class Lockstep:
         return out
 
     def run(self) -> Generator[tuple[int, Any], None, None]:
-        lanes: list[dict[int, _Round]] = [{} for _ in range(LANES)]
+        lanes: list[dict[int, list[TrialRequest]]] = [{} for _ in range(LANES)]
         for i in range(len(self.steps)):
             try:
                 lanes[i % LANES][i] = self._advance(i, None)
@@ -366,7 +333,7 @@ class Lockstep:
                         continue
                     # the other lanes' kernel calls run meanwhile
                     prepared, future = call
-                    pending: dict[int, _Round] = {}
+                    pending: dict[int, list[TrialRequest]] = {}
                     for i, mine in self._outcomes(prepared, future.result()).items():
                         try:
                             pending[i] = self._advance(i, mine)
@@ -390,5 +357,3 @@ def _timed(calls: Calls) -> float:
 #: A lane's prepared round: its generators in order, their request counts, the kernel
 #: calls, and the seconds spent preparing them.
 _Lane = tuple[list[int], list[int], Calls, float]
-#: A generator's round: its requests, and their normals if drawn ahead (:func:`draw_ahead`).
-_Round = tuple[list[TrialRequest], list[np.ndarray | None] | None]
