@@ -6,10 +6,11 @@ Runs ``striatal sweep --seeds S --init chapter --max-trials 1000 --no-progress``
 ``--engine processes --workers 2``, ``--engine batch`` and ``--engine simd``, one after
 another, ``--repeats`` times, each as its own command (compile and start-up included,
 as a user sees them), timed with ``time.perf_counter``. Prints each wall time, its
-ratio to the processes run of the same repeat, the machine's load average before and
-after, and whether the batch rows equal the processes rows (every column but
-``wall_seconds``). Ratios, taken within one repeat, are the figures to read on a shared
-machine.
+ratio to the processes run of the same repeat, its CPU time (user + system, of the
+command and its worker processes), the machine's load average before and after, and
+whether the batch rows equal the processes rows (every column but ``wall_seconds``).
+Ratios, taken within one repeat, are the figures to read on a shared machine; there the
+process engine, whose two workers each need a core, loses most to the other load.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -51,12 +53,16 @@ def main() -> None:
             out = args.out / f"{name}{repeat}"
             shutil.rmtree(out, ignore_errors=True)
             load = os.getloadavg()[0]
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
             t0 = time.perf_counter()
             subprocess.run([*striatal, *base, *flags, "--out", str(out)], check=True)
             times[name] = time.perf_counter() - t0
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
             ratio = times[name] / times["processes"]
             print(
                 f"repeat {repeat} {name:9s} {times[name]:7.1f} s  / processes {ratio:5.2f}  "
+                f"cpu {cpu:6.1f} s  "
                 f"(load {load:.1f} -> {os.getloadavg()[0]:.1f})",
                 flush=True,
             )

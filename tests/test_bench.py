@@ -17,6 +17,7 @@ import sys
 import tomllib
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 
@@ -88,6 +89,32 @@ def test_mixed_batch_equals_scalar_kernel_bit_for_bit() -> None:
     assert faults[2::4].all() and faults[3::4].all()
     assert not faults[0::4].any()
     assert set(np.unique(outs[:, kernel.OUT_REWARD])) <= {10.0, -5.0}
+
+
+@pytest.mark.parametrize("chunk", [0, 2])
+def test_parallel_batch_rows_equal_serial_rows(chunk: int) -> None:
+    """The batch kernel's rows do not depend on its threads: one thread (serial), two,
+    static (chunk 0) or dynamic chunks (the engines' CHUNK), and the scalar kernel."""
+    rng = np.random.default_rng(11)
+    B = 12
+    states0, W, theta_c = _mixed_rows(rng, B)
+    noise = np.random.default_rng(5).standard_normal((B, SIM.n_steps))
+    threads, old = numba.get_num_threads(), numba.set_parallel_chunksize(chunk)
+    rows = []
+    try:
+        for n in sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}):
+            numba.set_num_threads(n)
+            rows.append(_batch(states0, W, theta_c, noise))
+    finally:
+        numba.set_num_threads(threads)
+        numba.set_parallel_chunksize(old)
+    for outs, traces in rows[1:]:
+        np.testing.assert_array_equal(outs, rows[0][0])
+        np.testing.assert_array_equal(traces, rows[0][1])
+    for b in range(B):
+        out, trace = _scalar(states0[b], W[b], theta_c[b], noise[b])
+        np.testing.assert_array_equal(rows[0][0][b], out)
+        np.testing.assert_array_equal(rows[0][1][b], trace)
 
 
 def test_mean_policy_batch_equals_scalar_kernel() -> None:

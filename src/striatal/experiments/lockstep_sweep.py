@@ -28,9 +28,10 @@ of the same experiment: the arms' success rates agree within their intervals
 (tests/test_lockstep_sweep.py, docs/performance.md), a given run's row need not.
 
 ``wall_seconds`` of a row is its share of the engine's time: its run's own Python plus
-an even share of each batched call it was in. The runs' Python and the kernel calls
-overlap (:class:`striatal.sim.batch.Lockstep`'s lanes), so the rows of a sweep sum to
-between its wall time and twice it.
+an even share of each batched call it was in (preparing it, the kernel, reading the
+outcomes). The runs' Python and the kernel calls overlap
+(:class:`striatal.sim.batch.Lockstep`'s lanes), so the rows of a sweep sum to between
+its wall time and twice it.
 """
 
 from __future__ import annotations

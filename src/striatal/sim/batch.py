@@ -30,6 +30,7 @@ import functools
 import time
 from collections.abc import Callable, Generator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
 from typing import Any, Literal, ParamSpec, TypeVar
 
 import numba
@@ -50,11 +51,14 @@ from striatal.sim.rollout import (
 __all__ = [
     "BATCH_ENGINES",
     "LANES",
+    "Calls",
+    "KernelCall",
     "Lockstep",
     "Steps",
     "TrialRequest",
     "drive",
     "driven",
+    "prepare",
     "run_requests",
 ]
 
@@ -96,70 +100,124 @@ def drive(steps: Steps[T]) -> T:
 
 
 def run_requests(
-    requests: Sequence[TrialRequest], engine: Literal["batch", "simd"] = "batch"
+    requests: Sequence[TrialRequest],
+    engine: Literal["batch", "simd"] = "batch",
 ) -> list[TrialOutcome]:
     """The outcomes of ``requests``, in their order, from as few batched kernel calls as
     their :meth:`TrialRequest.batch_key` allow.
 
     The action noise of each request is drawn from its generator in the order of
-    ``requests`` (what :func:`drive` would draw); traces are updated in place. "simd"
-    runs a group on the SIMD kernel unless its motor or track needs the exact one;
-    trials on a learned plant always run on the exact learned batch kernel.
+    ``requests`` (what :func:`drive` would draw); traces are updated in place. "simd" runs a
+    group on the SIMD kernel unless its motor or track needs the exact one; trials on a
+    learned plant always run on the exact learned batch kernel. The three
+    stages, :func:`prepare`, :meth:`Calls.run` and :meth:`Calls.outcomes`, can run on
+    different threads (:class:`Lockstep`).
     """
+    calls = prepare(requests, engine)
+    calls.run()
+    return calls.outcomes()
+
+
+@dataclass(frozen=True)
+class KernelCall:
+    """One batched kernel call: the indices of its requests, its arguments, and the
+    online trials' stacked critics (None: not online)."""
+
+    members: list[int]
+    args: kernel.BatchArgs
+    critic: kernel.CriticArgs | None
+
+
+@dataclass(frozen=True)
+class Calls:
+    """The kernel calls of a list of requests (:func:`prepare`); ``done`` holds the
+    outcomes of the requests that ran alone, by index."""
+
+    requests: Sequence[TrialRequest]
+    engine: Literal["batch", "simd"]
+    calls: list[KernelCall]
+    done: dict[int, TrialOutcome]
+
+    def run(self) -> None:
+        """Make the kernel calls: they release the GIL, so this can run on a thread
+        of its own while Python runs elsewhere."""
+        old = numba.set_parallel_chunksize(CHUNK)
+        try:
+            for call in self.calls:
+                args, critic = call.args, call.critic
+                first = self.requests[call.members[0]]
+                if critic is not None:
+                    kernel.run_online_trials_batch(*args[:7], critic, args.outs)
+                elif isinstance(first.plant, LearnedPlant):
+                    assert first.plant.dynamics is not None
+                    kernel.run_learned_trials_batch(first.plant.dynamics.args, *args)
+                elif self.engine == "simd" and first.hardware == CHAPTER_HARDWARE:
+                    # a block per thread when the trials are few
+                    block = -(-len(call.members) // numba.get_num_threads())
+                    kernel.run_trials_lockstep(*args, block)
+                else:
+                    kernel.run_trials_batch(*args)
+        finally:
+            numba.set_parallel_chunksize(old)
+
+    def outcomes(self) -> list[TrialOutcome]:
+        """The outcomes in the requests' order, after :meth:`run`; the traces (and an
+        online trial's critic) written back to each request's arrays."""
+        outcomes = dict(self.done)
+        for call in self.calls:
+            args, critic = call.args, call.critic
+            sim = self.requests[call.members[0]].sim
+            for j, i in enumerate(call.members):
+                r = self.requests[i]
+                r.trace[:] = args.learning.trace[j]
+                if critic is not None and r.online is not None:
+                    o = r.online
+                    for mine, rows in (
+                        (o.critic, critic.weights),
+                        (o.critic_trace, critic.trace),
+                        (o.stats, critic.stats),
+                        (o.square, critic.square),
+                        (o.gains_end, critic.gains_end),
+                    ):
+                        mine[:] = rows[j]
+                outcomes[i] = TrialOutcome.from_row(args.outs[j], sim)
+        return [outcomes[i] for i in range(len(self.requests))]
+
+
+def prepare(
+    requests: Sequence[TrialRequest],
+    engine: Literal["batch", "simd"] = "batch",
+) -> Calls:
+    """The batched kernel calls of ``requests`` (:func:`run_requests`): grouped by
+    :meth:`TrialRequest.batch_key`, their noise drawn, their arguments built. A request
+    that :attr:`~TrialRequest.runs_alone` runs here, on the scalar kernel, in its order."""
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
-    outcomes: list[TrialOutcome | None] = [None] * len(requests)
+    done: dict[int, TrialOutcome] = {}
     groups: dict[tuple[object, ...], list[int]] = {}
-    noise: dict[int, np.ndarray] = {}
+    noise: list[np.ndarray | None] = [None] * len(requests)
     keys = [r.batch_key() for r in requests]
     if any(key is None for key in keys):
         # a trial that runs alone draws as it runs: keep every draw in request order
         for i, (r, key) in enumerate(zip(requests, keys, strict=True)):
             if key is None:
-                outcomes[i] = r.run()
+                done[i] = r.run()
                 continue
-            noise[i] = r.noise()[0]
+            if r.draws_actions:
+                noise[i] = r.noise()[0]
             groups.setdefault(key, []).append(i)
     else:
         for i, key in enumerate(keys):
             groups.setdefault(key, []).append(i)  # type: ignore[arg-type]
-        noise = _draw_noise(requests)
+        _draw_noise(requests, noise)
+    calls = []
     for members in groups.values():
         group = [requests[i] for i in members]
         first = group[0]
-        args = batch_args(
-            group, np.array([noise[i] for i in members]) if first.draws_actions else None
-        )
+        rows = np.array([noise[i] for i in members]) if first.draws_actions else None
         critic = None if first.online is None else _critics(group)
-        old = numba.set_parallel_chunksize(CHUNK)
-        try:
-            if critic is not None:
-                kernel.run_online_trials_batch(*args[:7], critic, args.outs)
-            elif isinstance(first.plant, LearnedPlant):
-                assert first.plant.dynamics is not None
-                kernel.run_learned_trials_batch(first.plant.dynamics.args, *args)
-            elif engine == "simd" and first.hardware == CHAPTER_HARDWARE:
-                # a block per thread when the trials are few
-                block = -(-len(group) // numba.get_num_threads())
-                kernel.run_trials_lockstep(*args, block)
-            else:
-                kernel.run_trials_batch(*args)
-        finally:
-            numba.set_parallel_chunksize(old)
-        for j, (i, r) in enumerate(zip(members, group, strict=True)):
-            r.trace[:] = args.learning.trace[j]
-            if critic is not None and r.online is not None:
-                o = r.online
-                for mine, rows in (
-                    (o.critic, critic.weights),
-                    (o.critic_trace, critic.trace),
-                    (o.stats, critic.stats),
-                    (o.square, critic.square),
-                    (o.gains_end, critic.gains_end),
-                ):
-                    mine[:] = rows[j]
-            outcomes[i] = TrialOutcome.from_row(args.outs[j], first.sim)
-    return outcomes  # type: ignore[return-value]
+        calls.append(KernelCall(members, batch_args(group, rows), critic))
+    return Calls(requests, engine, calls, done)
 
 
 def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
@@ -175,16 +233,19 @@ def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
     )
 
 
-def _draw_noise(requests: Sequence[TrialRequest]) -> dict[int, np.ndarray]:
-    """The action normals of every request that draws them, by index: each generator's
-    requests in their order (what run_trial draws), different generators on threads
-    (:func:`striatal.sim.noise.run_parts`) once there are enough normals to pay."""
+def _draw_noise(requests: Sequence[TrialRequest], noise: list[np.ndarray | None]) -> None:
+    """Fill ``noise[i]`` with the action normals of every request that draws them: each
+    generator's requests in their order (what run_trial draws), different
+    generators on threads (:func:`striatal.sim.noise.run_parts`) once there are enough
+    normals to pay."""
     by_rng: dict[int, list[int]] = {}
-    noise: dict[int, np.ndarray] = {}
+    todo = 0
     for i, r in enumerate(requests):
         if r.draws_actions:
             by_rng.setdefault(id(r.rng), []).append(i)
-            noise[i] = np.empty(action_draws(r.sim, r.action_every))
+            n = action_draws(r.sim, r.action_every)
+            noise[i] = np.empty(n)
+            todo += n
     chains = list(by_rng.values())
 
     def part(chain_ids: range) -> Callable[[], None]:
@@ -195,11 +256,10 @@ def _draw_noise(requests: Sequence[TrialRequest]) -> dict[int, np.ndarray]:
 
         return fill
 
-    if sum(a.size for a in noise.values()) < PARALLEL_NORMALS:
+    if todo < PARALLEL_NORMALS:
         part(range(len(chains)))()
     else:
         run_parts([part(ids) for ids in row_parts(len(chains))])
-    return noise
 
 
 class Lockstep:
@@ -207,12 +267,14 @@ class Lockstep:
     one run in batched kernel calls (:func:`run_requests`).
 
     The generators are split into :data:`LANES` groups that take turns: while one
-    group's trials run (their noise drawn and the kernel called on a worker thread, the
-    kernels releasing the GIL), the main thread advances the other group's generators
-    with the outcomes of its last call (their Python: the rules' plans and updates, the
-    success tests). The kernel's threads and the runs' Python then overlap instead of
-    taking turns. A generator is always in the same group, so its trials, and the order
-    in which its generator draws their noise, are what they would be alone.
+    group's kernel calls run on a worker thread (:meth:`Calls.run`, the kernels
+    releasing the GIL), the main thread advances the other group's generators with the
+    outcomes of its last calls (their Python: the rules' plans and updates, the success
+    tests) and prepares their next calls (:func:`prepare`: grouping, noise, arguments).
+    The kernel's threads and the runs' Python and noise then overlap instead of taking
+    turns, and the kernel waits for no Python between a lane's calls. A generator is
+    always in the same group, so its trials, and the order in which its generator draws
+    their noise, are what they would be alone.
 
     :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value.
     ``seconds[i]``: the wall time spent on generator i, its own Python plus an even
@@ -235,18 +297,24 @@ class Lockstep:
         finally:
             self.seconds[i] += time.perf_counter() - t0
 
-    def _call(self, pending: dict[int, list[TrialRequest]]) -> _Call:
-        """Run the requests of ``pending`` (on the worker thread): their outcomes by
-        generator, each generator's share of the call's wall time added."""
+    def _prepare(self, pending: dict[int, list[TrialRequest]]) -> _Lane:
+        """The kernel calls of ``pending``'s requests (:func:`prepare`), on this thread."""
         order = list(pending)
-        flat = [r for i in order for r in pending[i]]
         t0 = time.perf_counter()
-        outcomes = run_requests(flat, self.engine)
-        share = (time.perf_counter() - t0) / max(len(flat), 1)
+        calls = prepare([r for i in order for r in pending[i]], self.engine)
+        return order, [len(pending[i]) for i in order], calls, time.perf_counter() - t0
+
+    def _outcomes(self, lane: _Lane, seconds: float) -> dict[int, list[TrialOutcome]]:
+        """The outcomes of a lane's calls by generator, each generator's share of their
+        time (``seconds`` and this thread's preparing and reading) added."""
+        order, counts, calls, prepared = lane
+        t0 = time.perf_counter()
+        outcomes = calls.outcomes()
+        spent = prepared + seconds + time.perf_counter() - t0
+        share = spent / max(len(outcomes), 1)
         out: dict[int, list[TrialOutcome]] = {}
         at = 0
-        for i in order:
-            n = len(pending[i])
+        for i, n in zip(order, counts, strict=True):
             self.seconds[i] += share * n
             out[i], at = outcomes[at : at + n], at + n
         return out
@@ -260,24 +328,38 @@ class Lockstep:
                 yield i, stop.value
         worker = ThreadPoolExecutor(1, thread_name_prefix="lockstep")
         try:
-            calls: list[Future[_Call] | None] = [
-                worker.submit(self._call, lane) if lane else None for lane in lanes
-            ]
+            calls: list[tuple[_Lane, Future[float]] | None] = [None] * LANES
+            for g, lane in enumerate(lanes):
+                if lane:
+                    prepared = self._prepare(lane)
+                    calls[g] = prepared, worker.submit(_timed, prepared[2])
             while any(call is not None for call in calls):
                 for g, call in enumerate(calls):
                     if call is None:
                         continue
                     # the other lanes' kernel calls run meanwhile
+                    prepared, future = call
                     pending: dict[int, list[TrialRequest]] = {}
-                    for i, mine in call.result().items():
+                    for i, mine in self._outcomes(prepared, future.result()).items():
                         try:
                             pending[i] = self._advance(i, mine)
                         except StopIteration as stop:
                             yield i, stop.value
-                    calls[g] = worker.submit(self._call, pending) if pending else None
+                    calls[g] = None
+                    if pending:
+                        prepared = self._prepare(pending)
+                        calls[g] = prepared, worker.submit(_timed, prepared[2])
         finally:
             worker.shutdown(wait=True, cancel_futures=True)
 
 
-#: The outcomes of one lane's kernel calls, by generator.
-_Call = dict[int, list[TrialOutcome]]
+def _timed(calls: Calls) -> float:
+    """Run ``calls``' kernels (on the worker thread): the wall time they took [s]."""
+    t0 = time.perf_counter()
+    calls.run()
+    return time.perf_counter() - t0
+
+
+#: A lane's prepared round: its generators in order, their request counts, the kernel
+#: calls, and the seconds spent preparing them.
+_Lane = tuple[list[int], list[int], Calls, float]

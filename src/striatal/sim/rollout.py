@@ -461,14 +461,19 @@ class TrialRequest:
         rows = traj[: int(out[kernel.OUT_END_STEP]) + 1] if self.record else None
         return TrialOutcome.from_row(out, self.sim, rows)
 
-    def batch_key(self) -> tuple[object, ...] | None:
-        """What a batched kernel call shares with this trial; None if it runs alone
-        (sensor noise: the batch kernel has none; a recorded trial: it records none; an
-        online trial on a learned plant: no kernel runs it). The plant is part of the key,
-        so learned plants share a call only with the same model (a learned model is
-        equal only to itself)."""
+    @property
+    def runs_alone(self) -> bool:
+        """Whether no batch kernel takes the trial (sensor noise: the batch kernels have
+        none; a recorded trial: they record none; an online trial on a learned plant: no
+        kernel runs it)."""
         learned = isinstance(self.plant, LearnedPlant)
-        if self.sensor.active or self.record or (learned and self.online is not None):
+        return self.sensor.active or self.record or (learned and self.online is not None)
+
+    def batch_key(self) -> tuple[object, ...] | None:
+        """What a batched kernel call shares with this trial; None if it
+        :attr:`runs_alone`. The plant is part of the key, so learned plants share a call
+        only with the same model (a learned model is equal only to itself)."""
+        if self.runs_alone:
             return None
         c = self.controller
         return (
