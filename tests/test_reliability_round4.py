@@ -445,3 +445,92 @@ def test_what_a_sweep_and_an_ablation_write_is_what_their_schemas_read(
     assert r.rc == 0, r.err
     schema.AblationModel.of(json.loads((out / "ablation.json").read_text()), "ablation")
     schema.read_summary(out)
+
+
+# -- N12: a big history is read into arrays, and drawn with bounded points -------------
+
+
+def _history_file(path: Path, n: int, every_empty: int = 3) -> Path:
+    """A chapter history.csv of ``n`` trials (random gains, some empty cells)."""
+    from striatal.learners import RULES
+    from striatal.learners.state import history_columns
+
+    columns = history_columns(RULES["chapter"].history_columns)
+    x = np.random.default_rng(0).normal(size=(n, 8))
+    with path.open("w") as fh:
+        fh.write(",".join(columns) + "\n")
+        for i in range(n):
+            empty = "" if i % every_empty else "0.5"
+            cells = [str(i + 1), "-5.0", *map(repr, x[i].tolist()), empty, "5.0", "0", "0", "0"]
+            fh.write(",".join(cells) + "\n")
+    return path
+
+
+def test_n12_reading_a_history_holds_its_numbers_not_its_text(tmp_path: Path) -> None:
+    """N12: read_history's peak is its numbers plus a chunk, never the file's text (the
+    old reader held the text, then a tuple per row: several times the file)."""
+    import tracemalloc
+
+    from striatal.io.rundir import read_history
+
+    path = _history_file(tmp_path / "history.csv", 40_000)
+    read_history(path)  # imports and schemas built once, outside the measurement
+    tracemalloc.start()
+    try:
+        history = read_history(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    size = path.stat().st_size
+    assert history.data.shape == (40_000, 15)
+    assert np.isnan(history.column("min_abs_theta_swingup")[1])
+    assert history.data.nbytes <= peak < history.data.nbytes + size / 4, (peak, size)
+
+
+def test_a_small_file_is_read_into_a_buffer_of_its_size(tmp_path: Path) -> None:
+    """Found while measuring N12: read_text asked for a 256 MiB buffer for every file."""
+    import tracemalloc
+
+    from striatal.io.files import read_json
+
+    path = tmp_path / "small.json"
+    path.write_text(json.dumps({"a": [1.0] * 100}))
+    read_json(path)
+    tracemalloc.start()
+    try:
+        read_json(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 2**20, peak
+
+
+def test_n12_a_history_line_past_its_line_count_is_refused(tmp_path: Path) -> None:
+    """The rows are allocated from the line ends counted first; a bad cell names its line."""
+    from striatal.io.rundir import read_history
+
+    path = _history_file(tmp_path / "history.csv", 3000)
+    lines = path.read_text().splitlines(keepends=True)
+    lines[2500] = lines[2500].replace("-5.0", "abc", 1)
+    path.write_text("".join(lines))
+    with pytest.raises(DataFileError, match="line 2501: column reward is not a number"):
+        read_history(path)
+    lines[2500] = lines[2500].replace("abc", "-5.0", 1)
+    path.write_text("".join(lines).replace("\n", "\r\n"))
+    assert len(read_history(path)) == 3000
+
+
+def test_n12_curves_draw_a_bounded_number_of_points_with_the_same_extent() -> None:
+    """N12: a curve of a million trials is drawn as at most 2 x DRAWN_COLUMNS points, each
+    pixel column keeping its lowest and highest value."""
+    from striatal.viz.curves import DRAWN_COLUMNS, drawn
+
+    x = np.arange(1.0, 1_000_001.0)
+    y = np.sin(x / 5000.0) + np.random.default_rng(1).normal(0, 0.1, x.size)
+    dx, dy = drawn(x, y)
+    assert len(dx) <= 2 * DRAWN_COLUMNS
+    assert dy.min() == y.min() and dy.max() == y.max()
+    cut = x <= 500_000
+    assert dy[dx <= 500_000].max() == y[cut].max()
+    small = np.arange(10.0)
+    assert len(drawn(small, small)[0]) == 10
