@@ -111,6 +111,7 @@ def test_n1_the_generic_model_run_writes_its_result_and_resumes(tmp_path: Path) 
         ("one short", "not a multiple of 11"),
         ("unknown", "state.memory.trace is not kept by the forward learner"),
         ("imagined negative", "state.memory.imagined holds a negative count"),
+        ("imagined fraction", "state.memory.imagined.0 is a count, not a whole number"),
     ],
 )
 def test_n4_the_forward_memory_is_checked_on_resume(
@@ -133,6 +134,8 @@ def test_n4_the_forward_memory_is_checked_on_resume(
             mem["data"] = mem["data"][:-1]
         elif how == "unknown":
             mem["trace"] = [0.0] * 6
+        elif how == "imagined fraction":
+            mem["imagined"] = [1.5, 0.0]
         else:
             mem["imagined"] = [-1.0, 0.0]
 
