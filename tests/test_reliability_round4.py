@@ -239,6 +239,10 @@ def test_n9_a_library_that_does_not_load_is_refused_before_any_file(
         ("runs", -3, "runs"),
         ("successes", 9, "successes"),
         ("success_rate_ci", [0.9, 0.1], "success_rate"),
+        # held-out round-3 case: a field of the wrong type
+        ("runs", "2", "field arms.0.runs"),
+        ("success_rate", "x", "field arms.0.success_rate"),
+        ("trials_median", [1], "field arms.0.trials_median"),
     ],
 )
 def test_h25_compare_refuses_impossible_rates_and_counts(
@@ -275,6 +279,8 @@ def test_compare_writes_the_format_of_its_suffix(swept: Path, tmp_path: Path) ->
         (("robustness", "R", "--repeats", "1000000000"), "--repeats"),
         (("sweep", "--connect-timeout", "1e308"), "--connect-timeout"),
         (("switch-figure", "--inhibition", ",".join(["5"] * 13)), "at most 12"),
+        # held-out round-3 case: 200 values took over a minute
+        (("switch-figure", "--inhibition", ",".join(["5"] * 200)), "at most 12"),
     ],
 )
 def test_work_past_its_limit_is_refused_at_once(argv: tuple[str, ...], says: str) -> None:
@@ -537,3 +543,61 @@ def test_n12_curves_draw_a_bounded_number_of_points_with_the_same_extent() -> No
     assert dy[dx <= 500_000].max() == y[cut].max()
     small = np.arange(10.0)
     assert len(drawn(small, small)[0]) == 10
+
+
+# -- found by this round's own hostile pass --------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("table", "field"),
+    [
+        ("learner_vs_control", "success_rate"),
+        ("learner_vs_control", "control_success_rate"),
+        ("learner_vs_control", "fisher"),
+    ],
+)
+def test_compare_refuses_a_comparison_without_its_rates(
+    swept: Path, tmp_path: Path, table: str, field: str
+) -> None:
+    """A learner-against-control entry of summary.json lacking a rate ended in a
+    KeyError traceback: the pairs are held to their schema too."""
+    folder = copy_of(swept, tmp_path)
+    edit_json(folder / "summary.json", lambda d: d[table][0].pop(field))
+    one_line(cli_in_process("compare", str(folder)), f"field {table}.0.{field}")
+
+
+def test_compare_names_the_summary_of_each_row(swept: Path, tmp_path: Path) -> None:
+    """H25: with several summaries, each row of the table names the one it came from."""
+    other = copy_of(swept, tmp_path)
+    r = cli_in_process("compare", str(swept), str(other))
+    assert r.rc == 0, r.err
+    header, _, *rows = r.out.split("\n\n")[0].splitlines()
+    assert header.startswith("| source | arm |")
+    assert {row.split(" | ")[0].removeprefix("| ") for row in rows} == {str(swept), str(other)}
+    single = cli_in_process("compare", str(swept))
+    assert single.out.startswith("| arm |")
+
+
+@pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="needs [cluster]")
+@pytest.mark.parametrize("address", ["nonsense:::", "localhost"])
+def test_a_ray_address_that_is_refused_writes_nothing(tmp_path: Path, address: str) -> None:
+    """H20: an address Ray refuses (not HOST:PORT) wrote sweep.json and runs.csv first."""
+    out = tmp_path / "s"
+    r = cli_in_process(
+        *("sweep", "--backend", "ray", "--address", address, "--connect-timeout", "20"),
+        *("--seeds", "1", "--max-trials", "1", "--out", str(out)),
+    )
+    one_line(r, "cannot connect to the Ray cluster")
+    assert not out.exists()
+
+
+def test_the_network_s_work_is_bounded_before_it_starts() -> None:
+    """neural --learn --trials 2147483647 ran without bound: the network's work (trials x
+    steps x neurons) is held to the same limit as every command's."""
+    from striatal.neural.network import NetworkConfig
+
+    with pytest.raises(ParameterError, match="2,147,483,647 trials x 30,000 steps"):
+        NetworkConfig().check_work(30.0, 0.001, 2**31 - 1)
+    NetworkConfig().check_work(30.0, 0.001, 20)
+    pytest.importorskip("nengo")
+    one_line(cli_in_process("neural", "--learn", "--trials", "2147483647"), "would simulate")

@@ -328,6 +328,7 @@ def learn_network(
     seed = check_seed(seed)
     if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
         raise ParameterError(f"trials must be a whole number >= 1, got {trials!r}")
+    config.check_work(sim.duration, net_dt, trials)
     protocol = Protocol() if protocol is None else protocol
     if 0.0 <= protocol.check_time < sim.duration:
         raise ParameterError(
