@@ -470,7 +470,8 @@ def _history_file(path: Path, n: int, every_empty: int = 3) -> Path:
         fh.write(",".join(columns) + "\n")
         for i in range(n):
             empty = "" if i % every_empty else "0.5"
-            cells = [str(i + 1), "-5.0", *map(repr, x[i].tolist()), empty, "5.0", "0", "0", "0"]
+            gains, sigma = map(repr, x[i, :6].tolist()), repr(abs(float(x[i, 7])))
+            cells = [str(i + 1), "-5.0", *gains, "0.6", sigma, empty, "5.0", "0", "0", "0"]
             fh.write(",".join(cells) + "\n")
     return path
 
@@ -601,3 +602,60 @@ def test_the_network_s_work_is_bounded_before_it_starts() -> None:
     NetworkConfig().check_work(30.0, 0.001, 20)
     pytest.importorskip("nengo")
     one_line(cli_in_process("neural", "--learn", "--trials", "2147483647"), "would simulate")
+
+
+def test_a_history_theta_c_outside_its_range_is_one_line(tmp_path: Path) -> None:
+    """theta_c = 1e308 in history.csv ended in matplotlib's OverflowError traceback in
+    curves: the history schema holds theta_c to (0, pi], as every learner keeps it."""
+    path = _history_file(tmp_path / "history.csv", 5)
+    lines = path.read_text().splitlines(keepends=True)
+    cells = lines[3].split(",")
+    cells[8] = "1e308"
+    lines[3] = ",".join(cells)
+    path.write_text("".join(lines))
+    r = cli_in_process("curves", str(path), "--out", str(tmp_path / "c.png"))
+    one_line(r, "line 4: column theta_c must be in (0, pi]")
+    assert not (tmp_path / "c.png").exists()
+
+
+def test_curves_draw_gains_too_large_for_an_axis(tmp_path: Path) -> None:
+    """W1 alternating +-1e308 (a run without a step bound can reach such gains) ended in
+    a LinAlgError traceback; it is drawn at +-1e100, and the figure says so."""
+    from striatal.io.rundir import read_history
+    from striatal.viz.curves import learning_curves
+
+    path = _history_file(tmp_path / "history.csv", 6)
+    lines = path.read_text().splitlines(keepends=True)
+    for i in range(1, 7):
+        cells = lines[i].split(",")
+        cells[2] = "1e308" if i % 2 else "-1e308"
+        lines[i] = ",".join(cells)
+    path.write_text("".join(lines))
+    r = cli_in_process("curves", str(path), "--out", str(tmp_path / "c.png"))
+    assert r.rc == 0, r.err
+    fig = learning_curves(read_history(path))
+    assert "values beyond +-1e+100 drawn at +-1e+100" in fig.texts[0].get_text()
+
+
+def test_an_animation_s_frames_are_bounded_in_bytes_before_the_run() -> None:
+    """animate --width 4096 --height 4096 at 4 801 frames asked for 225 GiB (a process
+    without a memory limit would have been killed); refused before the simulation."""
+    r = cli_in_process(
+        *("animate", "--width", "4096", "--height", "4096", "--fps", "100"),
+        *("--speed", "0.125", "--duration", "6", "--out", "x.gif"),
+    )
+    one_line(r, "4,801 frames of 4096 x 4096 px", "more than 2 GiB")
+
+
+def test_the_bench_s_work_is_bounded_before_it_times_anything(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The sweeps the bench times (--sweep-seeds up to 10 000: 4.8 * 10**11 steps) are held
+    to the work limit before the first timing, like every command's, with the estimate."""
+    from striatal.bench.timing import BenchConfig
+
+    monkeypatch.setenv("STRIATAL_MAX_STEPS", str(10**9))
+    with pytest.raises(ParameterError, match="sweeps 80,000,000"):
+        BenchConfig(sweep_seeds=10_000).check_work()
+    BenchConfig(train_max_trials=20).check_work()
+    one_line(cli_in_process("bench", "--sweep-seeds", "10000"), "the bench would simulate")

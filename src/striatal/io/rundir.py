@@ -489,6 +489,8 @@ def _history_chunk(
             bad |= (col < 0) | (col != np.floor(col))
         elif kind == "nonnegative":
             bad |= col < 0
+        elif kind == "angle":
+            bad |= (col <= 0) | (col > math.pi)
         if empty is not None:
             bad |= empty & (kind != "empty")
             if kind == "empty":
@@ -532,6 +534,8 @@ def _history_cell(cell: str | None, column: str, kind: str, where: str) -> float
         )
     if kind == "nonnegative" and v < 0:
         raise DataFileError(f"{where}: column {column} must be >= 0, got {cell!r:.40}")
+    if kind == "angle" and not 0 < v <= math.pi:
+        raise DataFileError(f"{where}: column {column} must be in (0, pi], got {cell!r:.40}")
     return v
 
 

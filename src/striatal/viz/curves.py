@@ -10,7 +10,14 @@ from striatal.errors import ParameterError
 from striatal.learners import History
 from striatal.viz.canvas import new_figure
 
-__all__ = ["DRAWN_COLUMNS", "RULE_PANELS", "drawn", "learning_curves", "running_mean"]
+__all__ = [
+    "DRAWN_COLUMNS",
+    "DRAWN_LIMIT",
+    "RULE_PANELS",
+    "drawn",
+    "learning_curves",
+    "running_mean",
+]
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -25,6 +32,9 @@ def running_mean(values: np.ndarray, window: int) -> np.ndarray:
     return (c[i] - c[lo]) / (i - lo)
 
 
+#: Largest magnitude drawn: a value beyond (a gain of a run without a step bound) is
+#: drawn at the edge, and the figure says so (an axis cannot span +-1e308).
+DRAWN_LIMIT = 1e100
 #: Most columns of points a curve is drawn with: more than a figure has pixels across
 #: at any --dpi it takes (at most 1000 dpi on an 8-inch axis).
 DRAWN_COLUMNS = 8192
@@ -41,7 +51,8 @@ def drawn(
     only the extent of its points, but the figure holds at most ``2 * columns`` points
     instead of one per trial: its memory does not grow with the history.
     """
-    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    x = np.asarray(x, dtype=float)
+    y = np.clip(np.asarray(y, dtype=float), -DRAWN_LIMIT, DRAWN_LIMIT)
     if len(x) <= 2 * columns:
         return x, y
     edges = np.linspace(x[0], x[-1], columns, endpoint=False)
@@ -146,6 +157,8 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
     axes[-1].set_xlabel("trial")
     counted = f"{int((reward > 0).sum())} with reward > 0, " if sparse else ""
     unchanged = f"\n{history.learner}'s " + ", ".join(flat) + " (not drawn)" if flat else ""
+    if np.nanmax(np.abs(history.data), initial=0.0) > DRAWN_LIMIT:
+        unchanged += f"\nvalues beyond +-{DRAWN_LIMIT:.0e} drawn at +-{DRAWN_LIMIT:.0e}"
     fig.suptitle(
         title
         or f"Learning curves ({history.learner}): {len(history)} trials, {counted}"

@@ -226,9 +226,11 @@ def check_memory(learner: str, state: StateModel, where: str) -> None:
 
 #: How each history.csv column is checked (a column not listed: a finite number).
 #: "count": a whole number >= 0; "flag": 0 or 1; "empty": a number, or empty (NaN:
-#: not recorded in this trial, e.g. the fitted pole mass of a trial that fitted none).
-HISTORY_CELLS: dict[str, Literal["count", "flag", "empty", "nonnegative"]] = {
+#: not recorded in this trial, e.g. the fitted pole mass of a trial that fitted none);
+#: "angle": theta_c, in (0, pi] [rad] as every learner keeps it (eq 21).
+HISTORY_CELLS: dict[str, Literal["count", "flag", "empty", "nonnegative", "angle"]] = {
     "trial": "count",
+    "theta_c": "angle",
     "success": "flag",
     "fault": "flag",
     "early": "flag",
