@@ -66,7 +66,10 @@ def check_animation(t_end: float, fps: float, speed: float, width: int, height: 
             raise ParameterError(f"--{name} must be a whole number of px, got {v!r}")
         if not FRAME_PX[0] <= v <= FRAME_PX[1]:
             raise ParameterError(f"--{name} must be in [{FRAME_PX[0]}, {FRAME_PX[1]}] px, got {v}")
-    n = len(frame_times(t_end, fps, speed))
+    frame_times(0.0, fps, speed)  # fps and speed > 0
+    n = count_of_steps(
+        t_end, speed / fps, cap=MAX_FRAMES, what="frames", fix="raise --speed or lower --fps"
+    )
     size = n * width * height * 3
     if size > MAX_FRAME_BYTES:
         raise ParameterError(
