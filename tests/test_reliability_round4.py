@@ -515,8 +515,9 @@ def test_a_small_file_is_read_into_a_buffer_of_its_size(tmp_path: Path) -> None:
     assert peak < 2**20, peak
 
 
-def test_n12_a_history_line_past_its_line_count_is_refused(tmp_path: Path) -> None:
-    """The rows are allocated from the line ends counted first; a bad cell names its line."""
+def test_n12_a_bad_cell_names_its_line_and_crlf_lines_are_read(tmp_path: Path) -> None:
+    """The rows are allocated from the line ends counted first (CR LF counted once); a bad
+    cell in a later chunk still names its line."""
     from striatal.io.rundir import read_history
 
     path = _history_file(tmp_path / "history.csv", 3000)
