@@ -70,6 +70,14 @@ class BenchConfig:
         if self.train_max_trials is not None and self.train_max_trials < 1:
             raise ParameterError(f"train max trials must be >= 1, got {self.train_max_trials}")
 
+    @property
+    def timed_seconds(self) -> float:
+        """The wall budget of the timed repeats [s], at most: each timed side (three
+        comparisons of two sides, one per scaling duration) calibrates for ``seconds``
+        and then times ``repeats`` repeats of about ``seconds``; ``anchors`` add theirs."""
+        sides = 3 * 2 + len(self.scaling_durations)
+        return sides * (self.repeats + 1) * self.seconds
+
     def check_work(self) -> None:
         """ParameterError (one line, with the estimate) if the commands the bench times
         (``train``, the sweeps of ``sweep_seeds`` and ``memory_runs``, each of the
