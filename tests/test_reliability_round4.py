@@ -660,3 +660,13 @@ def test_the_bench_s_work_is_bounded_before_it_times_anything(
         BenchConfig(sweep_seeds=10_000).check_work()
     BenchConfig(train_max_trials=20).check_work()
     one_line(cli_in_process("bench", "--sweep-seeds", "10000"), "the bench would simulate")
+
+
+@pytest.mark.parametrize("x0", ["16", "-16", "1e300"])
+def test_figure_of_a_run_that_starts_beyond_the_view(tmp_path: Path, x0: str) -> None:
+    """Found by tests/test_fuzz.py: `figure --x0 16` (a start beyond the 15-m view, so no
+    point inside it) ended in numpy's zero-size-array ValueError traceback."""
+    out = tmp_path / "f.png"
+    r = cli_in_process("figure", "--duration", "2", "--x0", x0, "--out", str(out))
+    assert r.rc == 0 and not r.err.strip(), r.err
+    assert out.exists()
