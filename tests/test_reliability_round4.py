@@ -670,3 +670,16 @@ def test_figure_of_a_run_that_starts_beyond_the_view(tmp_path: Path, x0: str) ->
     r = cli_in_process("figure", "--duration", "2", "--x0", x0, "--out", str(out))
     assert r.rc == 0 and not r.err.strip(), r.err
     assert out.exists()
+
+
+@pytest.mark.parametrize("inits", [1, True, [], ["x"], "chapter"])
+def test_profile_refuses_summary_settings_of_the_wrong_type(
+    swept: Path, tmp_path: Path, inits: Any
+) -> None:
+    """Found by benchmarks/hostile_files.py: summary.json's settings were any object, and
+    `inits: 1` ended in a TypeError traceback in profile's title; they are held to the
+    sweep settings' schema (SweepModel)."""
+    folder = copy_of(swept, tmp_path)
+    edit_json(folder / "summary.json", lambda d: d["settings"].__setitem__("inits", inits))
+    r = cli_in_process("profile", str(folder), "--out", str(tmp_path / "p.png"))
+    one_line(r, "field settings.inits")

@@ -240,26 +240,6 @@ class BaselinePair(_Pair):
     baseline_simulated_seconds_restricted_mean: NonNegative | None
 
 
-class SummaryModel(BaseModel):
-    """summary.json of a sweep (or an ablation): its arms, comparisons, notes, settings."""
-
-    model_config = _MODEL
-    arms: Annotated[list[ArmSummary], Field(max_length=100_000)]
-    learner_vs_control: list[PairSummary] = []
-    learner_vs_baselines: list[BaselinePair] = []
-    notes: list[str] = []
-    settings: dict[str, Any] = {}
-
-    @model_validator(mode="after")
-    def _unique(self) -> SummaryModel:
-        seen: set[tuple[str, str]] = set()
-        for a in self.arms:
-            if (a.arm, a.init) in seen:
-                raise ValueError(f"arm {a.arm!r} (init {a.init!r}) appears twice")
-            seen.add((a.arm, a.init))
-        return self
-
-
 class SweepModel(BaseModel):
     """sweep.json: the settings of a sweep (what every run of its folder computes).
 
@@ -275,6 +255,9 @@ class SweepModel(BaseModel):
     arms: dict[Name, dict[str, Any]] | None = None
     root_seed: Seed | None = None
     run_seeds: list[Seed] | None = None
+    inits: Annotated[list[Literal["chapter", "random"]], Field(min_length=1)] | None = None
+    success_on: Name | None = None
+    robust: bool | None = None
 
     @model_validator(mode="after")
     def _seeds(self) -> SweepModel:
@@ -284,6 +267,26 @@ class SweepModel(BaseModel):
             and len(self.run_seeds) != self.seeds
         ):
             raise ValueError(f"run_seeds holds {len(self.run_seeds)} seeds, not {self.seeds}")
+        return self
+
+
+class SummaryModel(BaseModel):
+    """summary.json of a sweep (or an ablation): its arms, comparisons, notes, settings."""
+
+    model_config = _MODEL
+    arms: Annotated[list[ArmSummary], Field(max_length=100_000)]
+    learner_vs_control: list[PairSummary] = []
+    learner_vs_baselines: list[BaselinePair] = []
+    notes: list[str] = []
+    settings: SweepModel = SweepModel()
+
+    @model_validator(mode="after")
+    def _unique(self) -> SummaryModel:
+        seen: set[tuple[str, str]] = set()
+        for a in self.arms:
+            if (a.arm, a.init) in seen:
+                raise ValueError(f"arm {a.arm!r} (init {a.init!r}) appears twice")
+            seen.add((a.arm, a.init))
         return self
 
 
