@@ -224,7 +224,7 @@ def test_python_api_gives_exactly_what_the_cli_gives(tmp_path: Path) -> None:
     assert run.settings == want["settings"]
     from_file = striatal.read_history(out / "history.csv")
     assert run.history.columns == from_file.columns
-    np.testing.assert_array_equal(np.array(run.history.rows), np.array(from_file.rows))
+    np.testing.assert_array_equal(run.history.data, from_file.data)
     assert len(run.history) == run.trials
 
 

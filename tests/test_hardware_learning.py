@@ -161,7 +161,7 @@ def test_resume_keeps_the_limits(tmp_path: Path) -> None:
     resumed = striatal.train(out=tmp_path, resume=True, max_trials=8)
     assert resumed.settings["config"]["track"] == 2.4
     assert resumed.state == whole.state
-    assert resumed.history.rows == whole.history.rows
+    assert resumed.history == whole.history
 
 
 def test_the_searches_run_under_the_given_hardware(hardwares: list[Hardware]) -> None:

@@ -43,7 +43,7 @@ def test_init_gains_with_negative_w1_equals_the_random_draw(learner: str) -> Non
     assert b.settings["w1_floored_from"] == -0.5
     assert "w1_floored_from" not in a.settings
     assert a.history.columns == b.history.columns
-    np.testing.assert_array_equal(np.array(a.history.rows), np.array(b.history.rows))
+    np.testing.assert_array_equal(a.history.data, b.history.data)
     assert a.W == b.W and a.theta_c == b.theta_c
     assert a.state.rng_state == b.state.rng_state
 

@@ -274,10 +274,10 @@ def history_of(h: Any, **columns: np.ndarray) -> Any:
     """``h`` with the named columns replaced."""
     from dataclasses import replace
 
-    rows = np.array(h.rows, dtype=float)
+    data = h.data.copy()
     for name, values in columns.items():
-        rows[:, h.columns.index(name)] = values
-    return replace(h, rows=tuple(tuple(r) for r in rows))
+        data[:, h.columns.index(name)] = values
+    return replace(h, data=data)
 
 
 def _labels(fig: Any) -> list[str]:

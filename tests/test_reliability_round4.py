@@ -111,6 +111,7 @@ def test_n1_the_generic_model_run_writes_its_result_and_resumes(tmp_path: Path) 
         ("one short", "not a multiple of 11"),
         ("unknown", "state.memory.trace is not kept by the forward learner"),
         ("imagined negative", "state.memory.imagined holds a negative count"),
+        ("imagined fraction", "state.memory.imagined.0 is a count, not a whole number"),
     ],
 )
 def test_n4_the_forward_memory_is_checked_on_resume(
@@ -133,6 +134,8 @@ def test_n4_the_forward_memory_is_checked_on_resume(
             mem["data"] = mem["data"][:-1]
         elif how == "unknown":
             mem["trace"] = [0.0] * 6
+        elif how == "imagined fraction":
+            mem["imagined"] = [1.5, 0.0]
         else:
             mem["imagined"] = [-1.0, 0.0]
 
@@ -236,6 +239,10 @@ def test_n9_a_library_that_does_not_load_is_refused_before_any_file(
         ("runs", -3, "runs"),
         ("successes", 9, "successes"),
         ("success_rate_ci", [0.9, 0.1], "success_rate"),
+        # held-out round-3 case: a field of the wrong type
+        ("runs", "2", "field arms.0.runs"),
+        ("success_rate", "x", "field arms.0.success_rate"),
+        ("trials_median", [1], "field arms.0.trials_median"),
     ],
 )
 def test_h25_compare_refuses_impossible_rates_and_counts(
@@ -272,6 +279,8 @@ def test_compare_writes_the_format_of_its_suffix(swept: Path, tmp_path: Path) ->
         (("robustness", "R", "--repeats", "1000000000"), "--repeats"),
         (("sweep", "--connect-timeout", "1e308"), "--connect-timeout"),
         (("switch-figure", "--inhibition", ",".join(["5"] * 13)), "at most 12"),
+        # held-out round-3 case: 200 values took over a minute
+        (("switch-figure", "--inhibition", ",".join(["5"] * 200)), "at most 12"),
     ],
 )
 def test_work_past_its_limit_is_refused_at_once(argv: tuple[str, ...], says: str) -> None:
@@ -446,3 +455,232 @@ def test_what_a_sweep_and_an_ablation_write_is_what_their_schemas_read(
     assert r.rc == 0, r.err
     schema.AblationModel.of(json.loads((out / "ablation.json").read_text()), "ablation")
     schema.read_summary(out)
+
+
+# -- N12: a big history is read into arrays, and drawn with bounded points -------------
+
+
+def _history_file(path: Path, n: int, every_empty: int = 3) -> Path:
+    """A chapter history.csv of ``n`` trials (random gains, some empty cells)."""
+    from striatal.learners import RULES
+    from striatal.learners.state import history_columns
+
+    columns = history_columns(RULES["chapter"].history_columns)
+    x = np.random.default_rng(0).normal(size=(n, 8))
+    with path.open("w") as fh:
+        fh.write(",".join(columns) + "\n")
+        for i in range(n):
+            empty = "" if i % every_empty else "0.5"
+            gains, sigma = map(repr, x[i, :6].tolist()), repr(abs(float(x[i, 7])))
+            cells = [str(i + 1), "-5.0", *gains, "0.6", sigma, empty, "5.0", "0", "0", "0"]
+            fh.write(",".join(cells) + "\n")
+    return path
+
+
+def test_n12_reading_a_history_holds_its_numbers_not_its_text(tmp_path: Path) -> None:
+    """N12: read_history's peak is its numbers plus a chunk, never the file's text (the
+    old reader held the text, then a tuple per row: several times the file)."""
+    import tracemalloc
+
+    from striatal.io.rundir import read_history
+
+    path = _history_file(tmp_path / "history.csv", 40_000)
+    read_history(path)  # imports and schemas built once, outside the measurement
+    tracemalloc.start()
+    try:
+        history = read_history(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    size = path.stat().st_size
+    assert history.data.shape == (40_000, 15)
+    assert np.isnan(history.column("min_abs_theta_swingup")[1])
+    assert history.data.nbytes <= peak < history.data.nbytes + size / 4, (peak, size)
+
+
+def test_a_small_file_is_read_into_a_buffer_of_its_size(tmp_path: Path) -> None:
+    """Found while measuring N12: read_text asked for a 256 MiB buffer for every file."""
+    import tracemalloc
+
+    from striatal.io.files import read_json
+
+    path = tmp_path / "small.json"
+    path.write_text(json.dumps({"a": [1.0] * 100}))
+    read_json(path)
+    tracemalloc.start()
+    try:
+        read_json(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 2**20, peak
+
+
+def test_n12_a_bad_cell_names_its_line_and_crlf_lines_are_read(tmp_path: Path) -> None:
+    """The rows are allocated from the line ends counted first (CR LF counted once); a bad
+    cell in a later chunk still names its line."""
+    from striatal.io.rundir import read_history
+
+    path = _history_file(tmp_path / "history.csv", 3000)
+    lines = path.read_text().splitlines(keepends=True)
+    lines[2500] = lines[2500].replace("-5.0", "abc", 1)
+    path.write_text("".join(lines))
+    with pytest.raises(DataFileError, match="line 2501: column reward is not a number"):
+        read_history(path)
+    lines[2500] = lines[2500].replace("abc", "-5.0", 1)
+    path.write_text("".join(lines).replace("\n", "\r\n"))
+    assert len(read_history(path)) == 3000
+
+
+def test_n12_curves_draw_a_bounded_number_of_points_with_the_same_extent() -> None:
+    """N12: a curve of a million trials is drawn as at most 2 x DRAWN_COLUMNS points, each
+    pixel column keeping its lowest and highest value."""
+    from striatal.viz.curves import DRAWN_COLUMNS, drawn
+
+    x = np.arange(1.0, 1_000_001.0)
+    y = np.sin(x / 5000.0) + np.random.default_rng(1).normal(0, 0.1, x.size)
+    dx, dy = drawn(x, y)
+    assert len(dx) <= 2 * DRAWN_COLUMNS
+    assert dy.min() == y.min() and dy.max() == y.max()
+    cut = x <= 500_000
+    assert dy[dx <= 500_000].max() == y[cut].max()
+    small = np.arange(10.0)
+    assert len(drawn(small, small)[0]) == 10
+
+
+# -- found by this round's own hostile pass --------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("table", "field"),
+    [
+        ("learner_vs_control", "success_rate"),
+        ("learner_vs_control", "control_success_rate"),
+        ("learner_vs_control", "fisher"),
+    ],
+)
+def test_compare_refuses_a_comparison_without_its_rates(
+    swept: Path, tmp_path: Path, table: str, field: str
+) -> None:
+    """A learner-against-control entry of summary.json lacking a rate ended in a
+    KeyError traceback: the pairs are held to their schema too."""
+    folder = copy_of(swept, tmp_path)
+    edit_json(folder / "summary.json", lambda d: d[table][0].pop(field))
+    one_line(cli_in_process("compare", str(folder)), f"field {table}.0.{field}")
+
+
+def test_compare_names_the_summary_of_each_row(swept: Path, tmp_path: Path) -> None:
+    """H25: with several summaries, each row of the table names the one it came from."""
+    other = copy_of(swept, tmp_path)
+    r = cli_in_process("compare", str(swept), str(other))
+    assert r.rc == 0, r.err
+    header, _, *rows = r.out.split("\n\n")[0].splitlines()
+    assert header.startswith("| source | arm |")
+    assert {row.split(" | ")[0].removeprefix("| ") for row in rows} == {str(swept), str(other)}
+    single = cli_in_process("compare", str(swept))
+    assert single.out.startswith("| arm |")
+
+
+@pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="needs [cluster]")
+@pytest.mark.parametrize("address", ["nonsense:::", "localhost"])
+def test_a_ray_address_that_is_refused_writes_nothing(tmp_path: Path, address: str) -> None:
+    """H20: an address Ray refuses (not HOST:PORT) wrote sweep.json and runs.csv first."""
+    out = tmp_path / "s"
+    r = cli_in_process(
+        *("sweep", "--backend", "ray", "--address", address, "--connect-timeout", "20"),
+        *("--seeds", "1", "--max-trials", "1", "--out", str(out)),
+    )
+    one_line(r, "cannot connect to the Ray cluster")
+    assert not out.exists()
+
+
+def test_the_network_s_work_is_bounded_before_it_starts() -> None:
+    """neural --learn --trials 2147483647 ran without bound: the network's work (trials x
+    steps x neurons) is held to the same limit as every command's."""
+    from striatal.neural.network import NetworkConfig
+
+    with pytest.raises(ParameterError, match="2,147,483,647 trials x 30,000 steps"):
+        NetworkConfig().check_work(30.0, 0.001, 2**31 - 1)
+    NetworkConfig().check_work(30.0, 0.001, 20)
+    pytest.importorskip("nengo")
+    one_line(cli_in_process("neural", "--learn", "--trials", "2147483647"), "would simulate")
+
+
+def test_a_history_theta_c_outside_its_range_is_one_line(tmp_path: Path) -> None:
+    """theta_c = 1e308 in history.csv ended in matplotlib's OverflowError traceback in
+    curves: the history schema holds theta_c to (0, pi], as every learner keeps it."""
+    path = _history_file(tmp_path / "history.csv", 5)
+    lines = path.read_text().splitlines(keepends=True)
+    cells = lines[3].split(",")
+    cells[8] = "1e308"
+    lines[3] = ",".join(cells)
+    path.write_text("".join(lines))
+    r = cli_in_process("curves", str(path), "--out", str(tmp_path / "c.png"))
+    one_line(r, "line 4: column theta_c must be in (0, pi]")
+    assert not (tmp_path / "c.png").exists()
+
+
+def test_curves_draw_gains_too_large_for_an_axis(tmp_path: Path) -> None:
+    """W1 alternating +-1e308 (a run without a step bound can reach such gains) ended in
+    a LinAlgError traceback; it is drawn at +-1e100, and the figure says so."""
+    from striatal.io.rundir import read_history
+    from striatal.viz.curves import learning_curves
+
+    path = _history_file(tmp_path / "history.csv", 6)
+    lines = path.read_text().splitlines(keepends=True)
+    for i in range(1, 7):
+        cells = lines[i].split(",")
+        cells[2] = "1e308" if i % 2 else "-1e308"
+        lines[i] = ",".join(cells)
+    path.write_text("".join(lines))
+    r = cli_in_process("curves", str(path), "--out", str(tmp_path / "c.png"))
+    assert r.rc == 0, r.err
+    fig = learning_curves(read_history(path))
+    assert "values beyond +-1e+100 drawn at +-1e+100" in fig.texts[0].get_text()
+
+
+def test_an_animation_s_frames_are_bounded_in_bytes_before_the_run() -> None:
+    """animate --width 4096 --height 4096 at 4 801 frames asked for 225 GiB (a process
+    without a memory limit would have been killed); refused before the simulation."""
+    r = cli_in_process(
+        *("animate", "--width", "4096", "--height", "4096", "--fps", "100"),
+        *("--speed", "0.125", "--duration", "6", "--out", "x.gif"),
+    )
+    one_line(r, "4,801 frames of 4096 x 4096 px", "more than 2 GiB")
+
+
+def test_the_bench_s_work_is_bounded_before_it_times_anything(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The sweeps the bench times (--sweep-seeds up to 10 000: 4.8 * 10**11 steps) are held
+    to the work limit before the first timing, like every command's, with the estimate."""
+    from striatal.bench.timing import BenchConfig
+
+    monkeypatch.setenv("STRIATAL_MAX_STEPS", str(10**9))
+    with pytest.raises(ParameterError, match="sweeps 80,000,000"):
+        BenchConfig(sweep_seeds=10_000).check_work()
+    BenchConfig(train_max_trials=20).check_work()
+    one_line(cli_in_process("bench", "--sweep-seeds", "10000"), "the bench would simulate")
+
+
+@pytest.mark.parametrize("x0", ["16", "-16", "1e300"])
+def test_figure_of_a_run_that_starts_beyond_the_view(tmp_path: Path, x0: str) -> None:
+    """Found by tests/test_fuzz.py: `figure --x0 16` (a start beyond the 15-m view, so no
+    point inside it) ended in numpy's zero-size-array ValueError traceback."""
+    out = tmp_path / "f.png"
+    r = cli_in_process("figure", "--duration", "2", "--x0", x0, "--out", str(out))
+    assert r.rc == 0 and not r.err.strip(), r.err
+    assert out.exists()
+
+
+@pytest.mark.parametrize("inits", [1, True, [], ["x"], "chapter"])
+def test_profile_refuses_summary_settings_of_the_wrong_type(
+    swept: Path, tmp_path: Path, inits: Any
+) -> None:
+    """Found by benchmarks/hostile_files.py: summary.json's settings were any object, and
+    `inits: 1` ended in a TypeError traceback in profile's title; they are held to the
+    sweep settings' schema (SweepModel)."""
+    folder = copy_of(swept, tmp_path)
+    edit_json(folder / "summary.json", lambda d: d["settings"].__setitem__("inits", inits))
+    r = cli_in_process("profile", str(folder), "--out", str(tmp_path / "p.png"))
+    one_line(r, "field settings.inits")

@@ -108,7 +108,7 @@ def test_load_opens_a_run_folder_as_train_returned_it(folders: dict[str, Path]) 
         again.theta_c,
         again.success,
     )
-    assert run.history.rows == again.history.rows
+    assert run.history == again.history
     assert striatal.load(folders["train"] / "result.json").run_id == run.run_id
 
 

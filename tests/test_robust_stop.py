@@ -205,7 +205,7 @@ def test_resume_of_a_robust_run_equals_the_uninterrupted_run(tmp_path: Path) -> 
     resumed = striatal.train(out=tmp_path, resume=True, max_trials=30)
     assert resumed.settings["config"]["robust"] is True
     assert resumed.state == whole.state
-    assert resumed.history.rows == whole.history.rows
+    assert resumed.history == whole.history
     assert resumed.run_id == first.run_id  # the run id is of the run's starting settings
     assert json.loads((tmp_path / "result.json").read_text())["simulations"] == (
         whole.state.simulations

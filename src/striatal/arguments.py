@@ -241,7 +241,7 @@ def check_learning_work(
         raise ParameterError(
             f"{what}: one real trial would imagine up to {imagine_trials * steps:.3g} steps "
             f"({imagine_trials:,} imagined trials x {steps:,} steps), more than the limit "
-            f"of {MAX_IMAGINED_STEPS:.0e}; lower --imagine-trials"
+            f"of {MAX_IMAGINED_STEPS:.0e}; lower --imagine-trials (imagine_trials= in Python)"
         )
 
 

@@ -65,6 +65,7 @@ class BenchReport:
 
 def run_all(config: BenchConfig, seed: int = 0) -> BenchReport:
     """Every measurement in one process, in the order compile, 1, 2, 4, 3, anchors."""
+    config.check_work()  # before anything is timed
     if config.anchors:
         anchors.check_installed()  # before anything is timed
     t_start = time.perf_counter()

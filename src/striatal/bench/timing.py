@@ -70,6 +70,35 @@ class BenchConfig:
         if self.train_max_trials is not None and self.train_max_trials < 1:
             raise ParameterError(f"train max trials must be >= 1, got {self.train_max_trials}")
 
+    @property
+    def timed_seconds(self) -> float:
+        """The wall budget of the timed repeats [s], at most: each timed side (three
+        comparisons of two sides, one per scaling duration) calibrates for ``seconds``
+        and then times ``repeats`` repeats of about ``seconds``; ``anchors`` add theirs."""
+        sides = 3 * 2 + len(self.scaling_durations)
+        return sides * (self.repeats + 1) * self.seconds
+
+    def check_work(self) -> None:
+        """ParameterError (one line, with the estimate) if the commands the bench times
+        (``train``, the sweeps of ``sweep_seeds`` and ``memory_runs``, each of the
+        learner and its control arm, at their trial budgets of default-length trials)
+        would exceed the work limit (:func:`striatal.arguments.check_work`). The timed
+        kernel repeats are bounded by ``seconds`` x ``repeats`` instead."""
+        from striatal.arguments import check_work
+        from striatal.learners import LearnerConfig
+
+        steps = Simulation().n_steps
+        budget = LearnerConfig().max_trials
+        train = (self.train_max_trials or budget) if self.train else 0
+        sweep = 2 * self.sweep_seeds * 2 * (self.sweep_max_trials or budget)
+        memory = (5 + self.memory_runs // 2) * 2 * self.memory_max_trials if self.memory_runs else 0
+        check_work(
+            float(train + sweep + memory) * steps,
+            "the bench",
+            f"train {train:,} + sweeps {sweep:,} + memory sweeps {memory:,} trials x "
+            f"{steps:,} steps",
+        )
+
 
 QUICK = BenchConfig(
     seconds=0.05,

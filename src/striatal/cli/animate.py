@@ -11,7 +11,6 @@ from striatal.cli import options
 from striatal.cli.options import add_gain_source_arguments, controller_and_plant
 from striatal.errors import ParameterError
 from striatal.io.files import dumps_json
-from striatal.limits import count_of_steps
 
 DESCRIPTION = (
     "Simulate one run with the mean policy and write an animation: a frame every "
@@ -19,9 +18,6 @@ DESCRIPTION = (
     "A .gif is written with Pillow; a .mp4 needs ffmpeg on PATH. Gains as for "
     "striatal figure."
 )
-
-#: Most frames one animation may hold (memory and file size), counted before the run.
-MAX_FRAMES = 5000
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -55,19 +51,9 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(
             f"--fps must be at most 100 (GIF delays are 10 ms units), got {args.fps}"
         )
-    for name in ("width", "height"):
-        v = getattr(args, name)
-        if not 16 <= v <= 4096:
-            raise ParameterError(f"--{name} must be in [16, 4096] px, got {v}")
     controller, plant = controller_and_plant(args)
     sim = options.simulation_from(args)
-    count_of_steps(
-        sim.duration,
-        args.speed / args.fps,
-        cap=MAX_FRAMES,
-        what="frames",
-        fix="raise --speed or lower --fps",
-    )
+    plots.check_animation(sim.duration, args.fps, args.speed, args.width, args.height)
     traj = simulate(plant, controller, sim)
     frames = plots.animation_frames(
         traj, fps=args.fps, speed=args.speed, width=args.width, height=args.height

@@ -70,13 +70,15 @@ def label_arms(summaries: list[dict[str, Any]], sources: list[str]) -> list[dict
     return arms
 
 
-def label_pairs(summaries: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def label_pairs(summaries: list[dict[str, Any]], sources: list[str]) -> list[dict[str, Any]]:
     """Every learner-against-control pair, both arms named with their learner when the
-    summaries hold more than one learner (as :func:`label_arms` names them)."""
+    summaries hold more than one learner (as :func:`label_arms` names them), with the
+    summary it came from (``source``)."""
     learners = {learner_of(s, a["arm"]) for s in summaries for a in s["arms"]} - {None}
     pairs = []
-    for s in summaries:
+    for src, s in zip(sources, summaries, strict=True):
         for c in s["learner_vs_control"]:
+            c = {**c, "source": src}
             learner = learner_of(s, c["arm"])
             if learner and len(learners) > 1:
                 c = {
@@ -94,9 +96,10 @@ def run(args: argparse.Namespace) -> int:
         if not args.out.parent.is_dir():
             raise ParameterError(f"--out {args.out}: folder {args.out.parent} does not exist")
     summaries = [load_summary(p) for p in args.summaries]
-    arms = label_arms(summaries, [str(p) for p in args.summaries])
-    arms.sort(key=lambda a: (a["init"], a["arm"]))
-    pairs = label_pairs(summaries)
+    sources = [str(p) for p in args.summaries]
+    arms = label_arms(summaries, sources)
+    arms.sort(key=lambda a: (a["init"], a["arm"], a["source"]))
+    pairs = label_pairs(summaries, sources)
     from striatal.experiments import report
 
     table = report.markdown_table({"arms": arms, "learner_vs_control": pairs})

@@ -58,7 +58,7 @@ def network_plan(
     ``template``: theta_c(0) and the readings (balance sign, switch); its gains are not
     used (W(0) is ``init``'s). ``options``: the learner's."""
     from striatal.learners import default_config
-    from striatal.neural.driver import check_network_learning
+    from striatal.neural.driver import NET_DT, check_network_learning
 
     options = {**options, "reward": "sparse", "max_trials": max_trials}
     check_network_learning(default_config(learner, **options), sim)
@@ -89,6 +89,8 @@ def network_plan(
         "trial of the final gains",
     )
     specs = [replace(s, network=trials_on) for s in base.specs]
+    # every run's trials, and its final mean-policy trial, on the network
+    network.check_work(sim.duration, NET_DT, len(specs) * (max_trials + 1))
     return Plan(specs, settings, base.max_trials)
 
 

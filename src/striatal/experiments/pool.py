@@ -3,12 +3,13 @@
 :func:`execute` yields one row per spec (:func:`striatal.experiments.runner.run_one`),
 in completion order. Local workers die with the sweep that started them (Linux's
 PR_SET_PDEATHSIG, and a watchdog thread where that is missing); the Ray backend waits
-for its address to accept connections first (:func:`wait_for_address`).
+for its address to answer a whole connection first (:func:`check_cluster`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import logging
 import math
 import os
@@ -249,22 +250,41 @@ def _probe_ray(address: str, timeout: float, shown: float) -> None:
         raise ParameterError(f"cannot connect to the Ray cluster at {address}: {reason}")
 
 
+#: Ray addresses that answered a whole connection in this process (:func:`check_cluster`).
+_ANSWERED: set[str] = set()
+
+
+def check_cluster(address: str, connect_timeout: float) -> None:
+    """ParameterError (one line) unless Ray's [cluster] extra loads and the cluster at
+    ``address`` answers a whole connection (TCP, then Ray's handshake in a child
+    process) within ``connect_timeout`` s. A sweep calls it before it writes a file;
+    an address that answered is not probed again in this process."""
+    if address in _ANSWERED:
+        return
+    if importlib.util.find_spec("ray") is None:
+        raise ParameterError(
+            "--backend ray needs the [cluster] extra: pip install 'striatal[cluster]'"
+        )
+    started = time.monotonic()
+    wait_for_address(address, connect_timeout)
+    left = connect_timeout - (time.monotonic() - started)
+    _probe_ray(address, max(left, 1.0), connect_timeout)
+    _ANSWERED.add(address)
+
+
 def _execute_ray(
     specs: Sequence[RunSpec], address: str | None, connect_timeout: float
 ) -> Iterator[dict[str, Any]]:
     if not address:  # narrowed for the type checker; check_backend refused it already
         raise ParameterError("--backend ray needs --address HOST:PORT of a running Ray cluster")
+    # the whole connection, the TCP check and Ray's handshake, within connect_timeout
+    check_cluster(address, connect_timeout)
     try:
         import ray
     except ImportError:
         raise ParameterError(
             "--backend ray needs the [cluster] extra: pip install 'striatal[cluster]'"
         ) from None
-    # the whole connection, the TCP check and Ray's handshake, within connect_timeout
-    started = time.monotonic()
-    wait_for_address(address, connect_timeout)
-    left = connect_timeout - (time.monotonic() - started)
-    _probe_ray(address, max(left, 1.0), connect_timeout)
     ray.init(address=address, logging_level=logging.ERROR, log_to_driver=False)
     try:
         remote = ray.remote(num_cpus=1)(_ray_worker)

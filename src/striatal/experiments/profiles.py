@@ -20,6 +20,7 @@ per (arm, init): seeds started from different gains are never pooled.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 from collections.abc import Mapping, Sequence
@@ -33,7 +34,7 @@ from striatal.errors import DataFileError, ParameterError
 from striatal.experiments.runs_csv import RUN_COLUMNS
 from striatal.experiments.stats import wilson_interval
 from striatal.io import schema
-from striatal.io.files import read_text
+from striatal.io.files import lines_marking_last, read_lines
 
 __all__ = [
     "NOTE_TRIALS_FALLBACK",
@@ -85,38 +86,38 @@ def read_sweep_runs(folder: Path) -> list[SweepRun]:
     path = Path(folder) / "runs.csv"
     if not path.exists() and not path.is_symlink():
         raise DataFileError(f"{folder} has no runs.csv (is it a striatal sweep folder?)")
-    text = read_text(path, what="runs file")
-    lines = text.splitlines(keepends=True)
-    if not lines or not lines[0].endswith("\n"):
-        raise DataFileError(f"runs file {path} is empty")
-    header = next(csv.reader(io.StringIO(lines[0])))
-    missing = [c for c in ("arm", "seed", "success", "trials") if c not in header]
-    if missing:
-        raise DataFileError(f"runs file {path} lacks the column(s) {', '.join(missing)}")
-    costs = [c for c in X_COLUMNS if c in header]
-    # the whole schema of a row where the file has every column, the costs otherwise
-    model = schema.RunRow if set(header) >= set(RUN_COLUMNS[:-1]) else schema.CostRow
-    parsed: list[tuple[int, dict[str, Any]]] = []
-    for i, line in enumerate(lines[1:], start=2):
-        try:
-            if not line.endswith("\n"):
-                raise ValueError("line cut short")
-            cells = next(csv.reader(io.StringIO(line)))
-            if len(cells) != len(header):
-                raise ValueError(f"{len(cells)} cells, expected {len(header)}")
-            row = dict(zip(header, cells, strict=True))
+    with contextlib.closing(read_lines(path, what="runs file")) as lines:
+        head = next(lines, "")
+        if not head.endswith("\n"):
+            raise DataFileError(f"runs file {path} is empty")
+        header = next(csv.reader(io.StringIO(head)))
+        missing = [c for c in ("arm", "seed", "success", "trials") if c not in header]
+        if missing:
+            raise DataFileError(f"runs file {path} lacks the column(s) {', '.join(missing)}")
+        costs = [c for c in X_COLUMNS if c in header]
+        # the whole schema of a row where the file has every column, the costs otherwise
+        model = schema.RunRow if set(header) >= set(RUN_COLUMNS[:-1]) else schema.CostRow
+        parsed: list[tuple[int, dict[str, Any]]] = []
+        for i, line, last in lines_marking_last(lines, start=2):
             try:
-                model.model_validate(row)
-            except schema.ValidationError as exc:
-                raise ValueError(schema.one_line(exc, "").removeprefix(": ")) from None
-            empty = [c for c in costs if not row[c]]
-            if empty:
-                raise ValueError(f"its {empty[0]} is empty")
-            parsed.append((i, row))
-        except (ValueError, StopIteration, csv.Error) as exc:
-            if i == len(lines):
-                break
-            raise DataFileError(f"runs file {path} line {i} is malformed: {exc}") from None
+                if not line.endswith("\n"):
+                    raise ValueError("line cut short")
+                cells = next(csv.reader(io.StringIO(line)))
+                if len(cells) != len(header):
+                    raise ValueError(f"{len(cells)} cells, expected {len(header)}")
+                row = dict(zip(header, cells, strict=True))
+                try:
+                    model.model_validate(row)
+                except schema.ValidationError as exc:
+                    raise ValueError(schema.one_line(exc, "").removeprefix(": ")) from None
+                empty = [c for c in costs if not row[c]]
+                if empty:
+                    raise ValueError(f"its {empty[0]} is empty")
+                parsed.append((i, row))
+            except (ValueError, StopIteration, csv.Error) as exc:
+                if last:
+                    break
+                raise DataFileError(f"runs file {path} line {i} is malformed: {exc}") from None
     same = [c for c in header if c not in ("wall_seconds", "settings_id")]
     keyed = [(i, {**r, "init": r.get("init", "")}) for i, r in parsed]
     rows = schema.unique_rows(keyed, ("arm", "init", "seed"), f"runs file {path}", same=same)

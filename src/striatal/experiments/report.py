@@ -284,11 +284,33 @@ def markdown_table(summary: dict[str, Any]) -> str:
             f"{_num(a.get('pass_rate_mean'), '.2f')} | "
             f"{_num(a.get('simulations_total'))} | {_num(a.get('wall_seconds_total'), '.1f')} |"
         )
-    lines += _pair_table(summary.get("learner_vs_control"), "control", "Fisher p", _fisher_cell)
-    lines += _pair_table(
-        summary.get("learner_vs_baselines"),
-        "baseline",
-        "mean simulated s, all seeds (learner / baseline)",
-        _seconds_cell,
-    )
+    lines = _with_source(lines, summary["arms"])
+    for pairs, table in (
+        (
+            summary.get("learner_vs_control"),
+            _pair_table(summary.get("learner_vs_control"), "control", "Fisher p", _fisher_cell),
+        ),
+        (
+            summary.get("learner_vs_baselines"),
+            _pair_table(
+                summary.get("learner_vs_baselines"),
+                "baseline",
+                "mean simulated s, all seeds (learner / baseline)",
+                _seconds_cell,
+            ),
+        ),
+    ):
+        lines += _with_source(table[:1], []) + _with_source(table[1:], pairs or [])
     return "\n".join(lines) + "\n"
+
+
+def _with_source(lines: list[str], rows: list[dict[str, Any]]) -> list[str]:
+    """``lines`` (a header, its rule, one line per row) with a first column naming each
+    row's ``source`` (the summary it came from), when ``rows`` come from several."""
+    if len({r.get("source") for r in rows}) < 2:
+        return lines
+    return [
+        f"| source {lines[0]}",
+        f"|---{lines[1]}",
+        *(f"| {r['source']} {line}" for r, line in zip(rows, lines[2:], strict=True)),
+    ]

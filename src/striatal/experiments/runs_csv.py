@@ -8,16 +8,17 @@ twice; one with other results is refused.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 from striatal.errors import DataFileError
 from striatal.io import schema
-from striatal.io.files import csv_text, read_text
+from striatal.io.files import csv_text, lines_marking_last, read_lines
 from striatal.params import N_GAINS
 
 RUN_COLUMNS: tuple[str, ...] = (
@@ -111,23 +112,29 @@ def read_runs(path: Path, *, max_trials: int | None = None) -> tuple[list[dict[s
     """
     if not path.exists():
         return [], csv_text(RUN_COLUMNS, [])
-    lines = read_text(path, what="runs file").splitlines(keepends=True)
-    if not lines or not lines[0].endswith("\n"):
+    with contextlib.closing(read_lines(path, what="runs file")) as lines:
+        return _read_runs(path, lines, max_trials)
+
+
+def _read_runs(
+    path: Path, lines: Iterator[str], max_trials: int | None
+) -> tuple[list[dict[str, Any]], str]:
+    head = next(lines, "")
+    if not head.endswith("\n"):
         return [], csv_text(RUN_COLUMNS, [])
     known = (RUN_COLUMNS, COLUMNS_BEFORE_SETTINGS_ID, COLUMNS_BEFORE_IMAGINED)
-    columns = {",".join(c): c for c in known}.get(lines[0].strip())
+    columns = {",".join(c): c for c in known}.get(head.strip())
     if columns is None:
-        if lines[0].startswith("arm,"):
+        if head.startswith("arm,"):
             raise DataFileError(
                 f"runs file {path} has the columns of another striatal version (an older "
                 "one, before simulations or the robust column were recorded); use another --out"
             )
         raise DataFileError(f"runs file {path} does not have the header of a striatal sweep")
     rows: list[dict[str, Any]] = []
-    kept = [lines[0]]
+    kept = [head]
     seen: dict[tuple[str, str, int], dict[str, Any]] = {}
-    for i, line in enumerate(lines[1:], start=2):
-        last = i == len(lines)
+    for i, line, last in lines_marking_last(lines, start=2):
         try:
             if not line.endswith("\n"):
                 raise ValueError("line cut short")

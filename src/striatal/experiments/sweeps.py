@@ -29,8 +29,8 @@ from striatal.experiments.pool import (
     CONNECT_TIMEOUT,
     Backend,
     check_backend,
+    check_cluster,
     execute,
-    wait_for_address,
 )
 from striatal.experiments.report import summarise
 from striatal.experiments.results import Sweep
@@ -213,8 +213,8 @@ def run_sweep(
         )
     check_backend(backend, workers, address, connect_timeout)
     if backend == "ray" and address:
-        # nothing is written into out before the cluster's address answers
-        wait_for_address(address, connect_timeout)
+        # nothing is written into out before the cluster answers a whole connection
+        check_cluster(address, connect_timeout)
     if engine != "processes":
         from striatal.experiments.lockstep_sweep import check_specs
 

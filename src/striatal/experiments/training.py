@@ -462,7 +462,7 @@ def _run(
     else:
         history = History.of(config.learner, records, config.reward)
     if not history.columns:
-        history = History(config.learner, columns, (), config.reward)
+        history = History(config.learner, columns, reward_kind=config.reward)
     learned = setup.template.with_gains(final.W, final.theta_c)
     hardware = config.hardware
     check = _simulate(setup.plant, learned, setup.sim, hardware=hardware).outcome

@@ -20,7 +20,7 @@ import stat
 import tempfile
 import threading
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Generator, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
@@ -39,12 +39,15 @@ __all__ = [
     "atomic_write_text",
     "check_no_dangling_link",
     "check_out_dir",
+    "count_line_ends",
     "csv_stream",
     "csv_text",
     "dumps_json",
+    "lines_marking_last",
     "path_lock",
     "read_csv",
     "read_json",
+    "read_lines",
     "read_text",
     "remove_stale_temps",
     "replace_into",
@@ -382,21 +385,19 @@ def read_text(
 ) -> str:
     """The UTF-8 text of a regular file of at most ``max_bytes`` (:data:`MAX_INPUT_BYTES`).
 
-    Every JSON, CSV and TOML input goes through here. A folder, a device
-    (``/dev/zero``), a FIFO or a socket, or a file that is too big, raises
-    DataFileError before a byte is read: none can hang or exhaust memory.
+    Every JSON and TOML input goes through here (a CSV that can be large is read line by
+    line, :func:`read_lines`). A folder, a device (``/dev/zero``), a FIFO or a socket,
+    or a file that is too big, raises DataFileError before a byte is read: none can
+    hang or exhaust memory.
     """
     p = Path(path)
     try:
-        st = os.stat(p)  # stat, unlike open, does not wait for a FIFO's writer
-        if stat.S_ISDIR(st.st_mode):
-            raise DataFileError(f"{what} {p} is a folder, not a file")
-        _check_regular(p, st, what, max_bytes)
-        # O_NONBLOCK: if a FIFO took the file's place since the stat, open does not wait
-        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK)
-        with os.fdopen(fd, "rb") as fh:
-            _check_regular(p, os.fstat(fh.fileno()), what, max_bytes)
-            data = fh.read(max_bytes + 1)
+        with _open_checked(p, what, max_bytes) as fh:
+            # a buffer of the file's size, not of the limit (read(n) allocates n first)
+            size = os.fstat(fh.fileno()).st_size
+            data = fh.read(size + 1)
+            if len(data) > size:  # it grew since: read on, up to the limit
+                data += fh.read(max_bytes + 1 - len(data))
         _check_size(p, len(data), what, max_bytes)
         # utf-8-sig: a byte-order mark that an editor put first is not part of the text
         return data.decode("utf-8-sig")
@@ -404,6 +405,85 @@ def read_text(
         raise DataFileError(f"{what} {p} does not exist") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise DataFileError(f"{what} {p} cannot be read: {exc}") from None
+
+
+def read_lines(
+    path: str | os.PathLike[str], *, what: str = "file", max_bytes: int = MAX_INPUT_BYTES
+) -> Generator[str, None, None]:
+    """The lines of a regular file of at most ``max_bytes``, one at a time, line ends kept.
+
+    The checks of :func:`read_text`, but the text is never held whole: a reader that
+    keeps only numbers (a history's columns) needs memory for those alone. Line ends
+    are kept as written (``newline=""``, as :mod:`csv` wants). A decoding error, or a file
+    that grows past ``max_bytes`` while it is read, raises DataFileError.
+    """
+    p = Path(path)
+    try:
+        with (
+            _open_checked(p, what, max_bytes) as raw,
+            io.TextIOWrapper(raw, encoding="utf-8-sig", newline="") as fh,
+        ):
+            read = 0
+            for line in fh:
+                read += len(line)
+                _check_size(p, read, what, max_bytes)
+                yield line
+    except FileNotFoundError:
+        raise DataFileError(f"{what} {p} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DataFileError(f"{what} {p} cannot be read: {exc}") from None
+
+
+def count_line_ends(
+    path: str | os.PathLike[str], *, what: str = "file", max_bytes: int = MAX_INPUT_BYTES
+) -> int:
+    """How many line ends (``\\n`` or a lone ``\\r``) a regular file of at most
+    ``max_bytes`` has, read a block at a time: at least the number of its lines but the
+    last, so a reader can allocate its rows before it parses them."""
+    p = Path(path)
+    n, last = 0, b""
+    try:
+        with _open_checked(p, what, max_bytes) as fh:
+            while block := fh.read(2**20):
+                n += block.count(b"\n") + block.count(b"\r") - block.count(b"\r\n")
+                n -= last == b"\r" and block[:1] == b"\n"
+                last = block[-1:]
+    except FileNotFoundError:
+        raise DataFileError(f"{what} {p} does not exist") from None
+    except OSError as exc:
+        raise DataFileError(f"{what} {p} cannot be read: {exc}") from None
+    return n
+
+
+def lines_marking_last(lines: Iterable[str], start: int = 1) -> Iterator[tuple[int, str, bool]]:
+    """(number, line, whether it is the last) of each of ``lines``, numbered from
+    ``start``, one line ahead: a reader can tell a last line (which a kill may have cut
+    short) from the others without holding the file."""
+    it = iter(lines)
+    line = next(it, None)
+    n = start
+    while line is not None:
+        following = next(it, None)
+        yield n, line, following is None
+        line, n = following, n + 1
+
+
+def _open_checked(p: Path, what: str, max_bytes: int) -> io.BufferedReader:
+    """``p`` opened for reading in binary, once it is known to be a regular file of at
+    most ``max_bytes``."""
+    st = os.stat(p)  # stat, unlike open, does not wait for a FIFO's writer
+    if stat.S_ISDIR(st.st_mode):
+        raise DataFileError(f"{what} {p} is a folder, not a file")
+    _check_regular(p, st, what, max_bytes)
+    # O_NONBLOCK: if a FIFO took the file's place since the stat, open does not wait
+    fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK)
+    fh = os.fdopen(fd, "rb")
+    try:
+        _check_regular(p, os.fstat(fh.fileno()), what, max_bytes)
+    except BaseException:
+        fh.close()
+        raise
+    return fh  # type: ignore[return-value]
 
 
 def _check_regular(p: Path, st: os.stat_result, what: str, max_bytes: int) -> None:

@@ -24,22 +24,26 @@ from __future__ import annotations
 import contextlib
 import csv
 import hashlib
-import io
+import itertools
 import json
 import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
+
+import numpy as np
 
 from striatal.errors import DataFileError, ParameterError
 from striatal.io import schema
 from striatal.io.files import (
+    atomic_write_stream,
     atomic_write_text,
+    count_line_ends,
     csv_text,
     path_lock,
     read_json,
-    read_text,
+    read_lines,
     write_json,
 )
 from striatal.learners import (
@@ -283,21 +287,34 @@ class RunDir:
         path = self.history_path
         if not path.exists():
             raise DataFileError(f"history {path} is missing but the checkpoint has {n_rows} trials")
-        lines = read_text(path, what="history").splitlines(keepends=True)
-        if len(lines) < 1 + n_rows or lines[0].strip() != ",".join(columns):
+        h = hashlib.sha256()
+        kept, more = 0, False  # lines hashed; whether a line follows them
+        with contextlib.closing(read_lines(path, what="history")) as lines:
+            for line in lines:
+                if kept == 0 and line.strip() != ",".join(columns):
+                    break
+                if kept == 1 + n_rows:
+                    more = True
+                    break
+                h.update(line.encode("utf-8"))
+                kept += 1
+        if kept < 1 + n_rows:
             raise DataFileError(
                 f"history {path} has fewer rows than the checkpoint's {n_rows} trials "
                 "or another header"
             )
-        kept = "".join(lines[: 1 + n_rows])
-        h = hashlib.sha256(kept.encode("utf-8"))
         if h.hexdigest() != digest:
             raise DataFileError(
                 f"history {path} does not belong to the run in {self.checkpoint_path} "
                 "(its rows differ from the checkpointed ones)"
             )
-        if len(lines) > 1 + n_rows:
-            atomic_write_text(path, kept)
+        if more:  # the rows after the checkpoint's go: copied line by line, not held
+
+            def first_lines(fh: TextIO) -> None:
+                with contextlib.closing(read_lines(path, what="history")) as lines:
+                    fh.writelines(itertools.islice(lines, 1 + n_rows))
+
+            atomic_write_stream(path, first_lines)
         self._hash = h
         self._open()
 
@@ -364,72 +381,135 @@ def _learner_of_columns(columns: Sequence[str]) -> str:
     return "unknown"
 
 
+#: Rows of history.csv parsed at a time: the text of one chunk is all a reader holds
+#: beside the numbers.
+HISTORY_CHUNK = 1024
+
+
 def read_history(path: str | Path, *, learner: str | None = None) -> History:
     """Parse a history.csv of ``striatal train`` or raise DataFileError.
 
     The learner is taken from the result.json or checkpoint.json beside it, else
-    from the columns (sigma: chapter or rpe; explore: pgpe).
+    from the columns (sigma: chapter or rpe; explore: pgpe). The file is read line by
+    line (:func:`striatal.io.files.read_lines`), :data:`HISTORY_CHUNK` rows at a time
+    into float arrays: the reader holds the numbers (8 bytes a cell) and one chunk's
+    text, never the file's.
     """
     p = Path(path)
-    # row by row, never a dict per row: a 255 MB history takes its numbers' memory only
-    reader = csv.reader(io.StringIO(read_text(p, what="history"), newline=""))
-    try:
-        columns = tuple(next(reader, ()))
-    except csv.Error as exc:
-        raise DataFileError(f"history {p} cannot be read as CSV: {exc}") from None
-    if len(set(columns)) != len(columns):
-        raise DataFileError(f"history {p} names a column twice")
-    reward_kind = "sparse"
-    settings = _sibling_settings(p)
-    if settings is not None:
-        learner = learner or settings.get("learner")
-        cfg = settings.get("config")
-        if isinstance(cfg, dict) and cfg.get("reward") in ("sparse", "shaped"):
-            reward_kind = cfg["reward"]
-    learner = learner or _learner_of_columns(columns)
-    if learner in RULES:
-        want = history_columns(RULES[learner].history_columns)
-        missing = [c for c in want if c not in columns]
-        if missing:
-            raise DataFileError(f"history {p} lacks the column(s) {', '.join(missing)}")
-    for c in ("trial", "reward", "W1", "W2", "W3", "W4", "W5", "W6", "theta_c", "success"):
-        if c not in columns:
-            raise DataFileError(f"history {p} lacks the column {c}")
-    out: list[tuple[float, ...]] = []
-    kinds = [schema.HISTORY_CELLS.get(c, "finite") for c in columns]
-    # a cell that repeats (a flag, a count, a reward) is one float object, not one per row
-    seen: dict[tuple[str, str], float] = {}
-    try:
-        for line, row in enumerate(reader, start=2):
-            if len(row) != len(columns):
-                raise DataFileError(
-                    f"history {p} line {line}: {len(row)} cells, expected {len(columns)}"
-                )
-            values = []
-            for cell, c, kind in zip(row, columns, kinds, strict=True):
-                v = seen.get((kind, cell)) if kind in ("flag", "count") else None
-                if v is None:
-                    v = _history_cell(cell, c, kind, f"history {p} line {line}")
-                    if kind in ("flag", "count") and len(seen) < 4096:
-                        seen[kind, cell] = v
-                values.append(v)
-            out.append(tuple(values))
-    except csv.Error as exc:
-        raise DataFileError(f"history {p} cannot be read as CSV: {exc}") from None
-    if not out:
+    with contextlib.closing(read_lines(p, what="history")) as lines:
+        reader = csv.reader(lines)
+        try:
+            columns = tuple(next(reader, ()))
+        except csv.Error as exc:
+            raise DataFileError(f"history {p} cannot be read as CSV: {exc}") from None
+        if len(set(columns)) != len(columns):
+            raise DataFileError(f"history {p} names a column twice")
+        reward_kind = "sparse"
+        settings = _sibling_settings(p)
+        if settings is not None:
+            learner = learner or settings.get("learner")
+            cfg = settings.get("config")
+            if isinstance(cfg, dict) and cfg.get("reward") in ("sparse", "shaped"):
+                reward_kind = cfg["reward"]
+        learner = learner or _learner_of_columns(columns)
+        if learner in RULES:
+            want = history_columns(RULES[learner].history_columns)
+            missing = [c for c in want if c not in columns]
+            if missing:
+                raise DataFileError(f"history {p} lacks the column(s) {', '.join(missing)}")
+        for c in ("trial", "reward", "W1", "W2", "W3", "W4", "W5", "W6", "theta_c", "success"):
+            if c not in columns:
+                raise DataFileError(f"history {p} lacks the column {c}")
+        kinds = [schema.HISTORY_CELLS.get(c, "finite") for c in columns]
+        # every row but the header ends a line: one array of at most that many rows
+        data = np.empty((max(count_line_ends(p, what="history"), 1), len(columns)))
+        n = 0  # rows parsed
+        rows: list[list[str]] = []
+        try:
+            for line, row in enumerate(reader, start=2):
+                if len(row) != len(columns):
+                    raise DataFileError(
+                        f"history {p} line {line}: {len(row)} cells, expected {len(columns)}"
+                    )
+                rows.append(row)
+                if len(rows) == HISTORY_CHUNK:
+                    n = _history_chunk(rows, columns, kinds, p, data, n)
+                    rows = []
+        except csv.Error as exc:
+            raise DataFileError(f"history {p} cannot be read as CSV: {exc}") from None
+    if rows:
+        n = _history_chunk(rows, columns, kinds, p, data, n)
+    if n == 0:
         raise DataFileError(f"history {p} has no trials")
-    trial = columns.index("trial")
-    numbers = [int(r[trial]) for r in out]
-    if numbers != list(range(numbers[0], numbers[0] + len(numbers))):
+    # a shorter file than its line ends say (CR LF, quoted line ends) is copied once
+    data = data[:n] if n > len(data) // 2 else data[:n].copy()
+    trial = data[:, columns.index("trial")]
+    if np.any(trial != trial[0] + np.arange(len(trial))):
         raise DataFileError(
             f"history {p}: its trial numbers are not consecutive (a row repeated or missing)"
         )
     if settings is None and "reward" in columns:
         # no settings beside it: the sparse reward takes only the values of eqs 24-25
-        i = columns.index("reward")
-        if any(r[i] not in (10.0, 0.0, -5.0) for r in out):
+        reward = data[:, columns.index("reward")]
+        if not np.all(np.isin(reward, (10.0, 0.0, -5.0))):
             reward_kind = "shaped"
-    return History(learner=learner, columns=columns, rows=tuple(out), reward_kind=reward_kind)
+    return History(learner=learner, columns=columns, data=data, reward_kind=reward_kind)
+
+
+def _history_chunk(
+    rows: list[list[str]],
+    columns: Sequence[str],
+    kinds: Sequence[str],
+    p: Path,
+    data: np.ndarray,
+    n: int,
+) -> int:
+    """Parse ``rows`` into ``data[n : n + len(rows)]``, each cell as
+    :data:`striatal.io.schema.HISTORY_CELLS` says it may be (a bad cell is named by
+    :func:`_history_cell`, with its line); return the rows parsed so far."""
+    if n + len(rows) > len(data):
+        raise DataFileError(f"history {p} changed while it was read")
+    first = n + 2  # the file's line of rows[0] (a line per row, after the header)
+    for j, (cells, c, kind) in enumerate(zip(zip(*rows, strict=True), columns, kinds, strict=True)):
+        try:
+            col = np.fromiter(map(float, cells), float, count=len(cells))
+            empty = None
+        except ValueError:  # an empty cell, or text: the empty ones are NaN if allowed
+            empty = np.fromiter((x == "" for x in cells), bool, count=len(cells))
+            try:
+                col = np.fromiter((float(x) if x else 0.0 for x in cells), float, len(cells))
+            except ValueError:
+                col = np.zeros(len(cells))
+                empty = None
+                _first_bad(cells, c, kind, p, first, np.ones(len(cells), bool))
+        bad = ~np.isfinite(col)
+        if kind == "flag":
+            bad |= (col != 0.0) & (col != 1.0)
+        elif kind == "count":
+            bad |= (col < 0) | (col != np.floor(col))
+        elif kind == "nonnegative":
+            bad |= col < 0
+        elif kind == "angle":
+            bad |= (col <= 0) | (col > math.pi)
+        if empty is not None:
+            bad |= empty & (kind != "empty")
+            if kind == "empty":
+                bad &= ~empty
+                col[empty] = math.nan
+        if bad.any():
+            _first_bad(cells, c, kind, p, first, bad)
+        data[n : n + len(rows), j] = col
+    return n + len(rows)
+
+
+def _first_bad(
+    cells: Sequence[str], column: str, kind: str, p: Path, first: int, bad: np.ndarray
+) -> None:
+    """Raise the DataFileError of the first cell of ``cells`` that :func:`_history_cell`
+    refuses (``bad`` marks those that may be)."""
+    for i in np.flatnonzero(bad):
+        _history_cell(cells[int(i)], column, kind, f"history {p} line {first + int(i)}")
+    raise DataFileError(f"history {p}: column {column} holds a cell it may not")
 
 
 def _history_cell(cell: str | None, column: str, kind: str, where: str) -> float:
@@ -454,6 +534,8 @@ def _history_cell(cell: str | None, column: str, kind: str, where: str) -> float
         )
     if kind == "nonnegative" and v < 0:
         raise DataFileError(f"{where}: column {column} must be >= 0, got {cell!r:.40}")
+    if kind == "angle" and not 0 < v <= math.pi:
+        raise DataFileError(f"{where}: column {column} must be in (0, pi], got {cell!r:.40}")
     return v
 
 

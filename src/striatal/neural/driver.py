@@ -64,6 +64,9 @@ T = TypeVar("T")
 #: imagines on a model: their requests are not the network's.
 NETWORK_RULES: tuple[str, ...] = ("chapter", "pgpe", "rpe")
 
+#: The network's step [s] (nengo's and the Brian2 program's dt).
+NET_DT = 0.001
+
 
 @dataclass(frozen=True)
 class NetworkTrial:
@@ -86,7 +89,7 @@ def run_request(
     config: NetworkConfig,
     seed: int,
     simulator: Simulator,
-    net_dt: float = 0.001,
+    net_dt: float = NET_DT,
     *,
     on_run: OnRun | None = None,
     on_compile: Callable[[Path], None] | None = None,
@@ -144,7 +147,7 @@ def network_drive(
     config: NetworkConfig,
     seed: int,
     simulator: Simulator,
-    net_dt: float = 0.001,
+    net_dt: float = NET_DT,
     *,
     on_run: OnRun | None = None,
     on_compile: Callable[[Path], None] | None = None,
@@ -196,7 +199,7 @@ def learn_with_rule(
     simulator: Simulator = "brian2",
     on_trial: Callable[[LearnerState, TrialRecord], None] | None = None,
     state: LearnerState | None = None,
-    net_dt: float = 0.001,
+    net_dt: float = NET_DT,
     on_run: OnRun | None = None,
     on_compile: Callable[[Path], None] | None = None,
     **options: object,
@@ -210,6 +213,7 @@ def learn_with_rule(
     seed = check_seed(seed)
     if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
         raise ParameterError(f"trials must be a whole number >= 1, got {trials!r}")
+    config.check_work(sim.duration, net_dt, trials)
     lc: LearnerConfig = default_config(learner, reward="sparse", max_trials=trials, **options)
     check_network_learning(lc, sim)
     protocol = Protocol()
@@ -318,7 +322,7 @@ def learn_network(
     trials: int,
     alpha: float | None = None,
     on_trial: Callable[[NeuralTrial], None] | None = None,
-    net_dt: float = 0.001,
+    net_dt: float = NET_DT,
     simulator: Simulator = "nengo",
     on_compile: Callable[[Path], None] | None = None,
     resume: NeuralLearning | None = None,

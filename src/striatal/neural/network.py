@@ -115,6 +115,22 @@ class NetworkConfig:
     bg_neurons: int = 30
     optimize: bool = False
 
+    def check_work(self, duration: float, net_dt: float, trials: int = 1) -> None:
+        """ParameterError (one line, with the estimate) if ``trials`` runs of ``duration``
+        s, stepped every ``net_dt`` s, exceed the work limit
+        (:func:`striatal.arguments.check_work`), counted in neuron updates: a network
+        step costs about as much per neuron as a kernel step does."""
+        from striatal.arguments import check_work
+
+        if not 0 < net_dt <= 0.1:
+            raise ParameterError(f"net_dt must be in (0, 0.1] s, got {net_dt!r}")
+        steps = math.ceil(duration / net_dt)
+        check_work(
+            float(trials) * steps * self.neurons,
+            "the network",
+            f"{trials:,} trials x {steps:,} steps of {net_dt:g} s x {self.neurons:,} neurons",
+        )
+
     def __post_init__(self) -> None:
         if not isinstance(self.optimize, bool):
             raise ParameterError(f"optimize must be True or False, got {self.optimize!r}")

@@ -228,6 +228,7 @@ def run_network(
     plant inside it (:mod:`striatal.neural.brian`); ``on_compile(folder)`` is called
     before it compiles (once per network size and run length; ``folder`` is the cache).
     """
+    config.check_work(sim.duration, net_dt)
     if simulator == "brian2":
         return _run_compiled(
             controller, plant, sim, config, seed, net_dt, exploration, on_compile, on_progress

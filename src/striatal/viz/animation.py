@@ -17,8 +17,10 @@ from striatal.limits import count_of_steps
 
 __all__ = [
     "MAX_FRAMES",
+    "MAX_FRAME_BYTES",
     "MAX_TRACK",
     "animation_frames",
+    "check_animation",
     "ffmpeg_path",
     "frame_times",
     "save_animation",
@@ -48,6 +50,36 @@ def frame_times(t_end: float, fps: float, speed: float) -> np.ndarray:
     return np.arange(n) * step
 
 
+#: Most bytes the frames of one animation hold (they are all in memory before the file
+#: is encoded): 2 GiB, about 3 100 frames of the default 720 x 320 px.
+MAX_FRAME_BYTES = 2 * 2**30
+#: Frame sizes an animation takes [px].
+FRAME_PX = (16, 4096)
+
+
+def check_animation(t_end: float, fps: float, speed: float, width: int, height: int) -> int:
+    """The number of frames of an animation of ``t_end`` s (:func:`frame_times`), or
+    ParameterError if a side is outside :data:`FRAME_PX` or the frames would hold
+    more than :data:`MAX_FRAME_BYTES`; checked before the run is simulated."""
+    for name, v in (("width", width), ("height", height)):
+        if isinstance(v, bool) or not isinstance(v, int | np.integer):
+            raise ParameterError(f"--{name} must be a whole number of px, got {v!r}")
+        if not FRAME_PX[0] <= v <= FRAME_PX[1]:
+            raise ParameterError(f"--{name} must be in [{FRAME_PX[0]}, {FRAME_PX[1]}] px, got {v}")
+    frame_times(0.0, fps, speed)  # fps and speed > 0
+    n = count_of_steps(
+        t_end, speed / fps, cap=MAX_FRAMES, what="frames", fix="raise --speed or lower --fps"
+    )
+    size = n * width * height * 3
+    if size > MAX_FRAME_BYTES:
+        raise ParameterError(
+            f"the animation would hold {n:,} frames of {width} x {height} px = "
+            f"{size / 2**30:.3g} GiB, more than {MAX_FRAME_BYTES / 2**30:g} GiB; lower "
+            "--width or --height, raise --speed or lower --fps"
+        )
+    return n
+
+
 #: Widest track an animation shows [m]; a runaway cart is drawn clipped at its edge.
 MAX_TRACK = 20.0
 
@@ -58,6 +90,7 @@ def animation_frames(
     """(H, W, 3) uint8 frames of ``traj`` from :func:`striatal.viz.render.cartpole_frame`."""
     from striatal.viz import render
 
+    check_animation(float(traj.t[-1]), fps, speed, width, height)
     times = frame_times(float(traj.t[-1]), fps, speed)
     idx = np.minimum(np.rint(times / traj.sim.dt).astype(int), len(traj.t) - 1)
     states = traj.states

@@ -10,7 +10,14 @@ from striatal.errors import ParameterError
 from striatal.learners import History
 from striatal.viz.canvas import new_figure
 
-__all__ = ["RULE_PANELS", "learning_curves", "running_mean"]
+__all__ = [
+    "DRAWN_COLUMNS",
+    "DRAWN_LIMIT",
+    "RULE_PANELS",
+    "drawn",
+    "learning_curves",
+    "running_mean",
+]
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -23,6 +30,35 @@ def running_mean(values: np.ndarray, window: int) -> np.ndarray:
     i = np.arange(1, len(v) + 1)
     lo = np.maximum(i - window, 0)
     return (c[i] - c[lo]) / (i - lo)
+
+
+#: Largest magnitude drawn: a value beyond (a gain of a run without a step bound) is
+#: drawn at the edge, and the figure says so (an axis cannot span +-1e308).
+DRAWN_LIMIT = 1e100
+#: Most columns of points a curve is drawn with: more than a figure has pixels across
+#: at any --dpi it takes (at most 1000 dpi on an 8-inch axis).
+DRAWN_COLUMNS = 8192
+
+
+def drawn(
+    x: np.ndarray, y: np.ndarray, columns: int = DRAWN_COLUMNS
+) -> tuple[np.ndarray, np.ndarray]:
+    """(x, y) as drawn: ``x`` (ascending) cut into ``columns`` equal intervals, the points
+    of each by their first x with their smallest and then their largest y (NaN-only
+    intervals stay NaN, a gap).
+
+    A line or dot plot of a million trials looks the same, since a pixel column shows
+    only the extent of its points, but the figure holds at most ``2 * columns`` points
+    instead of one per trial: its memory does not grow with the history.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.clip(np.asarray(y, dtype=float), -DRAWN_LIMIT, DRAWN_LIMIT)
+    if len(x) <= 2 * columns:
+        return x, y
+    edges = np.linspace(x[0], x[-1], columns, endpoint=False)
+    starts = np.unique(np.searchsorted(x, edges, side="left"))
+    low, high = np.fmin.reduceat(y, starts), np.fmax.reduceat(y, starts)
+    return np.repeat(x[starts], 2), np.stack([low, high], axis=1).ravel()
 
 
 #: Panel of each learner-specific history column: (y label, title).
@@ -70,22 +106,25 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
     ax_rate = ax_r.twinx()
     if sparse:
         pos, zero, neg = reward > 0, reward == 0, reward < 0
-        ax_r.plot(n[pos], reward[pos], ".", color="tab:green", ms=3, label="reward > 0")
+        ax_r.plot(*drawn(n[pos], reward[pos]), ".", color="tab:green", ms=3, label="reward > 0")
         if zero.any():
-            ax_r.plot(n[zero], reward[zero], ".", color="0.5", ms=3, label="reward 0")
-        ax_r.plot(n[neg], reward[neg], ".", color="tab:red", ms=3, label="reward < 0")
+            ax_r.plot(*drawn(n[zero], reward[zero]), ".", color="0.5", ms=3, label="reward 0")
+        ax_r.plot(*drawn(n[neg], reward[neg]), ".", color="tab:red", ms=3, label="reward < 0")
         ax_r.set_ylabel("reward (eqs 24-25)")
-        ax_rate.plot(n, running_mean(pos, window), color="tab:green", lw=1.2, label="fraction > 0")
+        ax_rate.plot(
+            *drawn(n, running_mean(pos, window)), color="tab:green", lw=1.2, label="fraction > 0"
+        )
     else:
-        ax_r.plot(n, reward, ".", color="tab:blue", ms=3, label="shaped reward")
-        ax_r.plot(n, running_mean(reward, window), color="tab:blue", lw=1.0, label="running mean")
+        ax_r.plot(*drawn(n, reward), ".", color="tab:blue", ms=3, label="shaped reward")
+        ax_r.plot(
+            *drawn(n, running_mean(reward, window)), color="tab:blue", lw=1.0, label="running mean"
+        )
         ax_r.set_ylabel("shaped reward")
     ax_r.set_title(
         f"reward per trial; running fractions over the last {window} trials", fontsize=10
     )
     ax_rate.plot(
-        n,
-        running_mean(success, window),
+        *drawn(n, running_mean(success, window)),
         color="black",
         lw=1.2,
         label="fraction passing success test",
@@ -102,22 +141,24 @@ def learning_curves(history: History, *, window: int = 50, title: str | None = N
     w6_unused = "explore" in history.rule_columns  # pgpe acts with the mean policy
     for i in range(6):
         label = f"W{i + 1}" + (" (unused)" if i == 5 and w6_unused else "")
-        ax_w.plot(n, W[:, i], lw=1.0, label=label)
+        ax_w.plot(*drawn(n, W[:, i]), lw=1.0, label=label)
     ax_w.axhline(0.0, color="0.6", lw=0.5)
     ax_w.set_ylabel("gain (used in the trial)")
     ax_w.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     ax_w.set_title("W1..W6 (eqs 22-23)", fontsize=10)
-    ax_c.plot(n, history.theta_c, color="tab:purple", lw=1.0)
+    ax_c.plot(*drawn(n, history.theta_c), color="tab:purple", lw=1.0)
     ax_c.set_ylabel("θ_c [rad]")
     ax_c.set_title("switching threshold (eq 21)", fontsize=10)
     for ax, name in zip(axes[3:], extra, strict=True):
         label, panel_title = RULE_PANELS[name]
-        ax.plot(n, history.column(name), color="tab:brown", lw=1.0)
+        ax.plot(*drawn(n, history.column(name)), color="tab:brown", lw=1.0)
         ax.set_ylabel(label)
         ax.set_title(panel_title, fontsize=10)
     axes[-1].set_xlabel("trial")
     counted = f"{int((reward > 0).sum())} with reward > 0, " if sparse else ""
     unchanged = f"\n{history.learner}'s " + ", ".join(flat) + " (not drawn)" if flat else ""
+    if np.nanmax(np.abs(history.data), initial=0.0) > DRAWN_LIMIT:
+        unchanged += f"\nvalues beyond +-{DRAWN_LIMIT:.0e} drawn at +-{DRAWN_LIMIT:.0e}"
     fig.suptitle(
         title
         or f"Learning curves ({history.learner}): {len(history)} trials, {counted}"

@@ -303,8 +303,13 @@ def figure5(
     ax_xy.plot([tx[-1]], [ty[-1]], "*", ms=10, color="tab:red", label="end")
     runaway = not bool(np.all(np.abs(x) <= VIEW_LIMIT))
     if runaway:
+        # the part within the view; a run that is never inside (started beyond it) is
+        # shown where it is, bounded to what an axis can span
         inside = np.abs(x) <= VIEW_LIMIT
-        ax_xy.set_xlim(tx[inside].min() - 0.5, tx[inside].max() + 0.5)
+        shown = tx[inside] if inside.any() else np.clip(tx[np.isfinite(tx)], -1e12, 1e12)
+        if not shown.size:
+            shown = np.array([-VIEW_LIMIT, VIEW_LIMIT])
+        ax_xy.set_xlim(shown.min() - 0.5, shown.max() + 0.5)
         ax_xy.set_ylim(-1.2 * l, 1.2 * l)
     else:
         ax_xy.set_aspect("equal", adjustable="datalim")

@@ -86,13 +86,15 @@ class ResultModel(BaseModel):
 
 class MemoryEntry(BaseModel):
     """What one entry of a learner's memory may hold: its lengths, whether a run that
-    has done a trial must have it, and the size of its values."""
+    has done a trial must have it, and the range of its values (``nonnegative``: all
+    >= 0; ``whole_at``: the positions that are counts, whole numbers)."""
 
     model_config = ConfigDict(frozen=True)
     sizes: tuple[int, ...] | None = None
     multiple_of: int = 1
     required: bool = True
-    counts: bool = False
+    nonnegative: bool = False
+    whole_at: tuple[int, ...] = ()
 
 
 #: The memory of each learner in checkpoint.json (``state.memory``: name -> numbers).
@@ -124,7 +126,7 @@ MEMORY: dict[str, dict[str, MemoryEntry]] = {
     # the imagined trials so far and their simulated seconds
     "forward": {
         "data": MemoryEntry(multiple_of=11),
-        "imagined": MemoryEntry(sizes=(2,), counts=True),
+        "imagined": MemoryEntry(sizes=(2,), nonnegative=True, whole_at=(0,)),
     },
 }
 #: The most numbers one memory entry holds (forward's 1 200 transitions of 11 on each of
@@ -203,8 +205,14 @@ def check_memory(learner: str, state: StateModel, where: str) -> None:
                 else f"a multiple of {entry.multiple_of}"
             )
             raise DataFileError(f"{where}: state.memory.{name} holds {n} numbers, not {want}")
-        if entry.counts and any(v < 0 for v in values):
+        if entry.nonnegative and any(v < 0 for v in values):
             raise DataFileError(f"{where}: state.memory.{name} holds a negative count")
+        fraction = [i for i in entry.whole_at if i < n and values[i] != int(values[i])]
+        if fraction:
+            raise DataFileError(
+                f"{where}: state.memory.{name}.{fraction[0]} is a count, not a whole "
+                f"number ({values[fraction[0]]!r})"
+            )
     if state.trials_done > 0:
         for name, entry in spec.items():
             if entry.required and not state.memory.get(name):
@@ -218,9 +226,11 @@ def check_memory(learner: str, state: StateModel, where: str) -> None:
 
 #: How each history.csv column is checked (a column not listed: a finite number).
 #: "count": a whole number >= 0; "flag": 0 or 1; "empty": a number, or empty (NaN:
-#: not recorded in this trial, e.g. the fitted pole mass of a trial that fitted none).
-HISTORY_CELLS: dict[str, Literal["count", "flag", "empty", "nonnegative"]] = {
+#: not recorded in this trial, e.g. the fitted pole mass of a trial that fitted none);
+#: "angle": theta_c, in (0, pi] [rad] as every learner keeps it (eq 21).
+HISTORY_CELLS: dict[str, Literal["count", "flag", "empty", "nonnegative", "angle"]] = {
     "trial": "count",
+    "theta_c": "angle",
     "success": "flag",
     "fault": "flag",
     "early": "flag",

@@ -188,34 +188,56 @@ class PValue(BaseModel):
     p_value: Rate | None
 
 
-class PairSummary(BaseModel):
-    """One learner-against-control comparison of summary.json."""
+class McNemar(BaseModel):
+    """McNemar's test on the seeds two arms share: its p-value and the discordant seeds."""
+
+    model_config = _MODEL
+    p_value: Rate | None
+    only_a: Count | None = None
+    only_b: Count | None = None
+
+
+class _Pair(BaseModel):
+    """What a learner arm's comparison with another arm holds of the learner: its rate
+    (with its interval), costs over solved seeds, and both tests."""
 
     model_config = _MODEL
     arm: Name
-    control: Name
     init: Name
+    learner: Name | None = None
+    success_rate: Rate | None
+    success_rate_ci: RateInterval | None = None
+    simulations_median: NonNegative | None = None
+    trials_median: NonNegative | None = None
+    simulated_seconds_restricted_mean: NonNegative | None = None
     fisher: PValue
-    mcnemar: PValue | None = None
+    mcnemar: McNemar | None = None
+    same_seeds: bool | None = None
 
 
-class SummaryModel(BaseModel):
-    """summary.json of a sweep (or an ablation): its arms, comparisons, notes, settings."""
+class PairSummary(_Pair):
+    """One learner-against-control comparison of summary.json (``control_``: the
+    control's numbers)."""
 
-    model_config = _MODEL
-    arms: Annotated[list[ArmSummary], Field(max_length=100_000)]
-    learner_vs_control: list[PairSummary] = []
-    notes: list[str] = []
-    settings: dict[str, Any] = {}
+    control: Name
+    control_success_rate: Rate | None
+    control_success_rate_ci: RateInterval | None = None
+    control_simulations_median: NonNegative | None = None
+    control_trials_median: NonNegative | None = None
+    control_simulated_seconds_restricted_mean: NonNegative | None = None
 
-    @model_validator(mode="after")
-    def _unique(self) -> SummaryModel:
-        seen: set[tuple[str, str]] = set()
-        for a in self.arms:
-            if (a.arm, a.init) in seen:
-                raise ValueError(f"arm {a.arm!r} (init {a.init!r}) appears twice")
-            seen.add((a.arm, a.init))
-        return self
+
+class BaselinePair(_Pair):
+    """One learner-against-baseline comparison of summary.json (``baseline_``: the
+    baseline's numbers)."""
+
+    simulated_seconds_restricted_mean: NonNegative | None
+    baseline: Name
+    baseline_success_rate: Rate | None
+    baseline_success_rate_ci: RateInterval | None = None
+    baseline_simulations_median: NonNegative | None = None
+    baseline_trials_median: NonNegative | None = None
+    baseline_simulated_seconds_restricted_mean: NonNegative | None
 
 
 class SweepModel(BaseModel):
@@ -233,6 +255,9 @@ class SweepModel(BaseModel):
     arms: dict[Name, dict[str, Any]] | None = None
     root_seed: Seed | None = None
     run_seeds: list[Seed] | None = None
+    inits: Annotated[list[Literal["chapter", "random"]], Field(min_length=1)] | None = None
+    success_on: Name | None = None
+    robust: bool | None = None
 
     @model_validator(mode="after")
     def _seeds(self) -> SweepModel:
@@ -242,6 +267,26 @@ class SweepModel(BaseModel):
             and len(self.run_seeds) != self.seeds
         ):
             raise ValueError(f"run_seeds holds {len(self.run_seeds)} seeds, not {self.seeds}")
+        return self
+
+
+class SummaryModel(BaseModel):
+    """summary.json of a sweep (or an ablation): its arms, comparisons, notes, settings."""
+
+    model_config = _MODEL
+    arms: Annotated[list[ArmSummary], Field(max_length=100_000)]
+    learner_vs_control: list[PairSummary] = []
+    learner_vs_baselines: list[BaselinePair] = []
+    notes: list[str] = []
+    settings: SweepModel = SweepModel()
+
+    @model_validator(mode="after")
+    def _unique(self) -> SummaryModel:
+        seen: set[tuple[str, str]] = set()
+        for a in self.arms:
+            if (a.arm, a.init) in seen:
+                raise ValueError(f"arm {a.arm!r} (init {a.init!r}) appears twice")
+            seen.add((a.arm, a.init))
         return self
 
 
