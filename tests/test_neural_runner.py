@@ -122,6 +122,7 @@ def test_other_options_are_not_resumed_into_the_folder(finished: Path, tmp_path:
         (["--workers", "2"], "--workers needs --learn --seeds N"),
         (["--learner", "pgpe"], "--learner needs --learn --seeds N"),
         (["--seeds", "2", "--backend", "brian2"], "--simulator brian2"),
+        (["--seeds", "100", "--trials", "100000"], "the network would simulate"),
     ],
 )
 def test_bad_sweep_options_get_one_line_and_exit_2(
