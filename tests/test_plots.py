@@ -393,6 +393,29 @@ def test_gif_has_one_frame_per_speed_over_fps(tmp_path: Path, fake_render: None)
         assert im.info["duration"] == 100
 
 
+@pytest.mark.parametrize("fps", ["0.01", "0.0999", "100.5", "1e-300"])
+def test_animate_refuses_a_frame_rate_a_gif_cannot_hold(
+    tmp_path: Path, fake_render: None, fps: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A GIF's delay is a 16-bit count of 10 ms: 0.01 fps (100 s a frame, merged with
+    the identical frames after it) overflowed Pillow's header with a traceback."""
+    out = tmp_path / "a.gif"
+    assert main(["animate", "--duration", "2", "--fps", fps, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--fps must be in [0.1, 100]" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_slowest_frame_rate_writes_a_gif(tmp_path: Path, fake_render: None) -> None:
+    from PIL import Image
+
+    out = tmp_path / "slow.gif"
+    args = ["animate", "--duration", "30", "--fps", "0.1", "--speed", "1", "--out", str(out)]
+    assert main([*args, "--width", "16", "--height", "16"]) == 0
+    with Image.open(out) as im:
+        assert im.info["duration"] == 10_000
+
+
 def test_animate_refuses_bad_options(tmp_path: Path, fake_render: None) -> None:
     assert main(["animate", "--fps", "0", "--out", str(tmp_path / "a.gif")]) == 2
     assert main(["animate", "--out", str(tmp_path / "a.avi")]) == 2

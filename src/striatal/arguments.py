@@ -251,6 +251,10 @@ def _args(*args: Arg) -> dict[str, Arg]:
 
 #: The arguments of the sweep (``striatal sweep``, :func:`striatal.sweep`) and the
 #: options that several commands share, by their Python name.
+#: Seconds to wait for a Ray cluster's address to accept a connection (the default of
+#: ``connect_timeout``).
+CONNECT_TIMEOUT = 30.0
+
 ARGS: dict[str, Arg] = _args(
     Arg("seeds", "count", "seeds per arm and init", low=1, high=100_000),
     # a seed as a sweep spawns one for each run (runs.csv's seeds): 32 bits

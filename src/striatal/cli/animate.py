@@ -47,10 +47,6 @@ def run(args: argparse.Namespace) -> int:
         v = getattr(args, name)
         if not (math.isfinite(v) and v > 0):
             raise ParameterError(f"--{name} must be a finite number > 0, got {v}")
-    if args.fps > 100:
-        raise ParameterError(
-            f"--fps must be at most 100 (GIF delays are 10 ms units), got {args.fps}"
-        )
     controller, plant = controller_and_plant(args)
     sim = options.simulation_from(args)
     plots.check_animation(sim.duration, args.fps, args.speed, args.width, args.height)

@@ -81,8 +81,6 @@ def simulator_meant(value: str) -> str | None:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from striatal.experiments import pool
-
     options.add_controller_arguments(parser, gains_required=True)
     parser.add_argument(
         "--result",
@@ -179,7 +177,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --seeds: the rule on the pathway weights (its preset, the sparse reward)",
     )
     options.add_worker_arguments(
-        runs, connect_timeout=pool.CONNECT_TIMEOUT, refuse_backend=simulator_meant
+        runs, connect_timeout=arguments.CONNECT_TIMEOUT, refuse_backend=simulator_meant
     )
     options.add_plant_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")

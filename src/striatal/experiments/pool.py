@@ -22,16 +22,13 @@ from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Literal
 
+from striatal.arguments import CONNECT_TIMEOUT
 from striatal.errors import ParameterError
 from striatal.experiments.runner import run_one
 from striatal.experiments.spec import RunSpec
 from striatal.learners.config import require_count
 
 Backend = Literal["local", "ray"]
-
-
-#: Seconds to wait for a Ray cluster's address to accept a connection.
-CONNECT_TIMEOUT = 30.0
 
 
 def _ray_worker(spec: RunSpec) -> dict[str, Any]:

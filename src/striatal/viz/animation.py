@@ -55,17 +55,27 @@ def frame_times(t_end: float, fps: float, speed: float) -> np.ndarray:
 MAX_FRAME_BYTES = 2 * 2**30
 #: Frame sizes an animation takes [px].
 FRAME_PX = (16, 4096)
+#: Frame rates an animation takes [1/s]: a GIF's delay is a 16-bit count of 10 ms
+#: (at most 655.35 s, and at least 10 ms), so 0.1 fps (10 s a frame) leaves room for
+#: the identical frames Pillow merges into one.
+FPS_RANGE = (0.1, 100.0)
 
 
 def check_animation(t_end: float, fps: float, speed: float, width: int, height: int) -> int:
     """The number of frames of an animation of ``t_end`` s (:func:`frame_times`), or
-    ParameterError if a side is outside :data:`FRAME_PX` or the frames would hold
+    ParameterError if a side is outside :data:`FRAME_PX`, ``fps`` outside
+    :data:`FPS_RANGE`, or the frames would hold
     more than :data:`MAX_FRAME_BYTES`; checked before the run is simulated."""
     for name, v in (("width", width), ("height", height)):
         if isinstance(v, bool) or not isinstance(v, int | np.integer):
             raise ParameterError(f"--{name} must be a whole number of px, got {v!r}")
         if not FRAME_PX[0] <= v <= FRAME_PX[1]:
             raise ParameterError(f"--{name} must be in [{FRAME_PX[0]}, {FRAME_PX[1]}] px, got {v}")
+    if not (isinstance(fps, int | float) and FPS_RANGE[0] <= fps <= FPS_RANGE[1]):
+        raise ParameterError(
+            f"--fps must be in [{FPS_RANGE[0]:g}, {FPS_RANGE[1]:g}] (a GIF's delay is a "
+            f"16-bit count of 10 ms), got {fps}"
+        )
     frame_times(0.0, fps, speed)  # fps and speed > 0
     n = count_of_steps(
         t_end, speed / fps, cap=MAX_FRAMES, what="frames", fix="raise --speed or lower --fps"
