@@ -47,7 +47,7 @@ def batch(lockstep):
     state0, gains, plant, control, protocol, _, learning, _ = setup.args
     args = (
         np.tile(state0, (B, 1)),
-        kernel.Gains(np.tile(gains.W, (B, 1)), np.full(B, gains.theta_c)),
+        kernel.BatchGains(np.tile(gains.W, (B, 1)), np.full(B, gains.theta_c)),
         plant,
         control,
         protocol,

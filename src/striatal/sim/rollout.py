@@ -513,7 +513,7 @@ def batch_args(
     sim, hardware = first.sim, first.hardware
     return kernel.BatchArgs(
         np.array([r.start for r in requests], dtype=float),
-        kernel.Gains(
+        kernel.BatchGains(
             W=np.array([r.W for r in requests], dtype=float),
             theta_c=np.array([r.threshold for r in requests], dtype=float),
         ),

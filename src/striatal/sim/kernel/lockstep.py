@@ -21,8 +21,8 @@ from striatal.sim.kernel.plant import (
     rk4,
 )
 from striatal.sim.kernel.policy import (
+    BatchGains,
     ControlArgs,
-    Gains,
     PolicyTerms,
     balancing_roots,
     policy_gradient,
@@ -67,7 +67,9 @@ _N_FIELDS = 29
 def _lockstep_block(
     lo: int,
     hi: int,
-    args: tuple[np.ndarray, Gains, PlantArgs, ControlArgs, ProtocolArgs, np.ndarray, TraceArgs],
+    args: tuple[
+        np.ndarray, BatchGains, PlantArgs, ControlArgs, ProtocolArgs, np.ndarray, TraceArgs
+    ],
     outs: np.ndarray,
 ) -> None:
     """Trials lo..hi-1 of :func:`run_trials_lockstep`, advanced step by step together.
@@ -263,7 +265,7 @@ def _lockstep_block(
 @njit(cache=True, parallel=True, nogil=True, error_model="numpy")
 def run_trials_lockstep(
     states0: np.ndarray,
-    gains: Gains,
+    gains: BatchGains,
     plant: PlantArgs,
     control: ControlArgs,
     protocol: ProtocolArgs,

@@ -36,7 +36,7 @@ from numba import njit, prange
 
 from striatal.sim.kernel.libm import wrap_angle
 from striatal.sim.kernel.plant import PlantArgs, motor_force, plant_step, plant_terms
-from striatal.sim.kernel.policy import ControlArgs, Gains, policy_of
+from striatal.sim.kernel.policy import BatchGains, ControlArgs, Gains, policy_of
 from striatal.sim.kernel.traces import TraceArgs
 from striatal.sim.kernel.trials import (
     STATUS_FAULT,
@@ -44,6 +44,7 @@ from striatal.sim.kernel.trials import (
     STATUS_TRACK,
     NoiseArgs,
     ProtocolArgs,
+    batch_row,
     judge,
     judge_start,
     load_trace,
@@ -310,7 +311,7 @@ def run_online_trial(
 @njit(cache=True, parallel=True, nogil=True)
 def run_online_trials_batch(
     states0: np.ndarray,
-    gains: Gains,
+    gains: BatchGains,
     plant: PlantArgs,
     control: ControlArgs,
     protocol: ProtocolArgs,
@@ -326,17 +327,17 @@ def run_online_trials_batch(
     ``critic`` (weights, trace, stats, square, gains_end: (B, ...)) belongs to trial b;
     the rates are shared. Each row equals the scalar trial's bit for bit.
     """
-    no_sensor = np.empty((0, 2))
     for b in prange(states0.shape[0]):
         c = critic
+        a = batch_row(b, states0, gains, plant, control, protocol, noise, learning, outs)
         run_online_trial(
-            states0[b],
-            Gains(gains.W[b], gains.theta_c[b]),
-            plant,
-            control,
-            protocol,
-            NoiseArgs(noise[b], no_sensor, 0.0, 0.0),
-            TraceArgs(learning.gamma, learning.trace[b]),
+            a.state0,
+            a.gains,
+            a.plant,
+            a.control,
+            a.protocol,
+            a.noise,
+            a.learning,
             CriticArgs(
                 c.alpha,
                 c.beta,

@@ -7,7 +7,7 @@ Readings: docs/paper-notes.md, sections 1-4.
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -17,6 +17,7 @@ from striatal.sim.kernel.libm import wrap_angle
 __all__ = [
     "MODE_BALANCE",
     "MODE_SWINGUP",
+    "BatchGains",
     "ControlArgs",
     "Gains",
     "PolicyTerms",
@@ -37,13 +38,19 @@ MODE_BALANCE = 1
 
 
 class Gains(NamedTuple):
-    """The learned parameters: W1..W6 (eqs 22-23) and the switching threshold theta_c (eq 21).
-
-    For :func:`run_trials_batch`, W is (B, 6) and theta_c (B,).
-    """
+    """The learned parameters of one trial: W1..W6 (eqs 22-23), (6,), and the switching
+    threshold theta_c (eq 21)."""
 
     W: np.ndarray
-    theta_c: Any  # float, or (B,) for the batch kernels
+    theta_c: float
+
+
+class BatchGains(NamedTuple):
+    """The learned parameters of B trials (the batch kernels): row b of ``W`` (B, 6) and
+    ``theta_c`` (B,) is trial b's :class:`Gains`."""
+
+    W: np.ndarray
+    theta_c: np.ndarray
 
 
 class ControlArgs(NamedTuple):

@@ -30,6 +30,7 @@ from striatal.sim.kernel.plant import (
 from striatal.sim.kernel.policy import (
     MODE_BALANCE,
     MODE_SWINGUP,
+    BatchGains,
     ControlArgs,
     Gains,
     PolicyTerms,
@@ -178,7 +179,7 @@ class BatchArgs(NamedTuple):
     ``outs`` (B, N_OUT) is trial b's; :func:`striatal.sim.rollout.batch_args` builds them."""
 
     states0: np.ndarray
-    gains: Gains
+    gains: BatchGains
     plant: PlantArgs
     control: ControlArgs
     protocol: ProtocolArgs
@@ -538,10 +539,37 @@ def trial_loop(step: Callable[..., State], dynamics: int | LearnedStep, args: Tr
     write_summary(buffers.out, status, reward, end_step, x, x_dot, theta, theta_dot, tally)
 
 
+@njit(cache=True, nogil=True)
+def batch_row(
+    b: int,
+    states0: np.ndarray,
+    gains: BatchGains,
+    plant: PlantArgs,
+    control: ControlArgs,
+    protocol: ProtocolArgs,
+    noise: np.ndarray,
+    learning: TraceArgs,
+    outs: np.ndarray,
+) -> TrialArgs:
+    """Trial b of a batch (the batch kernels' arguments) as one scalar trial's
+    arguments: its rows of the start, gains, noise, trace and output, no sensor noise,
+    nothing recorded. The trace and output rows are views: the trial writes them."""
+    return TrialArgs(
+        states0[b],
+        Gains(gains.W[b], gains.theta_c[b]),
+        plant,
+        control,
+        protocol,
+        NoiseArgs(noise[b], np.empty((0, 2)), 0.0, 0.0),
+        TraceArgs(learning.gamma, learning.trace[b]),
+        Buffers(outs[b], np.empty((0, N_TRAJ))),
+    )
+
+
 @njit(cache=True, parallel=True, nogil=True)
 def run_trials_batch(
     states0: np.ndarray,
-    gains: Gains,
+    gains: BatchGains,
     plant: PlantArgs,
     control: ControlArgs,
     protocol: ProtocolArgs,
@@ -554,29 +582,19 @@ def run_trials_batch(
     Build the arguments with :func:`striatal.sim.rollout.batch_args`. Row b of
     ``states0`` (B, 4), ``gains.W`` (B, 6), ``gains.theta_c`` (B,), ``noise``
     (B, n_draws) (or (B, 0) for the mean policy), ``learning.trace`` (B, 6) and
-    ``outs`` (B, N_OUT) belongs to trial b; no sensor noise, nothing recorded.
-    The result of each row equals the scalar kernel's bit for bit.
+    ``outs`` (B, N_OUT) belongs to trial b (:func:`batch_row`); no sensor noise, nothing
+    recorded. The result of each row equals the scalar kernel's bit for bit.
     """
-    no_sensor = np.empty((0, 2))
-    no_traj = np.empty((0, N_TRAJ))
     for b in prange(states0.shape[0]):
-        run_trial(
-            states0[b],
-            Gains(gains.W[b], gains.theta_c[b]),
-            plant,
-            control,
-            protocol,
-            NoiseArgs(noise[b], no_sensor, 0.0, 0.0),
-            TraceArgs(learning.gamma, learning.trace[b]),
-            Buffers(outs[b], no_traj),
-        )
+        a = batch_row(b, states0, gains, plant, control, protocol, noise, learning, outs)
+        run_trial(a.state0, a.gains, a.plant, a.control, a.protocol, a.noise, a.learning, a.buffers)
 
 
 @njit(cache=True, parallel=True, nogil=True)
 def run_learned_trials_batch(
     model: LearnedArgs,
     states0: np.ndarray,
-    gains: Gains,
+    gains: BatchGains,
     plant: PlantArgs,
     control: ControlArgs,
     protocol: ProtocolArgs,
@@ -590,19 +608,6 @@ def run_learned_trials_batch(
     :func:`run_trials_batch`'s (:func:`striatal.sim.rollout.batch_args`); no sensor
     noise, nothing recorded. The result of each row equals the scalar kernel's bit for
     bit."""
-    no_sensor = np.empty((0, 2))
-    no_traj = np.empty((0, N_TRAJ))
     for b in prange(states0.shape[0]):
-        run_learned_trial(
-            model,
-            TrialArgs(
-                states0[b],
-                Gains(gains.W[b], gains.theta_c[b]),
-                plant,
-                control,
-                protocol,
-                NoiseArgs(noise[b], no_sensor, 0.0, 0.0),
-                TraceArgs(learning.gamma, learning.trace[b]),
-                Buffers(outs[b], no_traj),
-            ),
-        )
+        a = batch_row(b, states0, gains, plant, control, protocol, noise, learning, outs)
+        run_learned_trial(model, a)
