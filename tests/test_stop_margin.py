@@ -270,3 +270,17 @@ def test_generic_gains_imagines_the_pole_answering_as_the_wider_corners_would(
     seen.clear()
     learn(Plant(), template, default_config("forward", **changes), 101)
     assert seen and set(seen) == {forward.RESPONSE_GAINS}
+
+
+def test_a_sweep_takes_the_margins_and_random_search_keeps_its_rule() -> None:
+    kw: dict[str, Any] = dict(
+        seeds=2, init="random", max_trials=3, eval_draws=0, control=False, baselines=("random",)
+    )
+    plain = striatal.sweep("pgpe", robust=True, **kw)
+    margin = striatal.sweep("pgpe", robust=True, stop_margin=0.1, **kw)
+    rows = {(r["arm"], r["seed"]): r for r in margin.runs}
+    for r in plain.runs:
+        if r["arm"] == "random":  # the same search, run for run
+            assert rows[("random", r["seed"])]["simulations"] == r["simulations"]
+    with pytest.raises(ParameterError, match="imagine_margin widens"):
+        striatal.sweep("forward", imagine_margin=0.1, **kw)
