@@ -27,7 +27,10 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    set on each member (:func:`striatal.sim.robust.family_check`), and with
    "generic-gains" on the mean with its angular acceleration times each of
    :data:`RESPONSE_GAINS`. Else imagination goes on. The candidate, found or not, is the
-   next real trial's controller.
+   next real trial's controller. With ``imagine_margin`` M the plant corners imagination
+   asks for are those at x(1 +- (0.2 + M)) (structured: the inner pgpe's jitter and each
+   family plant's set; generic-gains: :func:`response_gains`), a margin beyond the real
+   checks' +-20 %.
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
 imagined simulations and simulated seconds; history column ``imagined``), never in
