@@ -1,8 +1,9 @@
 """A margin candidate beside the arm it changes and random search, from sweeps' runs.csv.
 
 Each argument is NAME=SWEEP: a sweep folder run with ``--baselines random`` on the same
-seeds as the others (its random-search rows are the same run for run). For each NAME
-the learner arm's row, then random search's:
+seeds as the others (its random-search rows are the same run for run); a NAME given
+more than once pools its sweeps (e.g. one per evaluation root). For each NAME the
+learner arm's row, then random search's:
 
 1. cost: robust runs [Wilson 95 %], real simulated seconds of the solved runs (median
    and its percentile-bootstrap interval, ``np.random.default_rng(0)``), real trials,
@@ -112,20 +113,23 @@ def main(args: list[str]) -> None:
         "|---|---|---|---|---|---|---|",
     ]
     rng = np.random.default_rng(0)
-    first_random: dict[int, Controller] | None = None
-    first: dict[int, dict[str, Any]] | None = None
+    given: dict[str, list[dict[str, Any]]] = {}
     for arg in args:
         name, _, folder = arg.partition("=")
         rows, _ = read_runs(Path(folder) / "runs.csv")
-        found_random = sweep_controllers(rows).get("random", {})
+        given.setdefault(name, []).extend(rows)
+    first_random: dict[int, Controller] | None = None
+    first: dict[int, dict[str, Any]] | None = None
+    for name, rows in given.items():
+        found = sweep_controllers(rows)
         more, learner = cost_rows(name, rows, rng, first)
         lines += more
         first = learner if first is None else first
         if first_random is None:
-            first_random = found_random
-        elif found_random != first_random:
-            lines.append(f"| (random search in {name}'s sweep differs from the first's) |")
-        for arm, by_seed in sweep_controllers(rows).items():
+            first_random = found.get("random", {})
+        elif found.get("random", {}) != first_random:
+            lines.append(f"| (random search in {name}'s sweeps differs from the first's) |")
+        for arm, by_seed in found.items():
             arms.setdefault(name if arm == "learner" else arm, {}).update(by_seed)
     print("\n".join(lines) + "\n")
     print("The margin set, 40 conditions:\n")
@@ -134,7 +138,7 @@ def main(args: list[str]) -> None:
     beyond = tuple(c for c in MARGIN_CONDITIONS if outside(c))
     print(f"Its {len(beyond)} conditions outside the +-{BOX:.0%} box of pole mass and length:\n")
     print(margin_table(arms, conditions=beyond)[0])
-    names_given = [a.partition("=")[0] for a in args]
+    names_given = list(given)
     mine = {k: v for k, v in arms.items() if k in names_given}
     print(f"The 40 conditions, each arm paired with {names_given[0]} (the arm it changes):\n")
     print(margin_table(mine, reference=names_given[0])[0])
