@@ -33,6 +33,7 @@ ROWS: dict[str, tuple[str, dict[str, Any]]] = {
     "pgpe (preset: success_on mean)": ("pgpe", {}),
     "pgpe `--plant-jitter 0.2`": ("pgpe", {"plant_jitter": 0.2}),
     "pgpe `--robust` (jitter 0.2)": ("pgpe", {"robust": True}),
+    "pgpe `--robust --stop-margin 0.1`": ("pgpe", {"robust": True, "stop_margin": 0.1}),
     "forward (preset)": ("forward", {}),
     "ac (preset)": ("ac", {}),
 }

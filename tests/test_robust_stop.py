@@ -318,3 +318,19 @@ def test_robust_applies_the_rules_robust_preset_under_the_options_given() -> Non
 
     ctrl = control_config(c)
     assert (ctrl.alpha, ctrl.sigma_rate, ctrl.plant_jitter, ctrl.robust) == (0.0, 0.0, 0.2, True)
+
+
+def test_a_robust_sweep_reruns_in_its_folder_and_skips_its_finished_runs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """sweep.json's robust entry is the rule's note (text): a rerun reads it back."""
+    out = tmp_path / "sweep"
+    options = "--init random --seeds 1 --learner pgpe --robust --max-trials 2 --eval-draws 0"
+    argv = ["sweep", *options.split(), "--no-control", "--no-progress", "--out", str(out)]
+    assert main(argv) == 0
+    rows = (out / "runs.csv").read_text()
+    assert isinstance(json.loads((out / "sweep.json").read_text())["robust"], str)
+    capsys.readouterr()
+    assert main(argv) == 0
+    assert "1 already in --out" in capsys.readouterr().out
+    assert (out / "runs.csv").read_text() == rows

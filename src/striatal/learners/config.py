@@ -184,6 +184,15 @@ class LearnerConfig:
         "also applies the learner's robust preset before the options given (pgpe: "
         "--plant-jitter 0.2 --alpha 0.5)",
     )
+    stop_margin: float = option(
+        0.0,
+        "with --robust: a controller that passes the success test must first also pass the "
+        "four plant corners at pole mass and length x(1 +- (0.2 + M)), a margin beyond the "
+        "robustness set's (mean policy, 60 s, the force held, up to the first failure, "
+        "every run counted); the set then decides as before. The learner's stop rule only: "
+        "a sweep's baselines keep theirs. 0: none",
+        bounds="[0, 0.5]",
+    )
     critic_rate: float = option(
         0.01, "ac: rate beta of the critic's weights, v += beta delta z", bounds="[0, 1]"
     )
@@ -212,6 +221,15 @@ class LearnerConfig:
         "'conditioned' (the generic ensemble with the plant's pole mass and length factors "
         "as inputs, learned from the real trials and the real robust checks, rehearsing "
         "the corners it has seen)",
+    )
+    imagine_margin: float = option(
+        0.0,
+        "forward, with --robust and the structured or generic-gains model: imagination asks "
+        "for the plant corners at pole mass and length x(1 +- (0.2 + M)) instead of the "
+        "robustness set's (structured: the inner pgpe's jittered plants and each family "
+        "plant's checks; generic-gains: the angular-acceleration gains 1/(1 +- (0.2 + M))); "
+        "the real checks are unchanged. 0: the set's box",
+        bounds="[0, 0.5]",
     )
     max_force: float | None = option(
         None,

@@ -14,7 +14,9 @@ With ``config.robust`` (any rule) every trial and check holds the motor force
 (``striatal.sim.robust.ROBUST_HARDWARE``), the jitter corners are not checked, and a
 controller that passes the success test must also pass the robustness set
 (:func:`striatal.sim.robust.stop_check`, each of its runs counted; the nominal case is
-not rerun when the success test's noise-free nominal run already was it). With a
+not rerun when the success test's noise-free nominal run already was it); with
+``config.stop_margin`` it must first pass the four plant corners of a wider box too
+(:func:`striatal.sim.robust.corners_check_steps`, counted the same way). With a
 jittered plant, a rule judged on its noise-free candidate is first filtered by its
 own trial on that plant (no nominal rerun); the set then decides. ac's online trial
 (``striatal.sim.online``) runs with u held even then; its success checks and the set
@@ -45,7 +47,12 @@ from striatal.learners.rule import Judging, Rule, Trial, TrialContext, Update
 from striatal.learners.state import LearnerState, TrialRecord
 from striatal.params import Controller, Plant, Simulation
 from striatal.sim.batch import Steps, drive, driven
-from striatal.sim.robust import nominal_is_the_case, stop_check_steps
+from striatal.sim.robust import (
+    ROBUST_BOX,
+    corners_check_steps,
+    nominal_is_the_case,
+    stop_check_steps,
+)
 from striatal.sim.rollout import Protocol, TrialRequest
 
 __all__ = [
@@ -142,6 +149,9 @@ CHECKS: dict[str, str] = {
     "rerun": "a noise-free run of the judged controller on the nominal plant",
     "jitter corners": "noise-free runs on the four corners of plant_jitter (pole mass and "
     "length scaled by 1 +- plant_jitter), the controller believing in the nominal plant",
+    "margin corners": "with stop_margin M: noise-free runs on the four plant corners at "
+    "pole mass and length x(1 +- (0.2 + M)) (the motor force held, 60 s), the controller "
+    "believing in the nominal plant, up to the first that fails",
     "robustness set": "the robustness set of striatal.sim.robust (9 noise-free cases, the "
     "motor force held), up to the first that fails; its nominal case is not rerun when a "
     "check already ran it",
@@ -164,7 +174,7 @@ def success_checks(config: LearnerConfig, judging: Judging | None = None) -> tup
     if config.success_on == "mean" and config.plant_jitter > 0.0 and not config.robust:
         checks += ("jitter corners",)
     if config.robust:
-        checks += ("robustness set",)
+        checks += ("margin corners",) * (config.stop_margin > 0.0) + ("robustness set",)
     return checks
 
 
@@ -243,6 +253,19 @@ def learning_steps(
                 record=plan.record_checks,
             )
             checks = verdict.recorded
+            simulations += verdict.simulations
+            seconds += verdict.simulated_seconds
+            success = verdict.robust
+            continue
+        if check == "margin corners":
+            verdict = yield from corners_check_steps(
+                replace(template, theta_c=theta_c),
+                plant,
+                sim.dt,
+                ROBUST_BOX + config.stop_margin,
+                gains=W,
+                hardware=context.hardware,
+            )
             simulations += verdict.simulations
             seconds += verdict.simulated_seconds
             success = verdict.robust

@@ -49,6 +49,7 @@ LOOP_OPTIONS = (
     "success_on",
     "action_every",
     "robust",
+    "stop_margin",
     "max_force",
     "track",
 )
@@ -230,6 +231,11 @@ class Rule:
                     f"learner {self.name!r} does not take {name} {value!r} "
                     f"(it takes: {', '.join(map(str, taken))})"
                 )
+        if config.stop_margin > 0.0 and not config.robust:
+            raise ParameterError(
+                "stop_margin widens the robust stop rule: it needs --robust "
+                f"(got stop_margin {config.stop_margin!r} without it)"
+            )
         if self.judging.mean_policy_only and config.success_on != "mean":
             raise ParameterError(
                 f"learner {self.name!r} {self.judging.mean_policy_only}: its success test is "

@@ -37,6 +37,7 @@ from striatal.sim.batch import Steps, TrialRequest, driven
 from striatal.sim.rollout import NO_PROTOCOL, SensorNoise, simulate
 
 __all__ = [
+    "ROBUST_BOX",
     "ROBUST_CASES",
     "ROBUST_DURATION",
     "ROBUST_HARDWARE",
@@ -46,9 +47,13 @@ __all__ = [
     "RobustReport",
     "StopCheck",
     "check_robust",
+    "corner_cases",
+    "corners_check",
+    "corners_check_steps",
     "family_check",
     "family_check_steps",
     "nominal_is_the_case",
+    "robust_cases",
     "robust_hardware",
     "run_case",
     "stop_check",
@@ -95,6 +100,9 @@ class Perturbation:
         return SensorNoise(x_std=self.x_std, theta_std=self.theta_std)
 
 
+#: The half-width of the robustness set's plant corners: pole mass and length x(1 +- it).
+ROBUST_BOX = 0.2
+
 #: The nine cases of the robustness set (module docstring).
 ROBUST_CASES: tuple[Perturbation, ...] = (
     Perturbation("nominal"),
@@ -107,6 +115,36 @@ ROBUST_CASES: tuple[Perturbation, ...] = (
     Perturbation("x0 = -0.5 m", x0=-0.5),
     Perturbation("x0 = +0.5 m", x0=0.5),
 )
+
+
+def robust_cases(box: float = ROBUST_BOX) -> tuple[Perturbation, ...]:
+    """:data:`ROBUST_CASES` with the four plant corners at pole mass and length
+    x(1 +- ``box``) in their places (``box`` :data:`ROBUST_BOX`: the set itself)."""
+    if box == ROBUST_BOX:
+        return ROBUST_CASES
+    if not 0.0 < box < 1.0:
+        raise ParameterError(f"a corner box must be in (0, 1), got {box!r}")
+
+    def moved(factor: float) -> float:
+        return round(1.0 + math.copysign(box, factor - 1.0), 12)
+
+    return tuple(
+        Perturbation(
+            f"pole mass x{moved(c.pole_mass):g}, length x{moved(c.length):g}",
+            pole_mass=moved(c.pole_mass),
+            length=moved(c.length),
+        )
+        if c.pole_mass != 1.0
+        else c
+        for c in ROBUST_CASES
+    )
+
+
+def corner_cases(box: float) -> tuple[Perturbation, ...]:
+    """The four plant corners of :func:`robust_cases` ``(box)``, from the chapter's
+    start, in :data:`STOP_ORDER` (the shorter pole first)."""
+    cases = robust_cases(box)
+    return tuple(cases[i] for i in STOP_ORDER if cases[i].pole_mass != 1.0)
 
 
 @dataclass(frozen=True)
@@ -329,6 +367,7 @@ def stop_check_steps(
     nominal_passed: bool = False,
     hardware: Hardware = ROBUST_HARDWARE,
     record: bool = False,
+    box: float = ROBUST_BOX,
 ) -> Steps[StopCheck]:
     """Is ``controller`` (with ``gains`` if given: a learner's guarded W) robust?
 
@@ -338,10 +377,13 @@ def stop_check_steps(
     the nominal case (:func:`nominal_is_the_case`) and it passed; it is not run again.
     The verdict equals :func:`check_robust`'s ``robust``. Its runs are yielded
     (:data:`striatal.sim.batch.Steps`); :func:`stop_check` runs them. ``record``: the
-    verdict keeps every run's rows with its case's plant factors.
+    verdict keeps every run's rows with its case's plant factors. ``box``: the plant
+    corners at x(1 +- box) instead (:func:`robust_cases`; a wider box than the set's
+    asks for a margin).
     """
     W = np.asarray(controller.gains if gains is None else gains, dtype=float)
-    cases = [ROBUST_CASES[i] for i in STOP_ORDER]
+    every = robust_cases(box)
+    cases = [every[i] for i in STOP_ORDER]
     runs = (
         (
             case.name,
@@ -358,6 +400,34 @@ def stop_check_steps(
 stop_check = driven(stop_check_steps)
 
 
+def corners_check_steps(
+    controller: Controller,
+    plant: Plant,
+    dt: float,
+    box: float,
+    *,
+    gains: np.ndarray | None = None,
+    hardware: Hardware = ROBUST_HARDWARE,
+) -> Steps[StopCheck]:
+    """The four plant corners at x(1 +- ``box``) (:func:`corner_cases`), run as the
+    robustness set runs its cases (mean policy, 60 s, ``hardware``, the controller
+    keeping ``plant`` as its model), up to the first failure, every run counted."""
+    W = np.asarray(controller.gains if gains is None else gains, dtype=float)
+    runs = (
+        (
+            case.name,
+            _case_request(controller, W, case, case.plant(plant), plant, dt, hardware),
+            (case.pole_mass, case.length),
+        )
+        for case in corner_cases(box)
+    )
+    return (yield from _until_failure(runs))
+
+
+#: :func:`corners_check_steps` run to its end on the scalar kernel.
+corners_check = driven(corners_check_steps)
+
+
 def family_check_steps(
     controller: Controller,
     plants: tuple[Plant, ...],
@@ -366,18 +436,19 @@ def family_check_steps(
     model: Plant | None = None,
     gains: np.ndarray | None = None,
     hardware: Hardware = ROBUST_HARDWARE,
+    box: float = ROBUST_BOX,
 ) -> Steps[StopCheck]:
     """The robust stop rule on each plant of ``plants`` (a family a model cannot rule
     out), stopping at the first failure, every run counted. ``model`` None: each plant
     is believed exactly and :func:`stop_check`'s cases run around it (its corners
-    scaled from it). Else the controller believes ``model`` and the plants replace the
-    corners: each start of :data:`ROBUST_CASES` (the nominal start and the four others)
-    on each plant, learned plants included."""
+    scaled from it, at x(1 +- ``box``)). Else the controller believes ``model`` and the
+    plants replace the corners: each start of :data:`ROBUST_CASES` (the nominal start
+    and the four others) on each plant, learned plants included."""
     if model is None:
         runs, seconds = 0, 0.0
         for plant in plants:
             verdict = yield from stop_check_steps(
-                controller, plant, dt, gains=gains, hardware=hardware
+                controller, plant, dt, gains=gains, hardware=hardware, box=box
             )
             runs += verdict.simulations
             seconds += verdict.simulated_seconds

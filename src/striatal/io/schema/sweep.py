@@ -257,7 +257,8 @@ class SweepModel(BaseModel):
     run_seeds: list[Seed] | None = None
     inits: Annotated[list[Literal["chapter", "random"]], Field(min_length=1)] | None = None
     success_on: Name | None = None
-    robust: bool | None = None
+    #: sweep.json holds the robust stop rule's note (its text), only when the rule is set
+    robust: bool | Annotated[str, Field(min_length=1, max_length=2_000)] | None = None
 
     @model_validator(mode="after")
     def _seeds(self) -> SweepModel:

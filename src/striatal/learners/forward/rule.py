@@ -27,7 +27,10 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    set on each member (:func:`striatal.sim.robust.family_check`), and with
    "generic-gains" on the mean with its angular acceleration times each of
    :data:`RESPONSE_GAINS`. Else imagination goes on. The candidate, found or not, is the
-   next real trial's controller.
+   next real trial's controller. With ``imagine_margin`` M the plant corners imagination
+   asks for are those at x(1 +- (0.2 + M)) (structured: the inner pgpe's jitter and each
+   family plant's set; generic-gains: :func:`response_gains`), a margin beyond the real
+   checks' +-20 %.
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
 imagined simulations and simulated seconds; history column ``imagined``), never in
@@ -66,7 +69,7 @@ from striatal.learners.state import LearnerState
 from striatal.params import N_GAINS, Controller, Plant, Simulation
 from striatal.sim.batch import Steps, driven
 from striatal.sim.learned import LearnedPlant
-from striatal.sim.robust import family_check_steps
+from striatal.sim.robust import ROBUST_BOX, family_check_steps
 from striatal.sim.rollout import Protocol
 
 __all__ = [
@@ -79,6 +82,7 @@ __all__ = [
     "generic_world",
     "imagine",
     "imagine_steps",
+    "response_gains",
     "structured_world",
 ]
 
@@ -99,12 +103,19 @@ INNER = "pgpe"
 RESPONSE_GAINS = (1.0 / 1.2, 1.0 / 0.8)
 
 
+def response_gains(box: float = ROBUST_BOX) -> tuple[float, float]:
+    """:data:`RESPONSE_GAINS` for plant corners at pole length x(1 +- ``box``):
+    1/(1 + box) and 1/(1 - box)."""
+    return (1.0 / (1.0 + box), 1.0 / (1.0 - box))
+
+
 @dataclass(frozen=True)
 class ForwardConfig:
     """The forward rule's options (see :class:`LearnerConfig` for each)."""
 
     imagine_trials: int
     forward_model: ForwardModel
+    imagine_margin: float
 
 
 @dataclass(frozen=True)
@@ -230,12 +241,15 @@ def imagine_steps(
     runs spent from the budget too. Every imagined trial is yielded
     (:data:`striatal.sim.batch.Steps`), so the engine that runs the real trials runs
     them too; :func:`imagine` runs them here."""
+    box = ROBUST_BOX + config.imagine_margin
+    jitter = {"plant_jitter": box} if config.robust and world.jitter else {}
     inner = default_config(
         INNER,
         robust=config.robust and world.jitter,
         max_force=config.max_force,
         track=config.track,
         action_every=config.action_every,
+        **jitter,
     )
     simulations, seconds, budget = 0, 0.0, config.imagine_trials
     template, round_seed, plant = controller, seed, world.plant
@@ -257,7 +271,12 @@ def imagine_steps(
         if solved and config.robust:
             for member in world.family:
                 verdict = yield from family_check_steps(
-                    template, (member,), sim.dt, model=world.family_model, hardware=config.hardware
+                    template,
+                    (member,),
+                    sim.dt,
+                    model=world.family_model,
+                    hardware=config.hardware,
+                    box=box,
                 )
                 simulations += verdict.simulations
                 seconds += verdict.simulated_seconds
@@ -308,6 +327,13 @@ class ForwardRule(Rule):
     def check(self, config: LearnerConfig) -> None:
         """Also: the generic model needs scikit-learn (refused before the first trial)."""
         super().check(config)
+        if config.imagine_margin > 0.0 and not (
+            config.robust and config.forward_model in ("structured", "generic-gains")
+        ):
+            raise ParameterError(
+                "imagine_margin widens the plant corners imagination checks: it needs --robust "
+                "and --forward-model structured or generic-gains"
+            )
         if config.forward_model != "structured" and importlib.util.find_spec("sklearn") is None:
             raise ParameterError(
                 "--forward-model generic needs scikit-learn: pip install 'striatal[model]'"
@@ -363,7 +389,8 @@ class ForwardRule(Rule):
                     np.random.default_rng(seed),
                     conditioned=c.forward_model == "conditioned",
                 )
-                gains = RESPONSE_GAINS if c.forward_model == "generic-gains" else ()
+                box = ROBUST_BOX + c.imagine_margin
+                gains = response_gains(box) if c.forward_model == "generic-gains" else ()
                 world = generic_world(model, believed_plant(context.plant), gains)
                 fitted = (math.nan, math.nan)
             else:
