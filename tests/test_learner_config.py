@@ -40,7 +40,15 @@ def test_run_ids_of_existing_configs_are_unchanged(name: str) -> None:
 
 def test_a_field_beyond_schema_2_is_stored_only_when_it_differs_from_its_default() -> None:
     later = {f.name for f in fields(LearnerConfig)} - STORED_ALWAYS
-    assert later == {"symmetric", "robust", "max_force", "track", "imagine_trials", "forward_model"}
+    assert later == {
+        "symmetric",
+        "robust",
+        "max_force",
+        "track",
+        "imagine_trials",
+        "imagine_round",
+        "forward_model",
+    }
     plain = LearnerConfig().to_dict()
     assert set(plain) == STORED_ALWAYS
     assert LearnerConfig(track=2.4).to_dict()["track"] == 2.4

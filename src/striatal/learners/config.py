@@ -202,6 +202,15 @@ class LearnerConfig:
         "after each real trial; 0 fits no model and learns nothing (its control)",
         bounds=">= 0",
     )
+    imagine_round: int | None = option(
+        None,
+        "forward: imagined trials a round of imagination (pgpe from the candidate under one "
+        "seed) may spend without a solution; a round that finds none ends the imagination "
+        "until the next real trial, whose data refit the model (none: the whole "
+        "--imagine-trials budget)",
+        bounds=">= 1",
+        metavar="TRIALS",
+    )
     forward_model: ForwardModel = option(
         "structured",
         "forward: the forward model imagination runs on: 'structured' (the cart-pole's "

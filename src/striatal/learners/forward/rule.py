@@ -104,6 +104,7 @@ class ForwardConfig:
     """The forward rule's options (see :class:`LearnerConfig` for each)."""
 
     imagine_trials: int
+    imagine_round: int | None
     forward_model: ForwardModel
 
 
@@ -177,9 +178,13 @@ class World:
     family: tuple[Plant, ...]
     jitter: bool
     family_model: Plant | None
-    #: Whether a candidate a family plant refuses is learned on that plant next, with
-    #: every imagined simulation (checks too) spent from the budget.
+    #: Whether a candidate a family plant refuses is learned on that plant next (its
+    #: checks spent from the budget, as with ``charge_checks``).
     rehearse: bool = False
+    #: Whether the family checks' runs are spent from the imagined budget too, so that
+    #: ``imagine_trials`` bounds every imagined simulation after a real trial (give or
+    #: take one check), not only the inner learner's trials.
+    charge_checks: bool = False
 
 
 def structured_world(fit: StructuredFit) -> World:
@@ -192,7 +197,8 @@ def generic_world(model: GenericModel, believed: Plant, gains: tuple[float, ...]
     """The generic ensemble, the controller believing ``believed`` throughout: learn on
     its mean (one evaluation a step), check on each member (the ensemble's doubt) and on
     its mean with the angular acceleration times each of ``gains``
-    (:meth:`~striatal.sim.learned.LearnedDynamics.gained`; not for a conditioned model).
+    (:meth:`~striatal.sim.learned.LearnedDynamics.gained`; not for a conditioned model),
+    every check spent from the imagined budget (``charge_checks``).
     A model conditioned on the plant factors is also checked on its mean at each plant
     the data hold (the corners the real checks ran), and a candidate a family plant
     refuses is learned on that plant next (``rehearse``)."""
@@ -205,12 +211,14 @@ def generic_world(model: GenericModel, believed: Plant, gains: tuple[float, ...]
         corners = tuple(
             mean.scaled(pole_mass=a, length=b) for a, b in model.plants if (a, b) != (1.0, 1.0)
         )
-        return World(mean, members + corners, False, believed, rehearse=True)
+        return World(mean, members + corners, False, believed, rehearse=True, charge_checks=True)
     dynamics = model.dynamics()
     members = tuple(LearnedPlant.of(dynamics.member(k), believed) for k in range(dynamics.members))
     average = dynamics.mean()
     gained = tuple(LearnedPlant.of(average.gained(g), believed) for g in gains)
-    return World(LearnedPlant.of(average, believed), members + gained, False, believed)
+    return World(
+        LearnedPlant.of(average, believed), members + gained, False, believed, charge_checks=True
+    )
 
 
 def imagine_steps(
@@ -226,8 +234,11 @@ def imagine_steps(
     rule's preset; with ``config.robust`` its stop rule, and its robust preset where
     ``world.jitter``). A solution must also be robust on each plant of
     ``world.family`` (with ``robust``), else the inner learner goes on from it with a
-    new seed; with ``world.rehearse`` on the family plant that refused it, the checks'
-    runs spent from the budget too. Every imagined trial is yielded
+    new seed; with ``world.rehearse`` on the family plant that refused it; with
+    ``world.charge_checks`` (or ``rehearse``) the checks' runs are spent from the budget
+    too. A round (one seed) that finds no solution within ``config.imagine_round``
+    trials (None: the budget left) ends the imagination: its candidate is the next real
+    trial's, whose data refit the model. Every imagined trial is yielded
     (:data:`striatal.sim.batch.Steps`), so the engine that runs the real trials runs
     them too; :func:`imagine` runs them here."""
     inner = default_config(
@@ -238,13 +249,15 @@ def imagine_steps(
         action_every=config.action_every,
     )
     simulations, seconds, budget = 0, 0.0, config.imagine_trials
+    per_round = config.imagine_round or budget
+    charged = world.rehearse or world.charge_checks
     template, round_seed, plant = controller, seed, world.plant
     solved = False
     while budget > 0 and not solved:
         result = yield from learn_steps(
             plant,
             template,
-            replace(inner, max_trials=budget),
+            replace(inner, max_trials=min(budget, per_round)),
             initial_state(template.gains, template.theta_c, round_seed),
             sim,
             protocol,
@@ -261,13 +274,15 @@ def imagine_steps(
                 )
                 simulations += verdict.simulations
                 seconds += verdict.simulated_seconds
-                if world.rehearse:
+                if charged:
                     budget -= verdict.simulations
                 if not verdict.robust:
                     solved = False
                     if world.rehearse:
                         plant = member
                     break
+        elif not solved:
+            break
         round_seed += 1
     return Imagined(
         W=tuple(float(w) for w in template.gains),
