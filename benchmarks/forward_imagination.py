@@ -2,6 +2,7 @@
 
     python benchmarks/forward_imagination.py [--root 0] [--first 0] [--seeds 15]
         [--forward-model generic-gains] [--imagine-trials 2000] [--imagine-round N]
+        [--imagine-duration SECONDS]
         [--json FILE]
 
 Runs ``striatal.train("forward", robust=True, init="random", max_trials=300, ...)`` on
@@ -92,6 +93,7 @@ def main() -> None:
     parser.add_argument("--forward-model", default="generic-gains")
     parser.add_argument("--imagine-trials", type=int, default=2000)
     parser.add_argument("--imagine-round", type=int, default=None)
+    parser.add_argument("--imagine-duration", type=float, default=None)
     parser.add_argument("--json", default=None, help="write each run's record here")
     args = parser.parse_args()
     print(f"load average before: {os.getloadavg()}")
@@ -109,6 +111,7 @@ def main() -> None:
             max_trials=300,
             imagine_trials=args.imagine_trials,
             imagine_round=args.imagine_round,
+            imagine_duration=args.imagine_duration,
         )
         cpu = time.process_time() - cpu
         endings = recorder.endings()

@@ -449,3 +449,46 @@ def test_a_capped_run_counts_imagination_apart_and_repeats_under_its_seed(
         default_config("forward", imagine_round=0)
     with pytest.raises(ParameterError, match="does not use imagine_round"):
         default_config("pgpe", imagine_round=10)
+
+
+def test_imagined_trials_last_the_imagine_duration_and_checks_keep_60_s(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """--imagine-duration D: the inner learner's trials run for D seconds (its success test
+    judged then), the family checks for the robustness set's 60 s; longer than the real
+    trial is cut to it; out of [1, 600] is refused."""
+    pytest.importorskip("sklearn")
+    world = _generic_world()
+    durations: list[float] = []
+    checks: list[int] = []
+    learn_steps, check_steps = forward.learn_steps, forward.family_check_steps
+
+    def noting(*args: Any, **kwargs: Any) -> Any:
+        durations.append(args[4].duration)
+        result = yield from learn_steps(*args, **kwargs)
+        checks.append(-result.trials_done)
+        return result
+
+    def checking(*args: Any, **kwargs: Any) -> Any:
+        verdict = yield from check_steps(*args, **kwargs)
+        checks.append(verdict.simulations)
+        return verdict
+
+    monkeypatch.setattr(forward, "learn_steps", noting)
+    monkeypatch.setattr(forward, "family_check_steps", checking)
+    config = default_config(
+        "forward", robust=True, imagine_trials=200, imagine_duration=20.0, forward_model="generic"
+    )
+    dream = forward.imagine(world, start(1), config, Simulation(), NO_PROTOCOL, 1)
+    assert durations and set(durations) == {20.0}
+    inner = -sum(c for c in checks if c < 0)
+    checked = sum(c for c in checks if c > 0)
+    assert dream.simulations == inner + checked
+    assert dream.simulated_seconds <= inner * 20.0 + checked * 60.0 + 1e-9
+    durations.clear()
+    longer = replace(config, imagine_duration=90.0)
+    forward.imagine(world, start(1), longer, Simulation(duration=30.0), NO_PROTOCOL, 1)
+    assert set(durations) == {30.0}
+    for bad in (0.5, 601.0):
+        with pytest.raises(ParameterError, match="imagine_duration"):
+            default_config("forward", imagine_duration=bad)

@@ -47,6 +47,7 @@ def test_a_field_beyond_schema_2_is_stored_only_when_it_differs_from_its_default
         "track",
         "imagine_trials",
         "imagine_round",
+        "imagine_duration",
         "forward_model",
     }
     plain = LearnerConfig().to_dict()

@@ -211,6 +211,14 @@ class LearnerConfig:
         bounds=">= 1",
         metavar="TRIALS",
     )
+    imagine_duration: float | None = option(
+        None,
+        "forward: duration [s] of the inner learner's imagined trials (at most the real "
+        "trial's), its success test judged at their end; a candidate is still checked on "
+        "the model's plants for the robustness set's 60 s (none: the real trial's duration)",
+        bounds="[1, 600]",
+        metavar="SECONDS",
+    )
     forward_model: ForwardModel = option(
         "structured",
         "forward: the forward model imagination runs on: 'structured' (the cart-pole's "

@@ -105,6 +105,7 @@ class ForwardConfig:
 
     imagine_trials: int
     imagine_round: int | None
+    imagine_duration: float | None
     forward_model: ForwardModel
 
 
@@ -238,7 +239,9 @@ def imagine_steps(
     ``world.charge_checks`` (or ``rehearse``) the checks' runs are spent from the budget
     too. A round (one seed) that finds no solution within ``config.imagine_round``
     trials (None: the budget left) ends the imagination: its candidate is the next real
-    trial's, whose data refit the model. Every imagined trial is yielded
+    trial's, whose data refit the model. The inner learner's trials last
+    ``config.imagine_duration`` (None, or longer: ``sim``'s); the family checks keep the robustness
+    set's. Every imagined trial is yielded
     (:data:`striatal.sim.batch.Steps`), so the engine that runs the real trials runs
     them too; :func:`imagine` runs them here."""
     inner = default_config(
@@ -248,6 +251,8 @@ def imagine_steps(
         track=config.track,
         action_every=config.action_every,
     )
+    if config.imagine_duration is not None:
+        sim = replace(sim, duration=min(config.imagine_duration, sim.duration))
     simulations, seconds, budget = 0, 0.0, config.imagine_trials
     per_round = config.imagine_round or budget
     charged = world.rehearse or world.charge_checks
