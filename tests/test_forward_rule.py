@@ -407,12 +407,13 @@ def test_generic_checks_are_spent_from_the_imagined_budget(monkeypatch: pytest.M
     most one family check; the structured world does not charge them (unchanged)."""
     pytest.importorskip("sklearn")
     world = _generic_world()
-    assert (
-        world.charge_checks
-        and not forward.structured_world(
-            fit_structured(Transitions.of([simulate(Plant(), start(1), Simulation(duration=5.0))]))
-        ).charge_checks
+    structured = forward.structured_world(
+        fit_structured(Transitions.of([simulate(Plant(), start(1), Simulation(duration=5.0))]))
     )
+    assert world.charge_checks and not structured.charge_checks
+    # the generic worlds' own round cap and duration; the structured world has none
+    assert (world.round_trials, world.duration) == (forward.GENERIC_ROUND, forward.GENERIC_DURATION)
+    assert (structured.round_trials, structured.duration) == (None, None)
     starts = 5  # the robustness set's starts on one family plant
     config = default_config(
         "forward", robust=True, imagine_trials=120, forward_model="generic-gains"

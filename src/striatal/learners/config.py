@@ -206,8 +206,8 @@ class LearnerConfig:
         None,
         "forward: imagined trials a round of imagination (pgpe from the candidate under one "
         "seed) may spend without a solution; a round that finds none ends the imagination "
-        "until the next real trial, whose data refit the model (none: the whole "
-        "--imagine-trials budget)",
+        "until the next real trial, whose data refit the model (none: the model's own, "
+        "500 for the generic models, the whole --imagine-trials budget for the structured)",
         bounds=">= 1",
         metavar="TRIALS",
     )

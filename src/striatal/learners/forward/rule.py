@@ -71,6 +71,8 @@ from striatal.sim.rollout import Protocol
 
 __all__ = [
     "FORWARD",
+    "GENERIC_DURATION",
+    "GENERIC_ROUND",
     "MAX_TRANSITIONS",
     "RESPONSE_GAINS",
     "ForwardConfig",
@@ -97,6 +99,14 @@ INNER = "pgpe"
 #: that turns 1/1.2 and 1/0.8 as fast (the one piece of prior knowledge it adds: a
 #: longer pole turns slower; its pole masses are left to the real checks).
 RESPONSE_GAINS = (1.0 / 1.2, 1.0 / 0.8)
+#: The generic worlds' own cap on a round of imagination that finds no solution
+#: (``imagine_round`` none): chosen on root 0 (docs/results.md, "The generic forward
+#: model, round 4"); the structured world has none (its rounds end in a few hundred
+#: trials).
+GENERIC_ROUND = 500
+#: The generic worlds' own imagined-trial duration [s] (``imagine_duration`` none;
+#: None: the real trial's), chosen with :data:`GENERIC_ROUND`.
+GENERIC_DURATION: float | None = None
 
 
 @dataclass(frozen=True)
@@ -186,6 +196,10 @@ class World:
     #: ``imagine_trials`` bounds every imagined simulation after a real trial (give or
     #: take one check), not only the inner learner's trials.
     charge_checks: bool = False
+    #: The world's own ``imagine_round`` and ``imagine_duration`` (used when the options
+    #: are none; None: no cap, the real trial's duration).
+    round_trials: int | None = None
+    duration: float | None = None
 
 
 def structured_world(fit: StructuredFit) -> World:
@@ -199,7 +213,9 @@ def generic_world(model: GenericModel, believed: Plant, gains: tuple[float, ...]
     its mean (one evaluation a step), check on each member (the ensemble's doubt) and on
     its mean with the angular acceleration times each of ``gains``
     (:meth:`~striatal.sim.learned.LearnedDynamics.gained`; not for a conditioned model),
-    every check spent from the imagined budget (``charge_checks``).
+    every check spent from the imagined budget (``charge_checks``), a round without a
+    solution capped at :data:`GENERIC_ROUND` trials and the imagined trials lasting
+    :data:`GENERIC_DURATION` unless the options say otherwise.
     A model conditioned on the plant factors is also checked on its mean at each plant
     the data hold (the corners the real checks ran), and a candidate a family plant
     refuses is learned on that plant next (``rehearse``)."""
@@ -212,13 +228,28 @@ def generic_world(model: GenericModel, believed: Plant, gains: tuple[float, ...]
         corners = tuple(
             mean.scaled(pole_mass=a, length=b) for a, b in model.plants if (a, b) != (1.0, 1.0)
         )
-        return World(mean, members + corners, False, believed, rehearse=True, charge_checks=True)
+        return World(
+            mean,
+            members + corners,
+            False,
+            believed,
+            rehearse=True,
+            charge_checks=True,
+            round_trials=GENERIC_ROUND,
+            duration=GENERIC_DURATION,
+        )
     dynamics = model.dynamics()
     members = tuple(LearnedPlant.of(dynamics.member(k), believed) for k in range(dynamics.members))
     average = dynamics.mean()
     gained = tuple(LearnedPlant.of(average.gained(g), believed) for g in gains)
     return World(
-        LearnedPlant.of(average, believed), members + gained, False, believed, charge_checks=True
+        LearnedPlant.of(average, believed),
+        members + gained,
+        False,
+        believed,
+        charge_checks=True,
+        round_trials=GENERIC_ROUND,
+        duration=GENERIC_DURATION,
     )
 
 
@@ -238,10 +269,11 @@ def imagine_steps(
     new seed; with ``world.rehearse`` on the family plant that refused it; with
     ``world.charge_checks`` (or ``rehearse``) the checks' runs are spent from the budget
     too. A round (one seed) that finds no solution within ``config.imagine_round``
-    trials (None: the budget left) ends the imagination: its candidate is the next real
-    trial's, whose data refit the model. The inner learner's trials last
-    ``config.imagine_duration`` (None, or longer: ``sim``'s); the family checks keep the robustness
-    set's. Every imagined trial is yielded
+    trials (None: ``world.round_trials``; None again: the budget left) ends the
+    imagination: its candidate is the next real trial's, whose data refit the model.
+    The inner learner's trials last ``config.imagine_duration`` (None:
+    ``world.duration``; None again, or longer: ``sim``'s); the family checks keep the
+    robustness set's. Every imagined trial is yielded
     (:data:`striatal.sim.batch.Steps`), so the engine that runs the real trials runs
     them too; :func:`imagine` runs them here."""
     inner = default_config(
@@ -251,10 +283,11 @@ def imagine_steps(
         track=config.track,
         action_every=config.action_every,
     )
-    if config.imagine_duration is not None:
-        sim = replace(sim, duration=min(config.imagine_duration, sim.duration))
+    duration = config.imagine_duration or world.duration
+    if duration is not None:
+        sim = replace(sim, duration=min(duration, sim.duration))
     simulations, seconds, budget = 0, 0.0, config.imagine_trials
-    per_round = config.imagine_round or budget
+    per_round = config.imagine_round or world.round_trials or budget
     charged = world.rehearse or world.charge_checks
     template, round_seed, plant = controller, seed, world.plant
     solved = False
