@@ -121,6 +121,7 @@ def main() -> None:
             "real_trials": run.trials,
             "real_seconds": run.state.simulated_seconds,
             "imagined": forward.FORWARD.imagined(run.state)[0],
+            "imagined_seconds": forward.FORWARD.imagined(run.state)[1],
             "cpu": cpu,
             **{f"{e}_trials": len(v) for e, v in endings.items()},
             **{f"{e}_imagined": sum(v) for e, v in endings.items()},
@@ -128,17 +129,22 @@ def main() -> None:
         runs.append(record)
         print(
             f"seed #{record['seed']}: robust {run.success}, {run.trials} real trials, "
-            f"{record['real_seconds']:.0f} real s, {record['imagined']} imagined ("
+            f"{record['real_seconds']:.0f} real s, {record['imagined']} imagined "
+            f"({record['imagined_seconds']:.0f} s; "
             + ", ".join(f"{e} {len(v)} x {sum(v)}" for e, v in endings.items())
             + f"), CPU {cpu:.1f} s",
             flush=True,
         )
-    med = {k: statistics.median(r[k] for r in runs) for k in ("real_seconds", "imagined", "cpu")}
+    med = {
+        k: statistics.median(r[k] for r in runs)
+        for k in ("real_seconds", "imagined", "imagined_seconds", "cpu")
+    }
     shares = {e: sum(r[f"{e}_imagined"] for r in runs) for e in ENDINGS}
     total = max(sum(shares.values()), 1)
     print(
         f"robust {sum(r['robust'] for r in runs)}/{len(runs)}; medians: "
-        f"{med['real_seconds']:.0f} real s, {med['imagined']:.0f} imagined, "
+        f"{med['real_seconds']:.0f} real s, {med['imagined']:.0f} imagined "
+        f"({med['imagined_seconds']:.0f} s), "
         f"CPU {med['cpu']:.1f} s; "
         "imagined by ending: "
         + ", ".join(f"{e} {100 * v / total:.0f} %" for e, v in shares.items())

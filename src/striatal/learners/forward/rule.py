@@ -26,8 +26,10 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    has no pole mass to jitter); a candidate must also pass every start of the robustness
    set on each member (:func:`striatal.sim.robust.family_check`), and with
    "generic-gains" on the mean with its angular acceleration times each of
-   :data:`RESPONSE_GAINS`. Else imagination goes on. The candidate, found or not, is the
-   next real trial's controller.
+   :data:`RESPONSE_GAINS`, each check spent from the budget. Else imagination goes on,
+   unless the round found no solution within ``imagine_round`` trials (generic:
+   :data:`GENERIC_ROUND` by default): then the next real trial's data refit the model
+   first. The candidate, found or not, is the next real trial's controller.
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
 imagined simulations and simulated seconds; history column ``imagined``), never in
