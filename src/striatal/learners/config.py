@@ -199,7 +199,8 @@ class LearnerConfig:
     imagine_trials: int = option(
         2000,
         "forward: imagined trials (on the forward model, not counted as simulations) allowed "
-        "after each real trial; 0 fits no model and learns nothing (its control)",
+        "after each real trial, the generic models' checks of a candidate included; 0 fits "
+        "no model and learns nothing (its control)",
         bounds=">= 0",
     )
     imagine_round: int | None = option(
