@@ -218,7 +218,10 @@ def test_generic_imagination_cannot_rehearse_other_plants_and_the_real_check_say
     +10) and are still refused by the real robust check, whose plant corners imagination
     could not rehearse."""
     pytest.importorskip("sklearn")
-    config = default_config("forward", robust=True, max_trials=7, forward_model="generic")
+    # rounds given the whole budget (imagine_round 2000), so no round ends early
+    config = default_config(
+        "forward", robust=True, max_trials=7, forward_model="generic", imagine_round=2000
+    )
     rows: list[TrialRecord] = []
     result = learn(Plant(), start(2), config, 2, on_trial=lambda s, r: rows.append(r))
     assert not result.success
