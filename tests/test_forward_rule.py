@@ -27,7 +27,7 @@ from striatal.params import (
 from striatal.sim import kernel
 from striatal.sim.learned import LearnedPlant
 from striatal.sim.robust import ROBUST_HARDWARE, check_robust
-from striatal.sim.rollout import simulate
+from striatal.sim.rollout import NO_PROTOCOL, simulate
 
 
 class Calls:
@@ -218,7 +218,10 @@ def test_generic_imagination_cannot_rehearse_other_plants_and_the_real_check_say
     +10) and are still refused by the real robust check, whose plant corners imagination
     could not rehearse."""
     pytest.importorskip("sklearn")
-    config = default_config("forward", robust=True, max_trials=7, forward_model="generic")
+    # rounds given the whole budget (imagine_round 2000), so no round ends early
+    config = default_config(
+        "forward", robust=True, max_trials=7, forward_model="generic", imagine_round=2000
+    )
     rows: list[TrialRecord] = []
     result = learn(Plant(), start(2), config, 2, on_trial=lambda s, r: rows.append(r))
     assert not result.success
@@ -351,3 +354,145 @@ def test_imagination_believes_a_plain_plant_passed_explicitly() -> None:
     world = forward.generic_world(model, believed)
     assert all(p.believed == believed for p in (world.plant, *world.family))  # type: ignore[attr-defined]
     assert world.family_model == believed
+
+
+def _generic_world() -> forward.World:
+    data = Transitions.of(
+        [
+            simulate(Plant(), c, Simulation(duration=20.0), hardware=ROBUST_HARDWARE)
+            for c in (
+                Controller(gains=CHAPTER_FINAL_W, theta_c=CHAPTER_FINAL_THETA_C),
+                Controller(theta_c=CHAPTER_INITIAL_THETA_C),
+            )
+        ]
+    )
+    model = forward.fit_generic(data, np.random.default_rng(0))
+    return forward.generic_world(model, Plant(), forward.RESPONSE_GAINS)
+
+
+@pytest.mark.parametrize("cap", [None, 15])
+def test_a_round_without_a_solution_ends_the_imagination(
+    monkeypatch: pytest.MonkeyPatch, cap: int | None
+) -> None:
+    """--imagine-round N: each round of the inner learner is given at most N trials, and a
+    round that finds no solution is the last (the budget left is not spent); the same
+    seed gives the same candidate and counts."""
+    pytest.importorskip("sklearn")
+    world = _generic_world()
+    rounds: list[tuple[int, bool]] = []
+    learn_steps = forward.learn_steps
+
+    def noting(*args: Any, **kwargs: Any) -> Any:
+        result = yield from learn_steps(*args, **kwargs)
+        rounds.append((args[2].max_trials, bool(result.success)))
+        return result
+
+    monkeypatch.setattr(forward, "learn_steps", noting)
+    config = default_config(
+        "forward", robust=True, imagine_trials=400, imagine_round=cap, forward_model="generic"
+    )
+    dream = forward.imagine(world, start(3), config, Simulation(), NO_PROTOCOL, 3)
+    assert rounds
+    assert all(ok for _, ok in rounds[:-1])  # only the last round may end unsolved
+    if cap is not None:
+        assert all(m <= cap for m, _ in rounds)
+        assert not rounds[-1][1] and not dream.solved  # W(0) of seed 3: no solution in 15
+        assert dream.simulations < config.imagine_trials
+    first = list(rounds)
+    rounds.clear()
+    again = forward.imagine(world, start(3), config, Simulation(), NO_PROTOCOL, 3)
+    assert again == dream and rounds == first
+
+
+def test_generic_checks_are_spent_from_the_imagined_budget(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The generic worlds charge their family checks to the budget: after a real trial,
+    the imagined simulations (inner trials and checks) exceed ``imagine_trials`` by at
+    most one family check; the structured world does not charge them (unchanged)."""
+    pytest.importorskip("sklearn")
+    world = _generic_world()
+    structured = forward.structured_world(
+        fit_structured(Transitions.of([simulate(Plant(), start(1), Simulation(duration=5.0))]))
+    )
+    assert world.charge_checks and not structured.charge_checks
+    # the generic worlds' own round cap and duration; the structured world has none
+    assert (world.round_trials, world.duration) == (forward.GENERIC_ROUND, forward.GENERIC_DURATION)
+    assert (structured.round_trials, structured.duration) == (None, None)
+    starts = 5  # the robustness set's starts on one family plant
+    config = default_config(
+        "forward", robust=True, imagine_trials=120, forward_model="generic-gains"
+    )
+    for seed in (1, 2):
+        dream = forward.imagine(world, start(seed), config, Simulation(), NO_PROTOCOL, seed)
+        assert dream.simulations <= config.imagine_trials + len(world.family) * starts
+
+
+def test_a_capped_run_counts_imagination_apart_and_repeats_under_its_seed(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """generic-gains with --imagine-round: no physical trial while dreaming, every real
+    trial in ``simulations``, the imagined ones apart; the same seed, the same run."""
+    pytest.importorskip("sklearn")
+    calls = Calls(monkeypatch)
+    config = default_config(
+        "forward",
+        robust=True,
+        max_trials=3,
+        imagine_trials=300,
+        imagine_round=50,
+        forward_model="generic-gains",
+    )
+    rows: list[TrialRecord] = []
+    result = learn(Plant(), start(101), config, 101, on_trial=lambda s, r: rows.append(r))
+    assert calls.imagined == 0 and calls.real == result.simulations
+    assert result.simulated_seconds == pytest.approx(calls.real_steps * Simulation().dt)
+    assert result.get("imagined")[0] == sum(dict(r.extra)["imagined"] for r in rows) > 0
+    again = learn(Plant(), start(101), config, 101)
+    assert again.W == result.W and again.simulations == result.simulations
+    assert again.get("imagined") == result.get("imagined")
+    with pytest.raises(ParameterError, match="imagine_round"):
+        default_config("forward", imagine_round=0)
+    with pytest.raises(ParameterError, match="does not use imagine_round"):
+        default_config("pgpe", imagine_round=10)
+
+
+def test_imagined_trials_last_the_imagine_duration_and_checks_keep_60_s(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """--imagine-duration D: the inner learner's trials run for D seconds (its success test
+    judged then), the family checks for the robustness set's 60 s; longer than the real
+    trial is cut to it; out of [1, 600] is refused."""
+    pytest.importorskip("sklearn")
+    world = _generic_world()
+    durations: list[float] = []
+    checks: list[int] = []
+    learn_steps, check_steps = forward.learn_steps, forward.family_check_steps
+
+    def noting(*args: Any, **kwargs: Any) -> Any:
+        durations.append(args[4].duration)
+        result = yield from learn_steps(*args, **kwargs)
+        checks.append(-result.trials_done)
+        return result
+
+    def checking(*args: Any, **kwargs: Any) -> Any:
+        verdict = yield from check_steps(*args, **kwargs)
+        checks.append(verdict.simulations)
+        return verdict
+
+    monkeypatch.setattr(forward, "learn_steps", noting)
+    monkeypatch.setattr(forward, "family_check_steps", checking)
+    config = default_config(
+        "forward", robust=True, imagine_trials=200, imagine_duration=20.0, forward_model="generic"
+    )
+    dream = forward.imagine(world, start(1), config, Simulation(), NO_PROTOCOL, 1)
+    assert durations and set(durations) == {20.0}
+    inner = -sum(c for c in checks if c < 0)
+    checked = sum(c for c in checks if c > 0)
+    assert dream.simulations == inner + checked
+    assert dream.simulated_seconds <= inner * 20.0 + checked * 60.0 + 1e-9
+    durations.clear()
+    longer = replace(config, imagine_duration=90.0)
+    forward.imagine(world, start(1), longer, Simulation(duration=30.0), NO_PROTOCOL, 1)
+    assert set(durations) == {30.0}
+    for bad in (0.5, 601.0):
+        with pytest.raises(ParameterError, match="imagine_duration"):
+            default_config("forward", imagine_duration=bad)

@@ -46,6 +46,8 @@ def test_a_field_beyond_schema_2_is_stored_only_when_it_differs_from_its_default
         "max_force",
         "track",
         "imagine_trials",
+        "imagine_round",
+        "imagine_duration",
         "forward_model",
         "stop_margin",
         "imagine_margin",

@@ -208,8 +208,26 @@ class LearnerConfig:
     imagine_trials: int = option(
         2000,
         "forward: imagined trials (on the forward model, not counted as simulations) allowed "
-        "after each real trial; 0 fits no model and learns nothing (its control)",
+        "after each real trial, the generic models' checks of a candidate included; 0 fits "
+        "no model and learns nothing (its control)",
         bounds=">= 0",
+    )
+    imagine_round: int | None = option(
+        None,
+        "forward: imagined trials a round of imagination (pgpe from the candidate under one "
+        "seed) may spend without a solution; a round that finds none ends the imagination "
+        "until the next real trial, whose data refit the model (none: the model's own, "
+        "500 for the generic models, the whole --imagine-trials budget for the structured)",
+        bounds=">= 1",
+        metavar="TRIALS",
+    )
+    imagine_duration: float | None = option(
+        None,
+        "forward: duration [s] of the inner learner's imagined trials (at most the real "
+        "trial's), its success test judged at their end; a candidate is still checked on "
+        "the model's plants for the robustness set's 60 s (none: the real trial's duration)",
+        bounds="[1, 600]",
+        metavar="SECONDS",
     )
     forward_model: ForwardModel = option(
         "structured",

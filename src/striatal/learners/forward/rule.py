@@ -26,11 +26,13 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    has no pole mass to jitter); a candidate must also pass every start of the robustness
    set on each member (:func:`striatal.sim.robust.family_check`), and with
    "generic-gains" on the mean with its angular acceleration times each of
-   :data:`RESPONSE_GAINS`. Else imagination goes on. The candidate, found or not, is the
-   next real trial's controller. With ``imagine_margin`` M the plant corners imagination
-   asks for are those at x(1 +- (0.2 + M)) (structured: the inner pgpe's jitter and each
-   family plant's set; generic-gains: :func:`response_gains`), a margin beyond the real
-   checks' +-20 %.
+   :data:`RESPONSE_GAINS`, each check spent from the budget. Else imagination goes on,
+   unless the round found no solution within ``imagine_round`` trials (generic:
+   :data:`GENERIC_ROUND` by default): then the next real trial's data refit the model
+   first. The candidate, found or not, is the next real trial's controller. With
+   ``imagine_margin`` M the plant corners imagination asks for are those at
+   x(1 +- (0.2 + M)) (structured: the inner pgpe's jitter and each family plant's set;
+   generic-gains: :func:`response_gains`), a margin beyond the real checks' +-20 %.
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
 imagined simulations and simulated seconds; history column ``imagined``), never in
@@ -74,6 +76,8 @@ from striatal.sim.rollout import Protocol
 
 __all__ = [
     "FORWARD",
+    "GENERIC_DURATION",
+    "GENERIC_ROUND",
     "MAX_TRANSITIONS",
     "RESPONSE_GAINS",
     "ForwardConfig",
@@ -101,6 +105,14 @@ INNER = "pgpe"
 #: that turns 1/1.2 and 1/0.8 as fast (the one piece of prior knowledge it adds: a
 #: longer pole turns slower; its pole masses are left to the real checks).
 RESPONSE_GAINS = (1.0 / 1.2, 1.0 / 0.8)
+#: The generic worlds' own cap on a round of imagination that finds no solution
+#: (``imagine_round`` none): chosen on root 0 (docs/results.md, "The generic forward
+#: model, round 4"); the structured world has none (its rounds end in a few hundred
+#: trials).
+GENERIC_ROUND = 500
+#: The generic worlds' own imagined-trial duration [s] (``imagine_duration`` none;
+#: None: the real trial's), chosen with :data:`GENERIC_ROUND`.
+GENERIC_DURATION: float | None = None
 
 
 def response_gains(box: float = ROBUST_BOX) -> tuple[float, float]:
@@ -114,6 +126,8 @@ class ForwardConfig:
     """The forward rule's options (see :class:`LearnerConfig` for each)."""
 
     imagine_trials: int
+    imagine_round: int | None
+    imagine_duration: float | None
     forward_model: ForwardModel
     imagine_margin: float
 
@@ -188,9 +202,17 @@ class World:
     family: tuple[Plant, ...]
     jitter: bool
     family_model: Plant | None
-    #: Whether a candidate a family plant refuses is learned on that plant next, with
-    #: every imagined simulation (checks too) spent from the budget.
+    #: Whether a candidate a family plant refuses is learned on that plant next (its
+    #: checks spent from the budget, as with ``charge_checks``).
     rehearse: bool = False
+    #: Whether the family checks' runs are spent from the imagined budget too, so that
+    #: ``imagine_trials`` bounds every imagined simulation after a real trial (give or
+    #: take one check), not only the inner learner's trials.
+    charge_checks: bool = False
+    #: The world's own ``imagine_round`` and ``imagine_duration`` (used when the options
+    #: are none; None: no cap, the real trial's duration).
+    round_trials: int | None = None
+    duration: float | None = None
 
 
 def structured_world(fit: StructuredFit) -> World:
@@ -203,7 +225,10 @@ def generic_world(model: GenericModel, believed: Plant, gains: tuple[float, ...]
     """The generic ensemble, the controller believing ``believed`` throughout: learn on
     its mean (one evaluation a step), check on each member (the ensemble's doubt) and on
     its mean with the angular acceleration times each of ``gains``
-    (:meth:`~striatal.sim.learned.LearnedDynamics.gained`; not for a conditioned model).
+    (:meth:`~striatal.sim.learned.LearnedDynamics.gained`; not for a conditioned model),
+    every check spent from the imagined budget (``charge_checks``), a round without a
+    solution capped at :data:`GENERIC_ROUND` trials and the imagined trials lasting
+    :data:`GENERIC_DURATION` unless the options say otherwise.
     A model conditioned on the plant factors is also checked on its mean at each plant
     the data hold (the corners the real checks ran), and a candidate a family plant
     refuses is learned on that plant next (``rehearse``)."""
@@ -216,12 +241,29 @@ def generic_world(model: GenericModel, believed: Plant, gains: tuple[float, ...]
         corners = tuple(
             mean.scaled(pole_mass=a, length=b) for a, b in model.plants if (a, b) != (1.0, 1.0)
         )
-        return World(mean, members + corners, False, believed, rehearse=True)
+        return World(
+            mean,
+            members + corners,
+            False,
+            believed,
+            rehearse=True,
+            charge_checks=True,
+            round_trials=GENERIC_ROUND,
+            duration=GENERIC_DURATION,
+        )
     dynamics = model.dynamics()
     members = tuple(LearnedPlant.of(dynamics.member(k), believed) for k in range(dynamics.members))
     average = dynamics.mean()
     gained = tuple(LearnedPlant.of(average.gained(g), believed) for g in gains)
-    return World(LearnedPlant.of(average, believed), members + gained, False, believed)
+    return World(
+        LearnedPlant.of(average, believed),
+        members + gained,
+        False,
+        believed,
+        charge_checks=True,
+        round_trials=GENERIC_ROUND,
+        duration=GENERIC_DURATION,
+    )
 
 
 def imagine_steps(
@@ -237,8 +279,14 @@ def imagine_steps(
     rule's preset; with ``config.robust`` its stop rule, and its robust preset where
     ``world.jitter``). A solution must also be robust on each plant of
     ``world.family`` (with ``robust``), else the inner learner goes on from it with a
-    new seed; with ``world.rehearse`` on the family plant that refused it, the checks'
-    runs spent from the budget too. Every imagined trial is yielded
+    new seed; with ``world.rehearse`` on the family plant that refused it; with
+    ``world.charge_checks`` (or ``rehearse``) the checks' runs are spent from the budget
+    too. A round (one seed) that finds no solution within ``config.imagine_round``
+    trials (None: ``world.round_trials``; None again: the budget left) ends the
+    imagination: its candidate is the next real trial's, whose data refit the model.
+    The inner learner's trials last ``config.imagine_duration`` (None:
+    ``world.duration``; None again, or longer: ``sim``'s); the family checks keep the
+    robustness set's. Every imagined trial is yielded
     (:data:`striatal.sim.batch.Steps`), so the engine that runs the real trials runs
     them too; :func:`imagine` runs them here."""
     box = ROBUST_BOX + config.imagine_margin
@@ -251,14 +299,19 @@ def imagine_steps(
         action_every=config.action_every,
         **jitter,
     )
+    duration = config.imagine_duration or world.duration
+    if duration is not None:
+        sim = replace(sim, duration=min(duration, sim.duration))
     simulations, seconds, budget = 0, 0.0, config.imagine_trials
+    per_round = config.imagine_round or world.round_trials or budget
+    charged = world.rehearse or world.charge_checks
     template, round_seed, plant = controller, seed, world.plant
     solved = False
     while budget > 0 and not solved:
         result = yield from learn_steps(
             plant,
             template,
-            replace(inner, max_trials=budget),
+            replace(inner, max_trials=min(budget, per_round)),
             initial_state(template.gains, template.theta_c, round_seed),
             sim,
             protocol,
@@ -280,13 +333,15 @@ def imagine_steps(
                 )
                 simulations += verdict.simulations
                 seconds += verdict.simulated_seconds
-                if world.rehearse:
+                if charged:
                     budget -= verdict.simulations
                 if not verdict.robust:
                     solved = False
                     if world.rehearse:
                         plant = member
                     break
+        elif not solved:
+            break
         round_seed += 1
     return Imagined(
         W=tuple(float(w) for w in template.gains),
