@@ -142,6 +142,7 @@ class Calls:
         """Make the kernel calls: they release the GIL, so this can run on a thread
         of its own while Python runs elsewhere."""
         old = numba.set_parallel_chunksize(CHUNK)
+        threads = numba.get_num_threads()
         try:
             for call in self.calls:
                 args, critic = call.args, call.critic
@@ -153,7 +154,7 @@ class Calls:
                     kernel.run_learned_trials_batch(first.plant.dynamics.args, *args)
                 elif self.engine == "simd" and first.hardware == CHAPTER_HARDWARE:
                     # a block per thread when the trials are few
-                    block = -(-len(call.members) // numba.get_num_threads())
+                    block = -(-len(call.members) // threads)
                     kernel.run_trials_lockstep(*args, block)
                 else:
                     kernel.run_trials_batch(*args)
@@ -190,33 +191,42 @@ def prepare(
 ) -> Calls:
     """The batched kernel calls of ``requests`` (:func:`run_requests`): grouped by
     :meth:`TrialRequest.batch_key`, their noise drawn, their arguments built. A request
-    that :attr:`~TrialRequest.runs_alone` runs here, on the scalar kernel, in its order."""
+    that :attr:`~TrialRequest.runs_alone` runs here, on the scalar kernel, in its order.
+
+    A group's action normals are drawn straight into the rows of its (B, n) block, the
+    kernel's argument: each request's row from its own generator, in request order."""
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
-    done: dict[int, TrialOutcome] = {}
-    groups: dict[tuple[object, ...], list[int]] = {}
-    noise: list[np.ndarray | None] = [None] * len(requests)
     keys = [r.batch_key() for r in requests]
+    groups: dict[tuple[object, ...], list[int]] = {}
+    for i, key in enumerate(keys):
+        if key is not None:
+            groups.setdefault(key, []).append(i)
+    rows: dict[int, np.ndarray] = {}
+    blocks: list[np.ndarray | None] = []
+    for members in groups.values():
+        first = requests[members[0]]
+        if not first.draws_actions:
+            blocks.append(None)
+            continue
+        normals = np.empty((len(members), action_draws(first.sim, first.action_every)))
+        rows.update(zip(members, normals, strict=True))
+        blocks.append(normals)
+    done: dict[int, TrialOutcome] = {}
     if any(key is None for key in keys):
         # a trial that runs alone draws as it runs: keep every draw in request order
         for i, (r, key) in enumerate(zip(requests, keys, strict=True)):
             if key is None:
                 done[i] = r.run()
-                continue
-            if r.draws_actions:
-                noise[i] = r.noise()[0]
-            groups.setdefault(key, []).append(i)
+            elif i in rows:
+                r.rng.standard_normal(out=rows[i])  # type: ignore[union-attr]
     else:
-        for i, key in enumerate(keys):
-            groups.setdefault(key, []).append(i)  # type: ignore[arg-type]
-        _draw_noise(requests, noise)
+        _draw_noise(requests, rows)
     calls = []
-    for members in groups.values():
+    for members, block in zip(groups.values(), blocks, strict=True):
         group = [requests[i] for i in members]
-        first = group[0]
-        rows = np.array([noise[i] for i in members]) if first.draws_actions else None
-        critic = None if first.online is None else _critics(group)
-        calls.append(KernelCall(members, batch_args(group, rows), critic))
+        critic = None if group[0].online is None else _critics(group)
+        calls.append(KernelCall(members, batch_args(group, block), critic))
     return Calls(requests, engine, calls, done)
 
 
@@ -233,33 +243,28 @@ def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
     )
 
 
-def _draw_noise(requests: Sequence[TrialRequest], noise: list[np.ndarray | None]) -> None:
-    """Fill ``noise[i]`` with the action normals of every request that draws them: each
-    generator's requests in their order (what run_trial draws), different
-    generators on threads (:func:`striatal.sim.noise.run_parts`) once there are enough
-    normals to pay."""
+def _draw_noise(requests: Sequence[TrialRequest], rows: dict[int, np.ndarray]) -> None:
+    """Fill ``rows[i]`` with the action normals of request i: each generator's requests
+    in their order (what run_trial draws), different generators on threads
+    (:func:`striatal.sim.noise.run_parts`) once there are enough normals to pay."""
     by_rng: dict[int, list[int]] = {}
-    todo = 0
-    for i, r in enumerate(requests):
-        if r.draws_actions:
-            by_rng.setdefault(id(r.rng), []).append(i)
-            n = action_draws(r.sim, r.action_every)
-            noise[i] = np.empty(n)
-            todo += n
+    for i in sorted(rows):
+        by_rng.setdefault(id(requests[i].rng), []).append(i)
     chains = list(by_rng.values())
 
     def part(chain_ids: range) -> Callable[[], None]:
         def fill() -> None:
             for c in chain_ids:
                 for i in chains[c]:
-                    requests[i].rng.standard_normal(out=noise[i])  # type: ignore[union-attr]
+                    requests[i].rng.standard_normal(out=rows[i])  # type: ignore[union-attr]
 
         return fill
 
-    if todo < PARALLEL_NORMALS:
+    if sum(row.size for row in rows.values()) < PARALLEL_NORMALS:
         part(range(len(chains)))()
     else:
-        run_parts([part(ids) for ids in row_parts(len(chains))])
+        threads = numba.get_num_threads()
+        run_parts([part(ids) for ids in row_parts(len(chains), threads)], threads)
 
 
 class Lockstep:
