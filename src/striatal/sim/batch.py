@@ -137,10 +137,15 @@ class Calls:
     engine: Literal["batch", "simd"]
     calls: list[KernelCall]
     done: dict[int, TrialOutcome]
+    #: Draws the calls' action normals into their blocks (None: drawn already).
+    draw: Callable[[], None] | None = None
 
     def run(self) -> None:
-        """Make the kernel calls: they release the GIL, so this can run on a thread
-        of its own while Python runs elsewhere."""
+        """Draw the calls' noise (:attr:`draw`) and make the kernel calls: NumPy's draws
+        and the kernels release the GIL, so this can run on a thread of its own while
+        Python runs elsewhere."""
+        if self.draw is not None:
+            self.draw()
         old = numba.set_parallel_chunksize(CHUNK)
         threads = numba.get_num_threads()
         try:
@@ -190,11 +195,13 @@ def prepare(
     engine: Literal["batch", "simd"] = "batch",
 ) -> Calls:
     """The batched kernel calls of ``requests`` (:func:`run_requests`): grouped by
-    :meth:`TrialRequest.batch_key`, their noise drawn, their arguments built. A request
-    that :attr:`~TrialRequest.runs_alone` runs here, on the scalar kernel, in its order.
+    :meth:`TrialRequest.batch_key`, their arguments built. A request that
+    :attr:`~TrialRequest.runs_alone` runs here, on the scalar kernel, in its order.
 
-    A group's action normals are drawn straight into the rows of its (B, n) block, the
-    kernel's argument: each request's row from its own generator, in request order."""
+    A group's action normals go straight into the rows of its (B, n) block, the kernel's
+    argument: each request's row from its own generator, in request order. They are
+    drawn by :meth:`Calls.run`, on the thread that runs the kernels, unless a request
+    runs alone (then here, in request order, as it draws)."""
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
     keys = [r.batch_key() for r in requests]
@@ -213,6 +220,7 @@ def prepare(
         rows.update(zip(members, normals, strict=True))
         blocks.append(normals)
     done: dict[int, TrialOutcome] = {}
+    draw = None
     if any(key is None for key in keys):
         # a trial that runs alone draws as it runs: keep every draw in request order
         for i, (r, key) in enumerate(zip(requests, keys, strict=True)):
@@ -220,14 +228,14 @@ def prepare(
                 done[i] = r.run()
             elif i in rows:
                 r.rng.standard_normal(out=rows[i])  # type: ignore[union-attr]
-    else:
-        _draw_noise(requests, rows)
+    elif rows:
+        draw = functools.partial(_draw_noise, requests, rows)
     calls = []
     for members, block in zip(groups.values(), blocks, strict=True):
         group = [requests[i] for i in members]
         critic = None if group[0].online is None else _critics(group)
         calls.append(KernelCall(members, batch_args(group, block), critic))
-    return Calls(requests, engine, calls, done)
+    return Calls(requests, engine, calls, done, draw)
 
 
 def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
@@ -272,12 +280,12 @@ class Lockstep:
     one run in batched kernel calls (:func:`run_requests`).
 
     The generators are split into :data:`LANES` groups that take turns: while one
-    group's kernel calls run on a worker thread (:meth:`Calls.run`, the kernels
-    releasing the GIL), the main thread advances the other group's generators with the
-    outcomes of its last calls (their Python: the rules' plans and updates, the success
-    tests) and prepares their next calls (:func:`prepare`: grouping, noise, arguments).
-    The kernel's threads and the runs' Python and noise then overlap instead of taking
-    turns, and the kernel waits for no Python between a lane's calls. A generator is
+    group's noise and kernel calls run on a worker thread (:meth:`Calls.run`, NumPy's
+    draws and the kernels releasing the GIL), the main thread advances the other group's
+    generators with the outcomes of its last calls (their Python: the rules' plans and
+    updates, the success tests) and prepares their next calls (:func:`prepare`: grouping,
+    arguments). The kernel's threads, the noise and the runs' Python then overlap instead
+    of taking turns, and the kernel waits for no Python between a lane's calls. A generator is
     always in the same group, so its trials, and the order in which its generator draws
     their noise, are what they would be alone.
 
