@@ -30,6 +30,7 @@ from striatal.sim.learned import LearnedPlant
 
 __all__ = [
     "NO_PROTOCOL",
+    "NO_SENSOR",
     "OnlineLearning",
     "Protocol",
     "SensorNoise",
@@ -95,6 +96,10 @@ class SensorNoise:
     @property
     def active(self) -> bool:
         return self.x_std > 0.0 or self.theta_std > 0.0
+
+
+#: No sensor noise (a frozen default, shared).
+NO_SENSOR = SensorNoise()
 
 
 @dataclass(frozen=True)
@@ -372,7 +377,7 @@ class TrialRequest:
     action_every: int = 1
     chapter_eligibility: bool = False
     model: Plant | None = None
-    sensor: SensorNoise = field(default_factory=SensorNoise)
+    sensor: SensorNoise = NO_SENSOR
     mean_policy: bool = False
     hardware: Hardware = CHAPTER_HARDWARE
     record: bool = False
