@@ -58,6 +58,7 @@ __all__ = [
     "TrialRequest",
     "drive",
     "driven",
+    "lane_threads",
     "prepare",
     "run_requests",
 ]
@@ -279,13 +280,15 @@ class Lockstep:
     """Many :data:`Steps` advanced together: each round, the requests of every unfinished
     one run in batched kernel calls (:func:`run_requests`).
 
-    The generators are split into :data:`LANES` groups that take turns: while one
-    group's noise and kernel calls run on a worker thread (:meth:`Calls.run`, NumPy's
-    draws and the kernels releasing the GIL), the main thread advances the other group's
-    generators with the outcomes of its last calls (their Python: the rules' plans and
-    updates, the success tests) and prepares their next calls (:func:`prepare`: grouping,
-    arguments). The kernel's threads, the noise and the runs' Python then overlap instead
-    of taking turns, and the kernel waits for no Python between a lane's calls. A generator is
+    The generators are split into :data:`LANES` groups: while a group's noise and kernel
+    calls run on a worker thread (:meth:`Calls.run`, NumPy's draws and the kernels
+    releasing the GIL), the main thread advances another group's generators with the
+    outcomes of its last calls (their Python: the rules' plans and updates, the success
+    tests) and prepares their next calls (:func:`prepare`: grouping, arguments). Each
+    lane has a worker of its own with its share of Numba's threads (:func:`lane_threads`),
+    so the lanes' calls also overlap each other: when few runs are left, each lane's few
+    trials still have a core. The kernels, the noise and the runs' Python then overlap
+    instead of taking turns. A generator is
     always in the same group, so its trials, and the order in which its generator draws
     their noise, are what they would be alone.
 
@@ -339,7 +342,13 @@ class Lockstep:
                 lanes[i % LANES][i] = self._advance(i, None)
             except StopIteration as stop:
                 yield i, stop.value
-        worker = ThreadPoolExecutor(1, thread_name_prefix="lockstep")
+        workers, each = lane_threads()
+        worker = ThreadPoolExecutor(
+            workers,
+            thread_name_prefix="lockstep",
+            initializer=numba.set_num_threads,
+            initargs=(each,),
+        )
         try:
             calls: list[tuple[_Lane, Future[float]] | None] = [None] * LANES
             for g, lane in enumerate(lanes):
@@ -364,6 +373,18 @@ class Lockstep:
                         calls[g] = prepared, worker.submit(_timed, prepared[2])
         finally:
             worker.shutdown(wait=True, cancel_futures=True)
+
+
+def lane_threads() -> tuple[int, int]:
+    """(worker threads of :class:`Lockstep`, Numba threads each): a worker per lane, each
+    with its share of Numba's threads, so that the lanes' kernel calls run at once and
+    a lane with few trials left does not hold a core it cannot use; one worker with all
+    of Numba's threads under the workqueue layer (it takes no concurrent calls) or with
+    fewer threads than lanes."""
+    threads = numba.get_num_threads()  # launches Numba's threading layer
+    if threads < LANES or numba.threading_layer() == "workqueue":
+        return 1, threads
+    return LANES, threads // LANES
 
 
 def _timed(calls: Calls) -> float:
