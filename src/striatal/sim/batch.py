@@ -343,18 +343,19 @@ class Lockstep:
             except StopIteration as stop:
                 yield i, stop.value
         workers, each = lane_threads()
-        worker = ThreadPoolExecutor(
-            workers,
-            thread_name_prefix="lockstep",
-            initializer=numba.set_num_threads,
-            initargs=(each,),
-        )
+        every = numba.get_num_threads()
+        worker = ThreadPoolExecutor(workers, thread_name_prefix="lockstep")
+        calls: list[tuple[_Lane, Future[float]] | None] = [None] * LANES
+
+        def submit(g: int, prepared: _Lane) -> None:
+            # a lane alone (the others finished) takes every thread
+            alone = all(call is None for h, call in enumerate(calls) if h != g)
+            calls[g] = prepared, worker.submit(_timed, prepared[2], every if alone else each)
+
         try:
-            calls: list[tuple[_Lane, Future[float]] | None] = [None] * LANES
             for g, lane in enumerate(lanes):
                 if lane:
-                    prepared = self._prepare(lane)
-                    calls[g] = prepared, worker.submit(_timed, prepared[2])
+                    submit(g, self._prepare(lane))
             while any(call is not None for call in calls):
                 for g, call in enumerate(calls):
                     if call is None:
@@ -369,8 +370,7 @@ class Lockstep:
                             yield i, stop.value
                     calls[g] = None
                     if pending:
-                        prepared = self._prepare(pending)
-                        calls[g] = prepared, worker.submit(_timed, prepared[2])
+                        submit(g, self._prepare(pending))
         finally:
             worker.shutdown(wait=True, cancel_futures=True)
 
@@ -378,18 +378,20 @@ class Lockstep:
 def lane_threads() -> tuple[int, int]:
     """(worker threads of :class:`Lockstep`, Numba threads each): a worker per lane, each
     with its share of Numba's threads, so that the lanes' kernel calls run at once and
-    a lane with few trials left does not hold a core it cannot use; one worker with all
-    of Numba's threads under the workqueue layer (it takes no concurrent calls) or with
-    fewer threads than lanes."""
+    a lane with few trials left does not hold a core it cannot use (a lane left alone
+    takes every thread); one worker with all of Numba's threads under the workqueue
+    layer (it takes no concurrent calls) or with fewer threads than lanes."""
     threads = numba.get_num_threads()  # launches Numba's threading layer
     if threads < LANES or numba.threading_layer() == "workqueue":
         return 1, threads
     return LANES, threads // LANES
 
 
-def _timed(calls: Calls) -> float:
-    """Run ``calls``' kernels (on the worker thread): the wall time they took [s]."""
+def _timed(calls: Calls, threads: int) -> float:
+    """Run ``calls``' noise and kernels on the worker thread with ``threads`` of Numba's
+    threads: the wall time they took [s]."""
     t0 = time.perf_counter()
+    numba.set_num_threads(threads)
     calls.run()
     return time.perf_counter() - t0
 
