@@ -29,7 +29,7 @@ from __future__ import annotations
 import functools
 import time
 from collections.abc import Callable, Generator, Sequence
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from typing import Any, Literal, ParamSpec, TypeVar
 
@@ -292,7 +292,9 @@ class Lockstep:
     always in the same group, so its trials, and the order in which its generator draws
     their noise, are what they would be alone.
 
-    :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value.
+    :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value
+    (the lanes are served as their calls finish, so the order of two lanes' values can
+    vary from run to run, as the process engine's rows do; the values cannot).
     ``seconds[i]``: the wall time spent on generator i, its own Python plus an even
     share of each kernel call it was in (the two overlap, so the sum over the
     generators can exceed the wall time of :meth:`run`, at most twice).
@@ -357,10 +359,12 @@ class Lockstep:
                 if lane:
                     submit(g, self._prepare(lane))
             while any(call is not None for call in calls):
-                for g, call in enumerate(calls):
-                    if call is None:
-                        continue
-                    # the other lanes' kernel calls run meanwhile
+                # the lanes whose calls are done, as they finish (the others' run meanwhile)
+                running = {call[1]: g for g, call in enumerate(calls) if call is not None}
+                finished, _ = wait(running, return_when=FIRST_COMPLETED)
+                for g in sorted(running[f] for f in finished):
+                    call = calls[g]
+                    assert call is not None
                     prepared, future = call
                     pending: dict[int, list[TrialRequest]] = {}
                     for i, mine in self._outcomes(prepared, future.result()).items():
