@@ -296,8 +296,9 @@ class Lockstep:
     (the lanes are served as their calls finish, so the order of two lanes' values can
     vary from run to run, as the process engine's rows do; the values cannot).
     ``seconds[i]``: the wall time spent on generator i, its own Python plus an even
-    share of each kernel call it was in (the two overlap, so the sum over the
-    generators can exceed the wall time of :meth:`run`, at most twice).
+    share of each kernel call it was in (the Python and each lane's calls overlap, so
+    the sum over the generators can exceed the wall time of :meth:`run`, at most
+    1 + :data:`LANES` times).
     """
 
     def __init__(
