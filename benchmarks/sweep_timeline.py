@@ -4,11 +4,13 @@ noise, the main thread's Python, each timed by wrapping the function with perf_c
     python benchmarks/sweep_timeline.py [--seeds 30] [--engine batch] [--out DIR]
 
 Runs ``striatal sweep --seeds S --init chapter --max-trials 1000 --no-progress --engine E``
-in this process and prints, for each wrapped function, its total wall time and its
-fraction of the sweep's. The worker thread runs the kernel calls (``kernel``:
-``run_trials_batch``; ``kernel calls``: all of a lane's calls); what the main thread
-does meanwhile (``advance``: the runs' generators; ``prepare``: grouping, noise and
-arguments of a lane's calls; ``outcomes``) overlaps them. Also runs on a tree without
+in this process and prints, for each wrapped function, its total wall time, its
+fraction of the sweep's, and the CPU time of the thread that called it (the kernel's
+other threads and the noise's pool not counted). The worker thread runs the kernel
+calls (``kernel``: ``run_trials_batch``; ``kernel calls``: all of a lane's calls, with
+their noise since it moved there); what the main thread does meanwhile (``advance``:
+the runs' generators; ``prepare``: grouping and arguments of a lane's calls, with the
+noise before; ``outcomes``) overlaps them. Also runs on a tree without
 ``prepare`` (the functions it lacks are left out), so two trees can be compared with
 ``PYTHONPATH=OLD/src``.
 """
@@ -26,6 +28,9 @@ from pathlib import Path
 from typing import Any
 
 TOTAL: dict[str, float] = collections.defaultdict(float)
+#: The CPU time of the calling thread in each wrapped function (``time.thread_time``:
+#: steadier than wall time on a shared machine; a kernel's other threads not counted).
+CPU: dict[str, float] = collections.defaultdict(float)
 
 
 def timed(owner: Any, name: str, label: str) -> None:
@@ -36,11 +41,12 @@ def timed(owner: Any, name: str, label: str) -> None:
 
     @functools.wraps(f)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         try:
             return f(*args, **kwargs)
         finally:
             TOTAL[label] += time.perf_counter() - t0
+            CPU[label] += time.thread_time() - c0
 
     setattr(owner, name, wrapper)
 
@@ -57,7 +63,7 @@ def main() -> None:
 
     timed(batch.kernel, "run_trials_batch", "kernel (worker)")
     timed(batch.kernel, "run_trials_lockstep", "kernel (worker)")
-    timed(batch, "_draw_noise", "noise in run_requests/prepare")
+    timed(batch, "_draw_noise", "noise (prepare, or worker after)")
     timed(batch, "run_requests", "run_requests (worker, before)")
     timed(batch, "_timed", "kernel calls (worker)")
     timed(batch, "prepare", "prepare (main)")
@@ -74,7 +80,7 @@ def main() -> None:
     cpu = time.process_time() - c0
     print(f"wall {wall:.1f} s, cpu {cpu:.1f} s, load {load:.1f} -> {os.getloadavg()[0]:.1f}")
     for label, seconds in sorted(TOTAL.items()):
-        print(f"  {label:32s} {seconds:7.1f} s  {seconds / wall:5.2f}")
+        print(f"  {label:32s} {seconds:7.1f} s  {seconds / wall:5.2f}  cpu {CPU[label]:6.2f} s")
 
 
 if __name__ == "__main__":

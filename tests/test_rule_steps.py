@@ -220,3 +220,20 @@ def test_a_rule_that_yields_its_own_simulations_runs_on_every_engine(
         assert (s["arm"], s["init"], s["seed"]) == (a["arm"], a["init"], a["seed"])
         if s["arm"] == "learner":
             assert s["imagined_simulations"] == 2 * (s["trials"] - s["success"])
+
+
+def test_lane_threads_share_numbas_threads_out() -> None:
+    """Each lane's worker gets its share of Numba's threads (never more in all), one
+    worker with every thread under the workqueue layer, which takes no concurrent calls."""
+    import numba
+
+    from striatal.sim.batch import lane_threads
+
+    workers, each = lane_threads()
+    threads = numba.get_num_threads()
+    assert workers in (1, LANES) and each >= 1
+    assert workers * each <= max(threads, 1)
+    if numba.threading_layer() == "workqueue" or threads < LANES:
+        assert (workers, each) == (1, threads)
+    else:
+        assert (workers, each) == (LANES, threads // LANES)

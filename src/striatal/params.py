@@ -8,6 +8,7 @@ message a user can act on.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any, Literal
 
@@ -276,10 +277,10 @@ class SuccessTest:
             f"|x_dot|<{self.x_dot:g} at T_f"
         )
 
-    def passed(self, state: np.ndarray) -> bool:
+    def passed(self, state: np.ndarray | Sequence[float]) -> bool:
         """True if ``state`` = [x, x_dot, theta, theta_dot] (theta wrapped) passes every bound."""
-        s = np.asarray(state, dtype=float)
-        if not np.all(np.isfinite(s)):
+        s = [float(v) for v in state]
+        if not all(math.isfinite(v) for v in s):
             return False
         return bool(
             abs(s[2]) < self.theta

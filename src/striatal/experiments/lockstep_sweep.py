@@ -29,9 +29,9 @@ of the same experiment: the arms' success rates agree within their intervals
 
 ``wall_seconds`` of a row is its share of the engine's time: its run's own Python plus
 an even share of each batched call it was in (preparing it, the kernel, reading the
-outcomes). The runs' Python and the kernel calls overlap
-(:class:`striatal.sim.batch.Lockstep`'s lanes), so the rows of a sweep sum to between
-its wall time and twice it.
+outcomes). The runs' Python and the lanes' kernel calls overlap
+(:class:`striatal.sim.batch.Lockstep`'s lanes, a worker each), so the rows of a sweep
+sum to between its wall time and three times it.
 """
 
 from __future__ import annotations

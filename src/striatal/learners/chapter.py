@@ -72,13 +72,15 @@ def gain_update(
 
     A non-finite trace or result leaves W unchanged (a numerical fault never reaches W).
     """
-    if not np.all(np.isfinite(trace)):
+    # array methods and ufuncs, not np.all / np.clip: their wrappers cost more than the
+    # arithmetic on six numbers, and this runs every trial
+    if not np.isfinite(trace).all():
         return W.copy()
     step = alpha * (1.0 - gamma) * (reward - baseline) * trace
-    step = np.clip(step, -max_step, max_step)
+    step = np.minimum(np.maximum(step, -max_step), max_step)
     new = W + step
     new[0] = max(new[0], w1_floor)
-    if not np.all(np.isfinite(new)):
+    if not np.isfinite(new).all():
         return W.copy()
     return new
 
@@ -122,15 +124,15 @@ def policy_plan(state: LearnerState, config: LearnerConfig, rng: np.random.Gener
 
 def finite_trace(trace: np.ndarray) -> tuple[float, ...]:
     """The trace to carry over: itself, or 0 if the trial left it non-finite."""
-    if not np.all(np.isfinite(trace)):
+    if not np.isfinite(trace).all():
         return (0.0,) * N_GAINS
-    return tuple(float(v) for v in trace)
+    return tuple(trace.tolist())
 
 
 def policy_sigma(plan: TrialPlan) -> tuple[str, float]:
     """The history column ("sigma", the policy std of eq 5 the trial explored with,
     :func:`striatal.sim.kernel.sigma_of` of its W6)."""
-    return ("sigma", float(sigma_of(plan.W[5])))
+    return ("sigma", sigma_of(float(plan.W[5])))
 
 
 class PolicyRule(Rule):

@@ -199,18 +199,22 @@ def learning_steps(
     sim: Simulation,
     protocol: Protocol,
     config: LearnerConfig,
+    rng: np.random.Generator | None = None,
 ) -> Steps[tuple[LearnerState, TrialRecord]]:
     """One trial with (W, theta_c) of ``state``, the success test, then the rule's update.
 
     Pure: the same state gives the same result. ``template`` carries the readings
-    (balance sign, switch, inhibition); its gains are replaced by the state's. As
+    (balance sign, switch, inhibition); its gains are replaced by the state's. ``rng``:
+    a PCG64 generator to draw with, its state set to ``state.rng_state`` first (a run
+    reuses one; None: a new one). As
     :data:`striatal.sim.batch.Steps`: every simulation is yielded as a request (the
     learning trial, the rule's own ones, the success test's trials and the robustness
     set); :func:`learning_step` runs them on the scalar kernel.
     """
     rule = rule_of(config)
     context = TrialContext(plant, template, sim, protocol, config.hardware, config.action_every)
-    rng = np.random.Generator(np.random.PCG64(_BLANK))
+    if rng is None:
+        rng = np.random.Generator(np.random.PCG64(_BLANK))
     rng.bit_generator.state = state.rng_state
     plan = rule.plan(state, config, rng, context)
     judging = rule.judging

@@ -29,7 +29,7 @@ from __future__ import annotations
 import functools
 import time
 from collections.abc import Callable, Generator, Sequence
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from typing import Any, Literal, ParamSpec, TypeVar
 
@@ -58,6 +58,7 @@ __all__ = [
     "TrialRequest",
     "drive",
     "driven",
+    "lane_threads",
     "prepare",
     "run_requests",
 ]
@@ -137,11 +138,17 @@ class Calls:
     engine: Literal["batch", "simd"]
     calls: list[KernelCall]
     done: dict[int, TrialOutcome]
+    #: Draws the calls' action normals into their blocks (None: drawn already).
+    draw: Callable[[], None] | None = None
 
     def run(self) -> None:
-        """Make the kernel calls: they release the GIL, so this can run on a thread
-        of its own while Python runs elsewhere."""
+        """Draw the calls' noise (:attr:`draw`) and make the kernel calls: NumPy's draws
+        and the kernels release the GIL, so this can run on a thread of its own while
+        Python runs elsewhere."""
+        if self.draw is not None:
+            self.draw()
         old = numba.set_parallel_chunksize(CHUNK)
+        threads = numba.get_num_threads()
         try:
             for call in self.calls:
                 args, critic = call.args, call.critic
@@ -153,7 +160,7 @@ class Calls:
                     kernel.run_learned_trials_batch(first.plant.dynamics.args, *args)
                 elif self.engine == "simd" and first.hardware == CHAPTER_HARDWARE:
                     # a block per thread when the trials are few
-                    block = -(-len(call.members) // numba.get_num_threads())
+                    block = -(-len(call.members) // threads)
                     kernel.run_trials_lockstep(*args, block)
                 else:
                     kernel.run_trials_batch(*args)
@@ -189,35 +196,47 @@ def prepare(
     engine: Literal["batch", "simd"] = "batch",
 ) -> Calls:
     """The batched kernel calls of ``requests`` (:func:`run_requests`): grouped by
-    :meth:`TrialRequest.batch_key`, their noise drawn, their arguments built. A request
-    that :attr:`~TrialRequest.runs_alone` runs here, on the scalar kernel, in its order."""
+    :meth:`TrialRequest.batch_key`, their arguments built. A request that
+    :attr:`~TrialRequest.runs_alone` runs here, on the scalar kernel, in its order.
+
+    A group's action normals go straight into the rows of its (B, n) block, the kernel's
+    argument: each request's row from its own generator, in request order. They are
+    drawn by :meth:`Calls.run`, on the thread that runs the kernels, unless a request
+    runs alone (then here, in request order, as it draws)."""
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
-    done: dict[int, TrialOutcome] = {}
-    groups: dict[tuple[object, ...], list[int]] = {}
-    noise: list[np.ndarray | None] = [None] * len(requests)
     keys = [r.batch_key() for r in requests]
+    groups: dict[tuple[object, ...], list[int]] = {}
+    for i, key in enumerate(keys):
+        if key is not None:
+            groups.setdefault(key, []).append(i)
+    rows: dict[int, np.ndarray] = {}
+    blocks: list[np.ndarray | None] = []
+    for members in groups.values():
+        first = requests[members[0]]
+        if not first.draws_actions:
+            blocks.append(None)
+            continue
+        normals = np.empty((len(members), action_draws(first.sim, first.action_every)))
+        rows.update(zip(members, normals, strict=True))
+        blocks.append(normals)
+    done: dict[int, TrialOutcome] = {}
+    draw = None
     if any(key is None for key in keys):
         # a trial that runs alone draws as it runs: keep every draw in request order
         for i, (r, key) in enumerate(zip(requests, keys, strict=True)):
             if key is None:
                 done[i] = r.run()
-                continue
-            if r.draws_actions:
-                noise[i] = r.noise()[0]
-            groups.setdefault(key, []).append(i)
-    else:
-        for i, key in enumerate(keys):
-            groups.setdefault(key, []).append(i)  # type: ignore[arg-type]
-        _draw_noise(requests, noise)
+            elif i in rows:
+                r.rng.standard_normal(out=rows[i])  # type: ignore[union-attr]
+    elif rows:
+        draw = functools.partial(_draw_noise, requests, rows)
     calls = []
-    for members in groups.values():
+    for members, block in zip(groups.values(), blocks, strict=True):
         group = [requests[i] for i in members]
-        first = group[0]
-        rows = np.array([noise[i] for i in members]) if first.draws_actions else None
-        critic = None if first.online is None else _critics(group)
-        calls.append(KernelCall(members, batch_args(group, rows), critic))
-    return Calls(requests, engine, calls, done)
+        critic = None if group[0].online is None else _critics(group)
+        calls.append(KernelCall(members, batch_args(group, block), critic))
+    return Calls(requests, engine, calls, done, draw)
 
 
 def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
@@ -233,53 +252,53 @@ def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
     )
 
 
-def _draw_noise(requests: Sequence[TrialRequest], noise: list[np.ndarray | None]) -> None:
-    """Fill ``noise[i]`` with the action normals of every request that draws them: each
-    generator's requests in their order (what run_trial draws), different
-    generators on threads (:func:`striatal.sim.noise.run_parts`) once there are enough
-    normals to pay."""
+def _draw_noise(requests: Sequence[TrialRequest], rows: dict[int, np.ndarray]) -> None:
+    """Fill ``rows[i]`` with the action normals of request i: each generator's requests
+    in their order (what run_trial draws), different generators on threads
+    (:func:`striatal.sim.noise.run_parts`) once there are enough normals to pay."""
     by_rng: dict[int, list[int]] = {}
-    todo = 0
-    for i, r in enumerate(requests):
-        if r.draws_actions:
-            by_rng.setdefault(id(r.rng), []).append(i)
-            n = action_draws(r.sim, r.action_every)
-            noise[i] = np.empty(n)
-            todo += n
+    for i in sorted(rows):
+        by_rng.setdefault(id(requests[i].rng), []).append(i)
     chains = list(by_rng.values())
 
     def part(chain_ids: range) -> Callable[[], None]:
         def fill() -> None:
             for c in chain_ids:
                 for i in chains[c]:
-                    requests[i].rng.standard_normal(out=noise[i])  # type: ignore[union-attr]
+                    requests[i].rng.standard_normal(out=rows[i])  # type: ignore[union-attr]
 
         return fill
 
-    if todo < PARALLEL_NORMALS:
+    if sum(row.size for row in rows.values()) < PARALLEL_NORMALS:
         part(range(len(chains)))()
     else:
-        run_parts([part(ids) for ids in row_parts(len(chains))])
+        threads = numba.get_num_threads()
+        run_parts([part(ids) for ids in row_parts(len(chains), threads)], threads)
 
 
 class Lockstep:
     """Many :data:`Steps` advanced together: each round, the requests of every unfinished
     one run in batched kernel calls (:func:`run_requests`).
 
-    The generators are split into :data:`LANES` groups that take turns: while one
-    group's kernel calls run on a worker thread (:meth:`Calls.run`, the kernels
-    releasing the GIL), the main thread advances the other group's generators with the
+    The generators are split into :data:`LANES` groups: while a group's noise and kernel
+    calls run on a worker thread (:meth:`Calls.run`, NumPy's draws and the kernels
+    releasing the GIL), the main thread advances another group's generators with the
     outcomes of its last calls (their Python: the rules' plans and updates, the success
-    tests) and prepares their next calls (:func:`prepare`: grouping, noise, arguments).
-    The kernel's threads and the runs' Python and noise then overlap instead of taking
-    turns, and the kernel waits for no Python between a lane's calls. A generator is
+    tests) and prepares their next calls (:func:`prepare`: grouping, arguments). Each
+    lane has a worker of its own with its share of Numba's threads (:func:`lane_threads`),
+    so the lanes' calls also overlap each other: when few runs are left, each lane's few
+    trials still have a core. The kernels, the noise and the runs' Python then overlap
+    instead of taking turns. A generator is
     always in the same group, so its trials, and the order in which its generator draws
     their noise, are what they would be alone.
 
-    :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value.
+    :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value
+    (the lanes are served as their calls finish, so the order of two lanes' values can
+    vary from run to run, as the process engine's rows do; the values cannot).
     ``seconds[i]``: the wall time spent on generator i, its own Python plus an even
-    share of each kernel call it was in (the two overlap, so the sum over the
-    generators can exceed the wall time of :meth:`run`, at most twice).
+    share of each kernel call it was in (the Python and each lane's calls overlap, so
+    the sum over the generators can exceed the wall time of :meth:`run`, at most
+    1 + :data:`LANES` times).
     """
 
     def __init__(
@@ -326,18 +345,27 @@ class Lockstep:
                 lanes[i % LANES][i] = self._advance(i, None)
             except StopIteration as stop:
                 yield i, stop.value
-        worker = ThreadPoolExecutor(1, thread_name_prefix="lockstep")
+        workers, each = lane_threads()
+        every = numba.get_num_threads()
+        worker = ThreadPoolExecutor(workers, thread_name_prefix="lockstep")
+        calls: list[tuple[_Lane, Future[float]] | None] = [None] * LANES
+
+        def submit(g: int, prepared: _Lane) -> None:
+            # a lane alone (the others finished) takes every thread
+            alone = all(call is None for h, call in enumerate(calls) if h != g)
+            calls[g] = prepared, worker.submit(_timed, prepared[2], every if alone else each)
+
         try:
-            calls: list[tuple[_Lane, Future[float]] | None] = [None] * LANES
             for g, lane in enumerate(lanes):
                 if lane:
-                    prepared = self._prepare(lane)
-                    calls[g] = prepared, worker.submit(_timed, prepared[2])
+                    submit(g, self._prepare(lane))
             while any(call is not None for call in calls):
-                for g, call in enumerate(calls):
-                    if call is None:
-                        continue
-                    # the other lanes' kernel calls run meanwhile
+                # the lanes whose calls are done, as they finish (the others' run meanwhile)
+                running = {call[1]: g for g, call in enumerate(calls) if call is not None}
+                finished, _ = wait(running, return_when=FIRST_COMPLETED)
+                for g in sorted(running[f] for f in finished):
+                    call = calls[g]
+                    assert call is not None
                     prepared, future = call
                     pending: dict[int, list[TrialRequest]] = {}
                     for i, mine in self._outcomes(prepared, future.result()).items():
@@ -347,15 +375,28 @@ class Lockstep:
                             yield i, stop.value
                     calls[g] = None
                     if pending:
-                        prepared = self._prepare(pending)
-                        calls[g] = prepared, worker.submit(_timed, prepared[2])
+                        submit(g, self._prepare(pending))
         finally:
             worker.shutdown(wait=True, cancel_futures=True)
 
 
-def _timed(calls: Calls) -> float:
-    """Run ``calls``' kernels (on the worker thread): the wall time they took [s]."""
+def lane_threads() -> tuple[int, int]:
+    """(worker threads of :class:`Lockstep`, Numba threads each): a worker per lane, each
+    with its share of Numba's threads, so that the lanes' kernel calls run at once and
+    a lane with few trials left does not hold a core it cannot use (a lane left alone
+    takes every thread); one worker with all of Numba's threads under the workqueue
+    layer (it takes no concurrent calls) or with fewer threads than lanes."""
+    threads = numba.get_num_threads()  # launches Numba's threading layer
+    if threads < LANES or numba.threading_layer() == "workqueue":
+        return 1, threads
+    return LANES, threads // LANES
+
+
+def _timed(calls: Calls, threads: int) -> float:
+    """Run ``calls``' noise and kernels on the worker thread with ``threads`` of Numba's
+    threads: the wall time they took [s]."""
     t0 = time.perf_counter()
+    numba.set_num_threads(threads)
     calls.run()
     return time.perf_counter() - t0
 

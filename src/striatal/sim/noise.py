@@ -36,9 +36,11 @@ def idle_kernel_threads() -> bool:
         return False
 
 
-def row_parts(rows: int) -> list[range]:
-    """``range(rows)`` cut into one contiguous part per Numba thread (fewer if rows are few)."""
-    step = max(1, -(-rows // max(1, min(numba.get_num_threads(), rows))))
+def row_parts(rows: int, threads: int | None = None) -> list[range]:
+    """``range(rows)`` cut into one contiguous part per thread (fewer if rows are few);
+    ``threads`` default: Numba's thread count."""
+    threads = numba.get_num_threads() if threads is None else threads
+    step = max(1, -(-rows // max(1, min(threads, rows))))
     return [range(lo, min(lo + step, rows)) for lo in range(0, rows, step)]
 
 
@@ -50,14 +52,20 @@ def _pool() -> ThreadPoolExecutor:
         return _POOL
 
 
-def run_parts(parts: Sequence[Callable[[], None]]) -> None:
+def run_parts(parts: Sequence[Callable[[], None]], threads: int | None = None) -> None:
     """Call every part, on a shared pool of Numba's thread count when
     :func:`idle_kernel_threads`, else one after another; the first exception is raised.
+    ``threads``: Numba's thread count when the caller has it (each asking releases the GIL).
 
     Parts must not share a generator or an output row: each is then the same whatever
     runs beside it.
     """
-    if len(parts) < 2 or numba.get_num_threads() < 2 or not idle_kernel_threads():
+    if len(parts) < 2:
+        for part in parts:
+            part()
+        return
+    threads = numba.get_num_threads() if threads is None else threads
+    if threads < 2 or not idle_kernel_threads():
         for part in parts:
             part()
         return

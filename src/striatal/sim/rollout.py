@@ -30,6 +30,7 @@ from striatal.sim.learned import LearnedPlant
 
 __all__ = [
     "NO_PROTOCOL",
+    "NO_SENSOR",
     "OnlineLearning",
     "Protocol",
     "SensorNoise",
@@ -97,6 +98,10 @@ class SensorNoise:
         return self.x_std > 0.0 or self.theta_std > 0.0
 
 
+#: No sensor noise (a frozen default, shared).
+NO_SENSOR = SensorNoise()
+
+
 @dataclass(frozen=True)
 class TrialOutcome:
     """What one trial returns. ``final_state`` has theta wrapped to (-pi, pi].
@@ -136,30 +141,23 @@ class TrialOutcome:
         cls, out: np.ndarray, sim: Simulation, rows: np.ndarray | None = None
     ) -> TrialOutcome:
         """Decode a kernel summary row (layout kernel.OUT_*), with the trial's ``rows``."""
-        final = (
-            float(out[kernel.OUT_X]),
-            float(out[kernel.OUT_X_DOT]),
-            float(out[kernel.OUT_THETA]),
-            float(out[kernel.OUT_THETA_DOT]),
-        )
-        fault = bool(out[kernel.OUT_FAULT])
-        early = bool(out[kernel.OUT_EARLY])
-        track = bool(out[kernel.OUT_TRACK])
+        v = out.tolist()
+        final = (v[kernel.OUT_X], v[kernel.OUT_X_DOT], v[kernel.OUT_THETA], v[kernel.OUT_THETA_DOT])
+        fault = bool(v[kernel.OUT_FAULT])
+        early = bool(v[kernel.OUT_EARLY])
+        track = bool(v[kernel.OUT_TRACK])
         return cls(
-            reward=float(out[kernel.OUT_REWARD]),
-            ended_at=float(out[kernel.OUT_END_STEP]) * sim.dt,
+            reward=v[kernel.OUT_REWARD],
+            ended_at=v[kernel.OUT_END_STEP] * sim.dt,
             final_state=final,
-            min_abs_theta_swingup=float(out[kernel.OUT_MIN_ABS_THETA_SWINGUP]),
-            min_abs_theta=float(out[kernel.OUT_MIN_ABS_THETA]),
+            min_abs_theta_swingup=v[kernel.OUT_MIN_ABS_THETA_SWINGUP],
+            min_abs_theta=v[kernel.OUT_MIN_ABS_THETA],
             fault=fault,
             early=early,
-            n_switches=int(out[kernel.OUT_N_SWITCHES]),
-            max_abs_x=float(out[kernel.OUT_MAX_ABS_X]),
-            max_abs_force=float(out[kernel.OUT_MAX_ABS_FORCE]),
-            success=(not fault)
-            and (not early)
-            and (not track)
-            and sim.success.passed(np.array(final)),
+            n_switches=int(v[kernel.OUT_N_SWITCHES]),
+            max_abs_x=v[kernel.OUT_MAX_ABS_X],
+            max_abs_force=v[kernel.OUT_MAX_ABS_FORCE],
+            success=(not fault) and (not early) and (not track) and sim.success.passed(final),
             track=track,
             rows=rows,
         )
@@ -379,7 +377,7 @@ class TrialRequest:
     action_every: int = 1
     chapter_eligibility: bool = False
     model: Plant | None = None
-    sensor: SensorNoise = field(default_factory=SensorNoise)
+    sensor: SensorNoise = NO_SENSOR
     mean_policy: bool = False
     hardware: Hardware = CHAPTER_HARDWARE
     record: bool = False
