@@ -102,9 +102,9 @@ def run_network_lockstep(args: argparse.Namespace) -> None:
     so that a run stopped at any time leaves every arm with the same trials per seed.
 
     Each (seed, alpha) is one :func:`striatal.neural.driver.learn_network` run continued
-    one trial at a time (``resume=``, equal to one run in one go, tested); after each
-    trial a ``"state"`` row holds its learner state, and a rerun with the same ``--out``
-    continues from the last one of each (seed, alpha)."""
+    one trial at a time (``resume=``, equal to one run in one go, tested); each trial's
+    row is written with a ``"state"`` row holding the learner state it left, and a rerun
+    with the same ``--out`` continues from the last one of each (seed, alpha)."""
     from striatal.experiments.spec import initial_gains
     from striatal.learners.state import LearnerState
     from striatal.neural.driver import NeuralLearning, NeuralTrial, learn_network
@@ -155,8 +155,15 @@ def run_network_lockstep(args: argparse.Namespace) -> None:
                 if old is not None and (old.state.trials_done >= k or old.solved):
                     continue
 
-                def on_trial(t: NeuralTrial, seed: int = seed, alpha: float = alpha) -> None:
-                    append(args.out, {**base(seed, alpha), "kind": "trial", **t.to_dict()})
+                rows: list[dict[str, Any]] = []
+
+                def on_trial(
+                    t: NeuralTrial,
+                    seed: int = seed,
+                    alpha: float = alpha,
+                    rows: list[dict[str, Any]] = rows,
+                ) -> None:
+                    rows.append({**base(seed, alpha), "kind": "trial", **t.to_dict()})
                     print(
                         f"network seed={seed} alpha={alpha:g} trial={t.trial} "
                         f"reward={t.reward:+g} cpu={t.cpu_time:.2f}s",
@@ -177,15 +184,11 @@ def run_network_lockstep(args: argparse.Namespace) -> None:
                     resume=old,
                 )
                 runs[(seed, alpha)] = replace(r, trials=())
-                append(
-                    args.out,
-                    {
-                        **base(seed, alpha),
-                        "kind": "state",
-                        "neurons": r.neurons,
-                        "state": r.state.to_dict(),
-                    },
-                )
+                state = {**base(seed, alpha), "kind": "state", "neurons": r.neurons}
+                # the trial and the state it left in one write: a stopped run has both or none
+                with args.out.open("a") as fh:
+                    fh.write("".join(json.dumps(row) + "\n" for row in rows))
+                    fh.write(json.dumps({**state, "state": r.state.to_dict()}) + "\n")
 
 
 def run_loop_side(args: argparse.Namespace, seed: int) -> None:
