@@ -377,3 +377,27 @@ def test_lockstep_learning_stopped_and_rerun_equals_each_run_in_one_go(
             expect = t.to_dict() | {"cpu_time_s": 0, "wall_time_s": 0}
             assert {k: r[k] for k in expect} | {"cpu_time_s": 0, "wall_time_s": 0} == expect
     assert got[2]["W"] != got[0]["W"] and got[3]["W"] == got[1]["W"]
+
+
+def test_the_runner_says_once_that_it_compiles_and_writes_each_trial(
+    brian_run: NeuralRun, cli: object, tmp_path: object, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``neural --learn --seeds`` on Brian2 with the program not in the cache: one notice
+    naming the cache on stderr, before the runs; trials.csv holds each run's trials."""
+    from pathlib import Path
+
+    from striatal.experiments.network import read_trials
+    from striatal.neural import brian
+
+    monkeypatch.setattr(brian, "_ACTIVE", None)
+    monkeypatch.setattr(brian.CompiledNetwork, "cached", property(lambda self: False))
+    out = Path(str(tmp_path)) / "sweep"
+    code, _out, err = cli(  # type: ignore[operator]
+        "neural", "--simulator", "brian2", "--chapter-initial", "--learn", "--seeds", "1",
+        "--trials", "1", "--duration", "30", "--no-progress", "--out", str(out),
+    )  # fmt: skip
+    assert code == 0, err
+    assert err.count("compiling the Brian2 network") == 1 and str(brian.cache_root()) in err
+    trials = read_trials(out / "trials.csv")
+    assert sorted(k[0] for k in trials) == ["control", "learner"]
+    assert all(len(v) == 1 for v in trials.values())
