@@ -82,6 +82,22 @@ def test_missing_brian2_gets_one_line_naming_the_extra(
     )
 
 
+def test_missing_brian2_on_the_runner_path_gets_one_line_and_writes_nothing(
+    cli: object, monkeypatch: pytest.MonkeyPatch, tmp_path: object
+) -> None:
+    from pathlib import Path
+
+    monkeypatch.setitem(sys.modules, "brian2", None)
+    out = Path(str(tmp_path)) / "sweep"
+    code, stdout, err = cli(  # type: ignore[operator]
+        "neural", "--simulator", "brian2", "--chapter-initial", "--learn", "--seeds", "2",
+        "--trials", "1", "--duration", "1", "--no-progress", "--out", str(out),
+    )  # fmt: skip
+    assert code == 2 and stdout == ""
+    assert len(err.strip().splitlines()) == 1 and "pip install 'striatal[neural]'" in err
+    assert not (out / "runs.csv").exists()
+
+
 def test_basal_ganglia_selection_is_refused() -> None:
     with pytest.raises(ParameterError, match="cerebellar switch only"):
         translate(CTRL, PLANT, NetworkConfig(neurons=300, selection="basal-ganglia"), 0)
