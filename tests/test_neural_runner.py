@@ -174,12 +174,13 @@ def test_the_sweep_options_come_from_the_option_table() -> None:
 
 def test_worker_processes_give_the_same_rows(finished: Path, tmp_path: Path) -> None:
     """The specs travel pickled to other processes (a local pool here, Ray's workers the
-    same way) and give the rows of the sweep run in this process."""
+    same way) and give the rows and trials of the sweep run in this process."""
     out = tmp_path / "pool"
     ran = cli_in_process("neural", *TINY, "--seeds", "1", "--seed", "4", "--trials", "2",
                          "--workers", "2", "--out", str(out))  # fmt: skip
     assert ran.rc == 0, ran.err
     assert without_time(rows(out)) == without_time(rows(finished))
+    assert read_trials(out / "trials.csv") == read_trials(finished / "trials.csv")
 
 
 def test_the_command_offers_the_rules_the_network_runs() -> None:
