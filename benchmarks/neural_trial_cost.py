@@ -34,7 +34,7 @@ from striatal.neural.brian import compiled_network
 from striatal.neural.driver import learn_network
 from striatal.neural.interpret import pathway_coefficients
 from striatal.neural.network import NetworkConfig
-from striatal.neural.translate import _BUILT, translate
+from striatal.neural.translate import forget_builds, translate
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
     CHAPTER_INITIAL_W,
@@ -94,7 +94,7 @@ def main() -> int:
     thetas = [0.6 + 0.01 * k for k in range(6)]
     t0 = time.process_time()
     for th in thetas:
-        _BUILT.clear()
+        forget_builds()
         translate(start.with_gains(start.gains, th), plant, config, args.seed)
     full = (time.process_time() - t0) / len(thetas)
     t0 = time.process_time()

@@ -109,13 +109,13 @@ def test_a_seeds_translation_for_new_gains_and_theta_c_equals_a_full_build() -> 
     translation), and the switch's decoders did change."""
     from dataclasses import fields
 
-    from striatal.neural import translate as tr_module
+    from striatal.neural.translate import forget_builds
 
     config = NetworkConfig(neurons=300)
     first = translate(CTRL, PLANT, config, 3)  # builds seed 3 at CTRL.theta_c
     other = Controller(gains=(0.9, -0.5, -0.7, 0.4, 0.6, 0.3), theta_c=0.83)
     fast = translate(other, PLANT, config, 3)
-    tr_module._BUILT.clear()
+    forget_builds()
     full = translate(other, PLANT, config, 3)
     for f in fields(full):
         a, b = getattr(fast, f.name), getattr(full, f.name)

@@ -18,7 +18,7 @@ from striatal.errors import ParameterError
 from striatal.neural.network import NetworkConfig, build, criterion_of_cos, require_nengo
 from striatal.params import Controller, Plant, check_gains, check_theta_c
 
-__all__ = ["Translation", "translate"]
+__all__ = ["Translation", "forget_builds", "translate"]
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,11 @@ class _Built:
 #: The last seeds' builds (a learning run alternates a few seeds; theta_c moves every trial).
 _BUILT: OrderedDict[tuple[object, ...], _Built] = OrderedDict()
 _BUILT_MAX = 64
+
+
+def forget_builds() -> None:
+    """Drop the kept builds: the next translation of every seed is a full build."""
+    _BUILT.clear()
 
 
 def translate(
