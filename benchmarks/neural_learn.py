@@ -24,11 +24,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from striatal.learners import default_config
 from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W, Controller, Simulation
 
 
@@ -93,6 +95,100 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
             "neurons": r.neurons,
         },
     )
+
+
+def run_network_lockstep(args: argparse.Namespace) -> None:
+    """``--side network --lockstep``: trial k of every seed and alpha before trial k + 1,
+    so that a run stopped at any time leaves every arm with the same trials per seed.
+
+    Each (seed, alpha) is one :func:`striatal.neural.driver.learn_network` run continued
+    one trial at a time (``resume=``, equal to one run in one go, tested); each trial's
+    row is written with a ``"state"`` row holding the learner state it left, and a rerun
+    with the same ``--out`` continues from the last one of each (seed, alpha)."""
+    from striatal.experiments.spec import initial_gains
+    from striatal.learners.state import LearnerState
+    from striatal.neural.driver import NeuralLearning, NeuralTrial, learn_network
+    from striatal.neural.network import NetworkConfig
+    from striatal.params import Plant
+
+    def base(seed: int, alpha: float) -> dict[str, Any]:
+        return {
+            "side": "network",
+            "seed": seed,
+            "neurons_requested": args.neurons,
+            "duration": args.duration,
+            "alpha": alpha,
+            "simulator": args.simulator,
+            "init": args.init,
+        }
+
+    def controller(seed: int) -> Controller:
+        return Controller(gains=initial_gains(args.init, seed), theta_c=CHAPTER_INITIAL_THETA_C)
+
+    runs: dict[tuple[int, float], NeuralLearning] = {}
+    if args.out.exists():
+        keys = ("side", "neurons_requested", "duration", "simulator", "init")
+        for line in args.out.read_text().splitlines():
+            row = json.loads(line) if line else {}
+            if row.get("kind") != "state" or any(row[k] != base(0, 0.0)[k] for k in keys):
+                continue
+            key = (int(row["seed"]), float(row["alpha"]))
+            if key[0] in args.seeds and key[1] in args.alpha:
+                ctl = controller(key[0])
+                state = LearnerState.from_dict(row["state"])
+                runs[key] = NeuralLearning(
+                    trials=(),
+                    W=state.W,
+                    theta_c=state.theta_c,
+                    W0=tuple(float(w) for w in ctl.gains),
+                    theta_c0=float(ctl.theta_c),
+                    solved=state.success,
+                    seed=key[0],
+                    neurons=int(row["neurons"]),
+                    config=default_config("chapter", reward="sparse", alpha=key[1]),
+                    state=state,
+                )
+    for k in range(1, args.trials + 1):
+        for seed in args.seeds:
+            for alpha in args.alpha:
+                old = runs.get((seed, alpha))
+                if old is not None and (old.state.trials_done >= k or old.solved):
+                    continue
+
+                rows: list[dict[str, Any]] = []
+
+                def on_trial(
+                    t: NeuralTrial,
+                    seed: int = seed,
+                    alpha: float = alpha,
+                    rows: list[dict[str, Any]] = rows,
+                ) -> None:
+                    rows.append({**base(seed, alpha), "kind": "trial", **t.to_dict()})
+                    print(
+                        f"network seed={seed} alpha={alpha:g} trial={t.trial} "
+                        f"reward={t.reward:+g} cpu={t.cpu_time:.2f}s",
+                        file=sys.stderr,
+                        flush=True,
+                    )
+
+                r = learn_network(
+                    controller(seed),
+                    Plant(),
+                    Simulation(duration=args.duration),
+                    NetworkConfig(neurons=args.neurons),
+                    seed,
+                    trials=k,
+                    alpha=alpha,
+                    on_trial=on_trial,
+                    simulator=args.simulator,
+                    resume=old,
+                )
+                runs[(seed, alpha)] = replace(r, trials=())
+                state = {**base(seed, alpha), "kind": "state", "neurons": r.neurons}
+                # the trial and the state it left in one write: a stopped run has both or none
+                with args.out.open("a") as fh:
+                    fh.write("".join(json.dumps(row) + "\n" for row in rows))
+                    fh.write(json.dumps({**state, "state": r.state.to_dict()}) + "\n")
 
 
 def run_loop_side(args: argparse.Namespace, seed: int) -> None:
@@ -456,6 +552,12 @@ def main() -> int:
         "interrupted run leaves the arms with the same seeds)",
     )
     parser.add_argument("--out", type=Path)
+    parser.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="--side network: trial k of every seed and alpha before trial k + 1 (a stopped "
+        "run leaves every arm with the same trials per seed); a rerun continues --out",
+    )
     parser.add_argument("--figure", type=Path, help="with --summary: also draw W per trial here")
     parser.add_argument(
         "--simulator", choices=("nengo", "brian2"), default="nengo", help="the network's simulator"
@@ -477,6 +579,11 @@ def main() -> int:
     side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
     if args.learner is None:
         args.learner = "pgpe" if args.side == "loop" else "chapter"
+    if args.lockstep:
+        if args.side != "network":
+            parser.error("--lockstep runs --side network only")
+        run_network_lockstep(args)
+        return 0
     for seed in args.seeds:
         for alpha in args.alpha:
             side[args.side](argparse.Namespace(**{**vars(args), "alpha": alpha}), seed)

@@ -82,9 +82,50 @@ def test_missing_brian2_gets_one_line_naming_the_extra(
     )
 
 
+def test_missing_brian2_on_the_runner_path_gets_one_line_and_writes_nothing(
+    cli: object, monkeypatch: pytest.MonkeyPatch, tmp_path: object
+) -> None:
+    from pathlib import Path
+
+    monkeypatch.setitem(sys.modules, "brian2", None)
+    out = Path(str(tmp_path)) / "sweep"
+    code, stdout, err = cli(  # type: ignore[operator]
+        "neural", "--simulator", "brian2", "--chapter-initial", "--learn", "--seeds", "2",
+        "--trials", "1", "--duration", "1", "--no-progress", "--out", str(out),
+    )  # fmt: skip
+    assert code == 2 and stdout == ""
+    assert len(err.strip().splitlines()) == 1 and "pip install 'striatal[neural]'" in err
+    assert not (out / "runs.csv").exists()
+
+
 def test_basal_ganglia_selection_is_refused() -> None:
     with pytest.raises(ParameterError, match="cerebellar switch only"):
         translate(CTRL, PLANT, NetworkConfig(neurons=300, selection="basal-ganglia"), 0)
+
+
+def test_a_seeds_translation_for_new_gains_and_theta_c_equals_a_full_build() -> None:
+    """The process keeps a seed's build; another W and theta_c re-solves only the switch's
+    decoders. Every array equals a full build at that W and theta_c (a fresh process's
+    translation), and the switch's decoders did change."""
+    from dataclasses import fields
+
+    from striatal.neural.translate import forget_builds
+
+    config = NetworkConfig(neurons=300)
+    first = translate(CTRL, PLANT, config, 3)  # builds seed 3 at CTRL.theta_c
+    other = Controller(gains=(0.9, -0.5, -0.7, 0.4, 0.6, 0.3), theta_c=0.83)
+    fast = translate(other, PLANT, config, 3)
+    forget_builds()
+    full = translate(other, PLANT, config, 3)
+    for f in fields(full):
+        a, b = getattr(fast, f.name), getattr(full, f.name)
+        assert np.array_equal(a, b), f.name
+    assert not np.array_equal(first.spike_w, fast.spike_w)
+    assert np.array_equal(first.enc_w, fast.enc_w) and np.array_equal(first.bias, fast.bias)
+    back = translate(CTRL, PLANT, config, 3)  # and back to the first theta_c
+    assert np.array_equal(back.spike_w, first.spike_w)
+    with pytest.raises(ParameterError):
+        translate(Controller(gains=(-0.1, 0, 0, 0, 0, 0.3), theta_c=0.6), PLANT, config, 3)
 
 
 def test_brian2_plant_equals_the_kernel_over_60_s() -> None:
@@ -315,3 +356,64 @@ def replace_model(req: object) -> object:
     from dataclasses import replace
 
     return replace(req, model=Plant(pole_mass=0.2))  # type: ignore[type-var]
+
+
+def test_lockstep_learning_stopped_and_rerun_equals_each_run_in_one_go(
+    brian_run: NeuralRun, tmp_path: object, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """benchmarks/neural_learn.py --lockstep runs trial k of every seed and alpha before
+    trial k + 1; stopped after trial 1 and rerun to 2 on the same file, each (seed, alpha)
+    equals its learning run in one go (every recorded number but the times)."""
+    import importlib.util
+    from pathlib import Path
+
+    from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "neural_learn.py"
+    spec = importlib.util.spec_from_file_location("neural_learn_bench", path)
+    assert spec is not None and spec.loader is not None
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    out = Path(str(tmp_path)) / "lock.jsonl"
+    for trials in ("1", "2"):
+        argv = ["neural_learn.py", "--side", "network", "--simulator", "brian2", "--lockstep"]
+        argv += ["--neurons", "2500", "--seeds", "1", "--alpha", "5", "0", "--trials", trials]
+        monkeypatch.setattr(sys, "argv", [*argv, "--duration", "30", "--out", str(out)])
+        assert bench.main() == 0
+    rows = [json.loads(line) for line in out.read_text().splitlines()]
+    got = [r for r in rows if r["kind"] == "trial"]
+    assert [(r["trial"], r["alpha"]) for r in got] == [(1, 5), (1, 0), (2, 5), (2, 0)]
+    start = Controller(gains=CHAPTER_INITIAL_W, theta_c=CHAPTER_INITIAL_THETA_C)
+    for alpha in (5.0, 0.0):
+        ref = learn_network(
+            start, PLANT, SIM, NetworkConfig(), SEED, trials=2, alpha=alpha, simulator="brian2"
+        )
+        mine = [r for r in got if r["alpha"] == alpha]
+        for r, t in zip(mine, ref.trials, strict=True):
+            expect = t.to_dict() | {"cpu_time_s": 0, "wall_time_s": 0}
+            assert {k: r[k] for k in expect} | {"cpu_time_s": 0, "wall_time_s": 0} == expect
+    assert got[2]["W"] != got[0]["W"] and got[3]["W"] == got[1]["W"]
+
+
+def test_the_runner_says_once_that_it_compiles_and_writes_each_trial(
+    brian_run: NeuralRun, cli: object, tmp_path: object, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``neural --learn --seeds`` on Brian2 with the program not in the cache: one notice
+    naming the cache on stderr, before the runs; trials.csv holds each run's trials."""
+    from pathlib import Path
+
+    from striatal.experiments.network import read_trials
+    from striatal.neural import brian
+
+    monkeypatch.setattr(brian, "_ACTIVE", None)
+    monkeypatch.setattr(brian.CompiledNetwork, "cached", property(lambda self: False))
+    out = Path(str(tmp_path)) / "sweep"
+    code, _out, err = cli(  # type: ignore[operator]
+        "neural", "--simulator", "brian2", "--chapter-initial", "--learn", "--seeds", "1",
+        "--trials", "1", "--duration", "30", "--no-progress", "--out", str(out),
+    )  # fmt: skip
+    assert code == 0, err
+    assert err.count("compiling the Brian2 network") == 1 and str(brian.cache_root()) in err
+    trials = read_trials(out / "trials.csv")
+    assert sorted(k[0] for k in trials) == ["control", "learner"]
+    assert all(len(v) == 1 for v in trials.values())

@@ -19,6 +19,7 @@ pytest.importorskip("nengo")
 
 from striatal import arguments
 from striatal.cli import build_parser
+from striatal.experiments.network import read_trials
 from striatal.experiments.spec import spawn_seeds
 from striatal.neural.driver import learn_with_rule
 from striatal.neural.network import NetworkConfig
@@ -60,6 +61,7 @@ def test_rows_are_the_spawned_seeds_and_equal_a_learning_run(finished: Path) -> 
     rs = rows(finished)
     (seed,) = spawn_seeds(4, 1)
     assert [(r["arm"], int(r["seed"])) for r in rs] == [("control", seed), ("learner", seed)]
+    rewards: list[float] = []
     state = learn_with_rule(
         "chapter",
         Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
@@ -69,7 +71,13 @@ def test_rows_are_the_spawned_seeds_and_equal_a_learning_run(finished: Path) -> 
         seed,
         trials=2,
         simulator="nengo",
+        on_trial=lambda _state, rec: rewards.append(rec.reward),
     )
+    # trials.csv: each run's learning trials, the learner's equal to the run's rewards
+    trials = read_trials(finished / "trials.csv")
+    assert sorted(trials) == [("control", "chapter", seed), ("learner", "chapter", seed)]
+    assert trials[("learner", "chapter", seed)] == rewards
+    assert all(len(v) == 2 and set(v) <= {10.0, -5.0} for v in trials.values())
     learner = next(r for r in rs if r["arm"] == "learner")
     control = next(r for r in rs if r["arm"] == "control")
     assert [float(learner[f"W{i}"]) for i in range(1, 7)] == pytest.approx(state.W, rel=1e-12)
@@ -96,6 +104,7 @@ def test_an_interrupted_sweep_resumes_bit_for_bit(finished: Path, tmp_path: Path
     assert "ran 1 runs, 1 already in --out" in ran.out
     assert without_time(rows(cut)) == without_time(rows(finished))
     assert (cut / "summary.json").exists()
+    assert read_trials(cut / "trials.csv") == read_trials(finished / "trials.csv")
 
 
 def test_other_options_are_not_resumed_into_the_folder(finished: Path, tmp_path: Path) -> None:
@@ -165,12 +174,13 @@ def test_the_sweep_options_come_from_the_option_table() -> None:
 
 def test_worker_processes_give_the_same_rows(finished: Path, tmp_path: Path) -> None:
     """The specs travel pickled to other processes (a local pool here, Ray's workers the
-    same way) and give the rows of the sweep run in this process."""
+    same way) and give the rows and trials of the sweep run in this process."""
     out = tmp_path / "pool"
     ran = cli_in_process("neural", *TINY, "--seeds", "1", "--seed", "4", "--trials", "2",
                          "--workers", "2", "--out", str(out))  # fmt: skip
     assert ran.rc == 0, ran.err
     assert without_time(rows(out)) == without_time(rows(finished))
+    assert read_trials(out / "trials.csv") == read_trials(finished / "trials.csv")
 
 
 def test_the_command_offers_the_rules_the_network_runs() -> None:

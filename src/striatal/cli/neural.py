@@ -38,6 +38,7 @@ OUT_FILES = (
     "learn_summary.json",
     "sweep.json",
     "runs.csv",
+    "trials.csv",
 )
 
 DESCRIPTION = (
@@ -475,6 +476,7 @@ def run_learning_sweep(
         out=args.out,
         **options.worker_options(args),
         progress=progress.shown(args),
+        on_compile=announce_compile,
         **changes,
     )
     if args.json:
@@ -485,5 +487,7 @@ def run_learning_sweep(
         print(f"\n{note}")
     print(f"ran {result.ran} runs, {result.skipped} already in --out")
     if args.out is not None:
-        print(f"wrote {args.out / 'runs.csv'}, {args.out / 'summary.json'}")
+        print(
+            f"wrote {args.out / 'runs.csv'}, {args.out / 'trials.csv'}, {args.out / 'summary.json'}"
+        )
     return 0

@@ -14,7 +14,7 @@ init's W(0), followed by one mean-policy rerun of the final gains on the network
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -23,6 +23,7 @@ from striatal.experiments.pool import CONNECT_TIMEOUT, Backend
 from striatal.experiments.results import Sweep
 from striatal.experiments.spec import NetworkTrials
 from striatal.experiments.sweeps import Plan, plan, run_sweep
+from striatal.io.files import csv_text
 from striatal.params import (
     CHAPTER_INITIAL_THETA_C,
     CHAPTER_INITIAL_W,
@@ -35,7 +36,10 @@ if TYPE_CHECKING:
     from striatal.neural.network import NetworkConfig
     from striatal.neural.run import Simulator
 
-__all__ = ["network_plan", "network_sweep"]
+__all__ = ["TRIALS_COLUMNS", "network_plan", "network_sweep", "read_trials"]
+
+#: trials.csv beside runs.csv: one line per learning trial of each run.
+TRIALS_COLUMNS = ("arm", "init", "seed", "trial", "reward")
 
 
 def network_plan(
@@ -112,9 +116,16 @@ def network_sweep(
     address: str | None = None,
     connect_timeout: float = CONNECT_TIMEOUT,
     progress: bool = False,
+    on_compile: Callable[[Path], None] | None = None,
     **options: Any,
 ) -> Sweep:
-    """Run :func:`network_plan`'s specs (resumed from ``out``/runs.csv if there)."""
+    """Run :func:`network_plan`'s specs (resumed from ``out``/runs.csv if there).
+
+    Each finished run's learning trials go to ``out``/trials.csv (:data:`TRIALS_COLUMNS`,
+    the reward of eq 25 of each; :func:`read_trials`) as its row goes to runs.csv. On the
+    local backend the Brian2 program is made ready in this process first
+    (:func:`striatal.neural.driver.prepare_simulator`; ``on_compile(folder)`` is told if
+    it compiles), so a compile happens once, before any run."""
     p = network_plan(
         learner,
         network=network,
@@ -128,6 +139,20 @@ def network_sweep(
         template=template,
         **options,
     )
+    if backend == "local" and p.specs:
+        from striatal.neural.driver import prepare_simulator
+
+        first = p.specs[0]
+        prepare_simulator(
+            simulator,
+            first.template,
+            first.plant,
+            first.sim,
+            network,
+            first.seed,
+            on_compile=on_compile,
+        )
+    on_run = None if out is None else _trials_writer(out / "trials.csv")
     return run_sweep(
         p.specs,
         p.settings,
@@ -138,4 +163,34 @@ def network_sweep(
         address=address,
         connect_timeout=connect_timeout,
         progress=progress,
+        on_run=on_run,
     )
+
+
+def _trials_writer(path: Path) -> Callable[[dict[str, Any]], None]:
+    """``on_run`` of a network sweep: a row's learning trials appended to ``path``."""
+
+    def write(row: dict[str, Any]) -> None:
+        new = not path.exists() or path.stat().st_size == 0
+        lines = [
+            (row["arm"], row["init"], row["seed"], k + 1, r)
+            for k, r in enumerate(row.get("trial_rewards", ()))
+        ]
+        text = csv_text(TRIALS_COLUMNS, lines)
+        with path.open("a", encoding="utf-8", newline="") as fh:
+            fh.write(text if new else text.split("\n", 1)[1])
+
+    return write
+
+
+def read_trials(path: Path) -> dict[tuple[str, str, int], list[float]]:
+    """trials.csv as (arm, init, seed) -> the rewards of trials 1, 2, ...; a run written
+    twice (rerun after a stop between runs.csv and trials.csv) counts once, its last."""
+    import csv
+
+    out: dict[tuple[str, str, int], dict[int, float]] = {}
+    with path.open(encoding="utf-8", newline="") as fh:
+        for rec in csv.DictReader(fh):
+            key = (rec["arm"], rec["init"], int(rec["seed"]))
+            out.setdefault(key, {})[int(rec["trial"])] = float(rec["reward"])
+    return {k: [v[t] for t in sorted(v)] for k, v in out.items()}

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 from striatal.errors import ParameterError
@@ -44,6 +45,7 @@ from striatal.experiments.spec import RunSpec, initial_gains
 from striatal.learners import LearnerConfig, check_config, rule_of
 from striatal.learners.common import initial_state
 from striatal.learners.loop import learn_steps
+from striatal.learners.state import LearnerState, TrialRecord
 from striatal.params import Controller, Plant, Simulation
 from striatal.sim.batch import Steps, TrialRequest, drive
 from striatal.sim.robust import check_robust
@@ -105,14 +107,25 @@ def control_note(learner: str) -> str:
 NOTE_CONTROL = control_note("chapter")
 
 
+#: Called with each learning trial of a run (its state after the trial and its record).
+OnTrial = Callable[[LearnerState, TrialRecord], None]
+
+
 def learning_run_steps(
-    plant: Plant, template: Controller, config: LearnerConfig, seed: int, sim: Simulation
+    plant: Plant,
+    template: Controller,
+    config: LearnerConfig,
+    seed: int,
+    sim: Simulation,
+    on_trial: OnTrial | None = None,
 ) -> Steps[dict[str, Any]]:
     """success, trials, W, theta_c, simulations and simulated_seconds of one learning run
     from ``template``'s gains (:func:`striatal.learners.loop.learn_steps`)."""
     start = initial_state(template.gains, template.theta_c, seed)
     check_config(config)
-    state = yield from learn_steps(plant, template, config, start, sim, Protocol())
+    state = yield from learn_steps(
+        plant, template, config, start, sim, Protocol(), on_trial=on_trial
+    )
     return {
         "success": state.success,
         "trials": state.trials_done,
@@ -124,13 +137,19 @@ def learning_run_steps(
     }
 
 
-def search(spec: RunSpec, W0: tuple[float, ...]) -> Steps[dict[str, Any]]:
-    """What the arm of ``spec`` finds from W(0) = ``W0``: a learning run or a baseline's
-    search, its trials yielded."""
+def search(
+    spec: RunSpec, W0: tuple[float, ...], on_trial: OnTrial | None = None
+) -> Steps[dict[str, Any]]:
+    """What the arm of ``spec`` finds from W(0) = ``W0``: a learning run (``on_trial``
+    gets each of its trials) or a baseline's search, its trials yielded."""
     template = spec.template.with_gains(W0, spec.template.theta_c)
     cfg = spec.config
     if spec.method == "learn":
-        return (yield from learning_run_steps(spec.plant, template, cfg, spec.seed, spec.sim))
+        return (
+            yield from learning_run_steps(
+                spec.plant, template, cfg, spec.seed, spec.sim, on_trial=on_trial
+            )
+        )
     search = baselines.SEARCHES.get(spec.method)
     if search is not None:
         return (yield from search(spec.plant, template, spec.sim, spec.seed, cfg))
@@ -140,18 +159,24 @@ def search(spec: RunSpec, W0: tuple[float, ...]) -> Steps[dict[str, Any]]:
 def run_one(spec: RunSpec) -> dict[str, Any]:
     """One run -> one row (RUN_COLUMNS), its trials on the scalar kernel, or on the
     spiking network of ``spec.network`` (:func:`striatal.neural.driver.network_drive`,
-    network seed = the run's seed). Pure: the same spec gives the same row (except
-    wall_seconds). :func:`run_steps` for other drivers."""
+    network seed = the run's seed; the row also carries ``trial_rewards``, each learning
+    trial's reward, for the sweep's trials.csv). Pure: the same spec gives the same row
+    (except wall_seconds). :func:`run_steps` for other drivers."""
     if spec.network is not None:
         from striatal.neural.driver import network_drive
 
-        return network_drive(
-            run_steps(spec), spec.network.config, spec.seed, spec.network.simulator
+        rewards: list[float] = []
+        row = network_drive(
+            run_steps(spec, on_trial=lambda _state, rec: rewards.append(rec.reward)),
+            spec.network.config,
+            spec.seed,
+            spec.network.simulator,
         )
+        return {**row, "trial_rewards": rewards}
     return drive(run_steps(spec))
 
 
-def run_steps(spec: RunSpec) -> Steps[dict[str, Any]]:
+def run_steps(spec: RunSpec, on_trial: OnTrial | None = None) -> Steps[dict[str, Any]]:
     """:func:`run_one` as :data:`striatal.sim.batch.Steps`.
 
     After the search: one noise-free re-simulation of the final gains
@@ -165,7 +190,7 @@ def run_steps(spec: RunSpec) -> Steps[dict[str, Any]]:
     theta_c0 = spec.template.theta_c
     template = spec.template.with_gains(W0, theta_c0)
     cfg = spec.config
-    out = yield from search(spec, W0)
+    out = yield from search(spec, W0, on_trial)
     final = template.with_gains(out["W"], out["theta_c"]) if out["W"][0] > 0 else None
     mean_ok = False
     if final is not None:

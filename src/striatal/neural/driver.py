@@ -54,6 +54,7 @@ __all__ = [
     "learn_network",
     "learn_with_rule",
     "network_drive",
+    "prepare_simulator",
     "run_request",
 ]
 
@@ -166,6 +167,31 @@ def network_drive(
             )
     except StopIteration as stop:
         return stop.value  # type: ignore[no-any-return]
+
+
+def prepare_simulator(
+    simulator: Simulator,
+    controller: Controller,
+    plant: Plant,
+    sim: Simulation,
+    config: NetworkConfig,
+    seed: int,
+    net_dt: float = NET_DT,
+    *,
+    on_compile: Callable[[Path], None] | None = None,
+) -> None:
+    """Get the Brian2 program for ``sim``'s trials of ``config``'s network ready in this
+    process now: compiled into the cache if it is not there (``on_compile(folder)`` told
+    first), generated and held otherwise. Nothing for nengo. A sweep calls it before its
+    runs, so that the notice comes once, before the progress bar."""
+    if simulator != "brian2":
+        return
+    from striatal.neural.brian import compiled_network, require_brian2
+    from striatal.neural.translate import translate
+
+    require_brian2()
+    tr = translate(controller, plant, config, check_seed(seed), net_dt)
+    compiled_network(tr, sim.duration, sim.dt, on_compile=on_compile)
 
 
 def check_network_learning(config: LearnerConfig, sim: Simulation) -> None:

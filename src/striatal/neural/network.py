@@ -181,6 +181,8 @@ class Handles:
     #: per pathway: transform / coefficient, the factor that turns the connection's decoded
     #: output into the term's signal in physical units (1, or the pump population's scale)
     pathway_scales: list[float] = field(default_factory=list)
+    #: the connection cos -> fibres, the only one whose function depends on theta_c
+    switch_criterion: Any = None
 
     @property
     def n_neurons(self) -> int:
@@ -191,6 +193,11 @@ class Handles:
 def criterion(abs_theta: float, theta_c: float, gain: float) -> float:
     """What the suppressor fibres carry: clip(gamma (theta_c - |theta|), -1, 1)."""
     return min(max(gain * (theta_c - abs_theta), -1.0), 1.0)
+
+
+def criterion_of_cos(theta_c: float, gain: float) -> Any:
+    """The function of the connection cos -> fibres: the criterion of |theta| = arccos(cos)."""
+    return lambda c: criterion(math.acos(min(max(c[0], -1.0), 1.0)), theta_c, gain)
 
 
 def build(
@@ -317,11 +324,8 @@ def build(
 
         # the switch: fibres carry clip(gamma (theta_c - |theta|), -1, 1), |theta| = arccos(cos)
         fibres = ens("fibres", 1, 1.0)
-        nengo.Connection(
-            cos,
-            fibres,
-            function=lambda c: criterion(math.acos(min(max(c[0], -1.0), 1.0)), theta_c, gain),
-            synapse=syn,
+        switch_criterion = nengo.Connection(
+            cos, fibres, function=criterion_of_cos(theta_c, gain), synapse=syn
         )
         # gate populations: tonically active, represent how closed their channel is
         gate_kw = {
@@ -418,5 +422,6 @@ def build(
             pathways=pathways,
             extra_neurons=extra,
             pathway_scales=scales,
+            switch_criterion=switch_criterion,
         )
     return h

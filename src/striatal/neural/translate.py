@@ -8,16 +8,17 @@ of :class:`Translation`. nengo is the reference; nothing of the network is writt
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+from collections import OrderedDict
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from striatal.errors import ParameterError
-from striatal.neural.network import NetworkConfig, build, require_nengo
-from striatal.params import Controller, Plant
+from striatal.neural.network import NetworkConfig, build, criterion_of_cos, require_nengo
+from striatal.params import Controller, Plant, check_gains, check_theta_c
 
-__all__ = ["Translation", "translate"]
+__all__ = ["Translation", "forget_builds", "translate"]
 
 
 @dataclass(frozen=True)
@@ -75,6 +76,29 @@ def _tau(synapse: Any) -> float | None:
     return float(tau)
 
 
+@dataclass(frozen=True)
+class _Built:
+    """A seed's translation at one theta_c, and what re-solving the switch needs: the
+    connection cos -> fibres, a model holding its presynaptic ensemble's build (nengo's
+    :func:`nengo.builder.connection.build_decoders` reads it) and its rows in ``spike_w``."""
+
+    theta_c: float
+    translation: Translation
+    conn: Any
+    model: Any
+    spikes: slice
+
+
+#: The last seeds' builds (a learning run alternates a few seeds; theta_c moves every trial).
+_BUILT: OrderedDict[tuple[object, ...], _Built] = OrderedDict()
+_BUILT_MAX = 64
+
+
+def forget_builds() -> None:
+    """Drop the kept builds: the next translation of every seed is a full build."""
+    _BUILT.clear()
+
+
 def translate(
     controller: Controller, plant: Plant, config: NetworkConfig, seed: int, net_dt: float = 0.001
 ) -> Translation:
@@ -84,7 +108,45 @@ def translate(
     of 1): their decoders do not depend on the transform, and the coefficients c(W)
     enter the compiled program as numbers of the run. ``v0``: initial voltages
     U(0, 1), as nengo's LIF draws them, from ``default_rng(seed)``.
+
+    So a seed's translation depends on W only through its checks, and on theta_c only
+    through the decoders of the switch's connection cos -> fibres (its function is the
+    criterion of theta_c). The process keeps the last seeds' builds: another W or
+    theta_c of a built seed re-solves only those decoders, with nengo's own
+    ``build_decoders`` and the connection's seed (the same arrays as a full build, tested).
     """
+    check_gains(controller.gains)
+    theta_c = check_theta_c(controller.theta_c)
+    key = (seed, config, plant, float(net_dt), float(controller.sign))
+    got = _BUILT.get(key)
+    if got is None:
+        got = _build(controller, plant, config, seed, net_dt)
+        _BUILT[key] = got
+        while len(_BUILT) > _BUILT_MAX:
+            _BUILT.popitem(last=False)
+    else:
+        _BUILT.move_to_end(key)
+    if got.theta_c == theta_c:
+        return got.translation
+    require_nengo()
+    from nengo.builder.connection import build_decoders
+
+    got.conn.function = criterion_of_cos(theta_c, config.switch_gain)
+    rng = np.random.RandomState(got.model.seeds[got.conn])
+    with got.model.decoder_cache:
+        _eval, decoders, _info = build_decoders(got.model, got.conn, rng)
+    if np.any(np.asarray(getattr(got.conn.transform, "init", 1.0)) != 1.0):
+        raise ParameterError("the switch's connection must have no transform")
+    # with no transform the full build's weights are the decoders
+    spike_w = got.translation.spike_w.copy()
+    spike_w[got.spikes] = np.asarray(decoders, dtype=float).reshape(-1)
+    return replace(got.translation, spike_w=spike_w)
+
+
+def _build(
+    controller: Controller, plant: Plant, config: NetworkConfig, seed: int, net_dt: float
+) -> _Built:
+    """:func:`translate` in full: nengo's builder on the whole network."""
     if config.selection != "cerebellum":
         raise ParameterError(
             "the Brian2 simulator builds the cerebellar switch only (--selection cerebellum)"
@@ -126,6 +188,7 @@ def translate(
     sensed_row: dict[int, int] = {}
     tonic_row = -1
     motor_tau = None
+    switch_spikes: slice | None = None
 
     def new_row(kind: int, sensor: int = -1, tau: float = 1.0) -> int:
         kinds.append(kind)
@@ -182,6 +245,9 @@ def translate(
                 nz = int(np.flatnonzero(t)[0]) if t.size > 1 else 0
                 d = weights[nz] / t[nz] if t.size > 1 else weights.reshape(-1) / float(t)
                 drive(row, post, conn.post_slice, transform)
+            if conn is h.switch_criterion:
+                start = sum(a.shape[0] for a in spike_w)
+                switch_spikes = slice(start, start + pre.n_neurons)
             spike_pre.append(offset[id(pre)] + np.arange(pre.n_neurons))
             spike_row.append(np.full(pre.n_neurons, row))
             spike_w.append(d)
@@ -200,12 +266,12 @@ def translate(
             drive(tonic_row, post, conn.post_slice, transform)
         else:
             raise ParameterError(f"the Brian2 simulator cannot translate {conn}")
-    if motor_tau is None or np.any(pathway_rows < 0):
-        raise ParameterError("the network has no motor output")
+    if motor_tau is None or np.any(pathway_rows < 0) or switch_spikes is None:
+        raise ParameterError("the network has no motor output or no switch")
     tau_arr = np.array(taus)
     tau_arr[pathway_rows] = motor_tau
     rng = np.random.default_rng(seed)
-    return Translation(
+    tr = Translation(
         pop_sizes=tuple((str(e.label), int(e.n_neurons)) for e in ensembles),
         row_kind=np.array(kinds, dtype=np.int32),
         row_sensor=np.array(sensors, dtype=np.int32),
@@ -224,3 +290,10 @@ def translate(
         net_dt=float(net_dt),
         neurons=n,
     )
+    # what re-solving the switch reads of the build: its presynaptic ensemble's parameters
+    conn = h.switch_criterion
+    small = Model(dt=net_dt, label="striatal switch", decoder_cache=model.decoder_cache)
+    small.params[conn.pre_obj] = model.params[conn.pre_obj]
+    small.seeds[conn] = model.seeds[conn]
+    small.seeded[conn] = model.seeded[conn]
+    return _Built(float(controller.theta_c), tr, conn, small, switch_spikes)
