@@ -243,7 +243,7 @@ def _build(
                 # weights = transform @ decoders; the transform goes to the drive
                 t = transform.reshape(-1)
                 nz = int(np.flatnonzero(t)[0]) if t.size > 1 else 0
-                d = weights[nz] / t[nz] if t.size > 1 else weights.reshape(-1) / float(t)
+                d = weights[nz] / t[nz] if t.size > 1 else weights.reshape(-1) / t.item()
                 drive(row, post, conn.post_slice, transform)
             if conn is h.switch_criterion:
                 start = sum(a.shape[0] for a in spike_w)
@@ -254,7 +254,7 @@ def _build(
         elif pre is h.sensor_input:
             if conn.synapse is not None:
                 raise ParameterError(f"sensed inputs take no synapse, got {conn}")
-            sensor = int(np.arange(pre.size_out)[conn.pre_slice])
+            sensor = int(np.arange(pre.size_out)[conn.pre_slice].item())
             if sensor not in sensed_row:
                 sensed_row[sensor] = new_row(1, sensor=sensor)
             drive(sensed_row[sensor], post, conn.post_slice, transform)
