@@ -12,6 +12,10 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
+from test_robust_stop import (  # pgpe's robust controller: passes the corners at +-25 %,
+    ROBUST_THETA_C,  # fails the first corner at +-30 % (pole mass x1.3, length x0.7)
+    ROBUST_W,
+)
 
 import striatal
 from striatal.cli import main
@@ -35,17 +39,6 @@ from striatal.sim.robust import (
 )
 
 DT = 0.01
-#: pgpe's robust controller of tests/test_robust_stop.py: it passes the corners at +-25 %
-#: and fails the first corner at +-30 % (pole mass x1.3, length x0.7).
-ROBUST_W = (
-    2.1263782943804586,
-    -0.23835975856782232,
-    -0.7555898236586254,
-    3.8082899510490504,
-    4.5445603658432345,
-    -0.5271986094008383,
-)
-ROBUST_THETA_C = 1.0087997898263552
 FIXED = dict(alpha=0.0, theta_c_rule="fixed", success_on="mean")
 
 
