@@ -15,8 +15,9 @@ import signal
 import subprocess
 import sys
 import traceback
+from collections.abc import Iterator
 from contextlib import redirect_stderr, redirect_stdout
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import pytest
 from hypothesis import settings
@@ -36,6 +37,35 @@ os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 @pytest.fixture
 def plant() -> Plant:
     return Plant()
+
+
+class KernelCounter:
+    """Counts the kernel's trial calls and their simulated steps."""
+
+    def __init__(self) -> None:
+        self.calls = 0
+        self.steps = 0
+
+    def seconds(self, dt: float = 0.01) -> float:
+        return self.steps * dt
+
+
+@pytest.fixture
+def counted(monkeypatch: pytest.MonkeyPatch) -> Iterator[KernelCounter]:
+    """Every call of the scalar kernel's ``run_trial`` counted, with its simulated steps."""
+    from striatal.sim import kernel, rollout  # the tests that count import the kernel
+
+    counter = KernelCounter()
+    real = kernel.run_trial
+
+    def counting(*args: Any) -> Any:
+        result = real(*args)
+        counter.calls += 1
+        counter.steps += int(args[-1][0][kernel.OUT_END_STEP])
+        return result
+
+    monkeypatch.setattr(rollout.kernel, "run_trial", counting)
+    yield counter
 
 
 @pytest.fixture

@@ -11,12 +11,11 @@ from __future__ import annotations
 import csv
 import json
 import math
-from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
+from conftest import KernelCounter
 
 import striatal
 from striatal.cli import main
@@ -24,7 +23,6 @@ from striatal.errors import ParameterError
 from striatal.experiments import baselines
 from striatal.learners import default_config, learn
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
-from striatal.sim import kernel, rollout
 from striatal.sim.robust import (
     ROBUST_CASES,
     ROBUST_HARDWARE,
@@ -48,32 +46,6 @@ ROBUST_W = (
     -0.5271986094008383,
 )
 ROBUST_THETA_C = 1.0087997898263552
-
-
-class KernelCounter:
-    """Counts the kernel's trial calls and their simulated steps."""
-
-    def __init__(self) -> None:
-        self.calls = 0
-        self.steps = 0
-
-    def seconds(self, dt: float = DT) -> float:
-        return self.steps * dt
-
-
-@pytest.fixture
-def counted(monkeypatch: pytest.MonkeyPatch) -> Iterator[KernelCounter]:
-    counter = KernelCounter()
-    real = kernel.run_trial
-
-    def counting(*args: Any) -> Any:
-        result = real(*args)
-        counter.calls += 1
-        counter.steps += int(args[-1][0][kernel.OUT_END_STEP])
-        return result
-
-    monkeypatch.setattr(rollout.kernel, "run_trial", counting)
-    yield counter
 
 
 def _controllers() -> list[Controller]:

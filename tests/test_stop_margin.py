@@ -8,10 +8,10 @@ their defaults the runs (and run ids) are those without them.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
+from conftest import KernelCounter
 from test_robust_stop import (  # pgpe's robust controller: passes the corners at +-25 %,
     ROBUST_THETA_C,  # fails the first corner at +-30 % (pole mass x1.3, length x0.7)
     ROBUST_W,
@@ -26,7 +26,6 @@ from striatal.learners import default_config, learn
 from striatal.learners.forward import rule as forward
 from striatal.learners.loop import success_checks
 from striatal.params import CHAPTER_INITIAL_THETA_C, Controller, Plant
-from striatal.sim import kernel, rollout
 from striatal.sim.robust import (
     ROBUST_BOX,
     ROBUST_CASES,
@@ -40,27 +39,6 @@ from striatal.sim.robust import (
 
 DT = 0.01
 FIXED = dict(alpha=0.0, theta_c_rule="fixed", success_on="mean")
-
-
-class Counter:
-    def __init__(self) -> None:
-        self.calls = 0
-        self.steps = 0
-
-
-@pytest.fixture
-def counted(monkeypatch: pytest.MonkeyPatch) -> Iterator[Counter]:
-    counter = Counter()
-    real = kernel.run_trial
-
-    def counting(*args: Any) -> Any:
-        result = real(*args)
-        counter.calls += 1
-        counter.steps += int(args[-1][0][kernel.OUT_END_STEP])
-        return result
-
-    monkeypatch.setattr(rollout.kernel, "run_trial", counting)
-    yield counter
 
 
 def test_the_wider_corners_replace_the_sets_corners_and_keep_its_order() -> None:
@@ -89,7 +67,9 @@ def test_the_wider_corners_replace_the_sets_corners_and_keep_its_order() -> None
             robust_cases(bad)
 
 
-def test_the_corners_check_counts_its_runs_and_agrees_with_each_case(counted: Counter) -> None:
+def test_the_corners_check_counts_its_runs_and_agrees_with_each_case(
+    counted: KernelCounter,
+) -> None:
     c = Controller(gains=ROBUST_W, theta_c=ROBUST_THETA_C)
     for box, robust, runs in ((0.25, True, 4), (0.3, False, 1)):
         counted.calls = counted.steps = 0
@@ -146,7 +126,7 @@ def test_the_cli_refuses_stop_margin_without_robust_in_one_line(
 
 
 def test_the_margin_corners_run_before_the_set_and_every_run_is_counted(
-    counted: Counter,
+    counted: KernelCounter,
 ) -> None:
     """A fixed robust controller (alpha 0): with the corners at +-25 % it stops at trial 1
     after its trial, the mean-policy rerun, 4 corners and the set's other 8 cases; at
@@ -166,7 +146,7 @@ def test_the_margin_corners_run_before_the_set_and_every_run_is_counted(
 
 
 def test_pgpe_with_a_margin_counts_every_run_and_its_controller_holds_the_wider_box(
-    counted: Counter,
+    counted: KernelCounter,
 ) -> None:
     """Root-0 seed #5 of ``sweep --init random --seed 0`` (robust in 12 trials)."""
     seed = 4118645239
@@ -201,14 +181,14 @@ def test_a_sweeps_baselines_keep_the_plain_stop_rule() -> None:
 
 
 def test_imagine_margin_widens_what_imagination_checks(
-    monkeypatch: pytest.MonkeyPatch, counted: Counter
+    monkeypatch: pytest.MonkeyPatch, counted: KernelCounter
 ) -> None:
     """Structured: the inner pgpe's jitter and each family plant's corners at +-30 %
     (generic-gains: the angular-acceleration gains 1/1.3 and 1/0.7). The run is the same
     under its seed twice, and its imagined trials stay out of ``simulations``."""
     boxes: list[float] = []
     jitters: list[float] = []
-    dreamt = Counter()
+    dreamt = KernelCounter()
     real_check, real_learn, real_imagine = (
         forward.family_check_steps,
         forward.learn_steps,
