@@ -25,7 +25,7 @@ counting every run.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -358,6 +358,22 @@ def _until_failure(
     return StopCheck(True, runs, seconds, recorded=tuple(recorded))
 
 
+def _case_runs(
+    controller: Controller,
+    gains: np.ndarray | None,
+    cases: Iterable[Perturbation],
+    plant: Plant,
+    dt: float,
+    hardware: Hardware,
+) -> Iterator[tuple[str, TrialRequest, tuple[float, float]]]:
+    """Each case's (name, request, plant factors), the controller (with ``gains`` if
+    given) keeping ``plant`` as its model: the runs :func:`_until_failure` takes."""
+    W = np.asarray(controller.gains if gains is None else gains, dtype=float)
+    for case in cases:
+        request = _case_request(controller, W, case, case.plant(plant), plant, dt, hardware)
+        yield case.name, request, (case.pole_mass, case.length)
+
+
 def stop_check_steps(
     controller: Controller,
     plant: Plant,
@@ -381,18 +397,9 @@ def stop_check_steps(
     corners at x(1 +- box) instead (:func:`robust_cases`; a wider box than the set's
     asks for a margin).
     """
-    W = np.asarray(controller.gains if gains is None else gains, dtype=float)
     every = robust_cases(box)
-    cases = [every[i] for i in STOP_ORDER]
-    runs = (
-        (
-            case.name,
-            _case_request(controller, W, case, case.plant(plant), plant, dt, hardware),
-            (case.pole_mass, case.length),
-        )
-        for case in cases
-        if not (nominal_passed and case == ROBUST_CASES[0])
-    )
+    cases = [every[i] for i in STOP_ORDER if not (nominal_passed and every[i] == ROBUST_CASES[0])]
+    runs = _case_runs(controller, gains, cases, plant, dt, hardware)
     return (yield from _until_failure(runs, record))
 
 
@@ -412,15 +419,7 @@ def corners_check_steps(
     """The four plant corners at x(1 +- ``box``) (:func:`corner_cases`), run as the
     robustness set runs its cases (mean policy, 60 s, ``hardware``, the controller
     keeping ``plant`` as its model), up to the first failure, every run counted."""
-    W = np.asarray(controller.gains if gains is None else gains, dtype=float)
-    runs = (
-        (
-            case.name,
-            _case_request(controller, W, case, case.plant(plant), plant, dt, hardware),
-            (case.pole_mass, case.length),
-        )
-        for case in corner_cases(box)
-    )
+    runs = _case_runs(controller, gains, corner_cases(box), plant, dt, hardware)
     return (yield from _until_failure(runs))
 
 
