@@ -1,7 +1,7 @@
 """Where the forward learner's real simulated seconds go, and how good its model is, per real trial.
 
     python benchmarks/forward_real_seconds.py [--root 0] [--first 0] [--seeds 15]
-        [--forward-model generic-gains] [--json FILE]
+        [--forward-model generic-gains] [--imagine-margin M] [--json FILE]
 
 Runs ``striatal.train("forward", robust=True, init="random", max_trials=300, ...)`` on
 the run seeds ``spawn_seeds(root, first + seeds)[first:]`` one after the other (the runs
@@ -138,6 +138,12 @@ def main() -> None:
     parser.add_argument("--first", type=int, default=0)
     parser.add_argument("--seeds", type=int, default=15)
     parser.add_argument("--forward-model", default="generic-gains")
+    parser.add_argument(
+        "--imagine-margin",
+        type=float,
+        default=None,
+        help="none: the model's robust preset (generic-gains: 0.1)",
+    )
     parser.add_argument("--json", default=None, help="write each run's record here")
     args = parser.parse_args()
     print(f"load average before: {os.getloadavg()}")
@@ -179,6 +185,7 @@ def main() -> None:
             forward_model=args.forward_model,
             max_trials=300,
             on_trial=on_trial,
+            **({} if args.imagine_margin is None else {"imagine_margin": args.imagine_margin}),
         )
         cpu = time.process_time() - cpu
         by_kind = collections.Counter()
