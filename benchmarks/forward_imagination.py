@@ -2,7 +2,7 @@
 
     python benchmarks/forward_imagination.py [--root 0] [--first 0] [--seeds 15]
         [--forward-model generic-gains] [--imagine-trials 2000] [--imagine-round N]
-        [--imagine-duration SECONDS]
+        [--imagine-duration SECONDS] [--imagine-margin M]
         [--json FILE]
 
 Runs ``striatal.train("forward", robust=True, init="random", max_trials=300, ...)`` on
@@ -94,6 +94,12 @@ def main() -> None:
     parser.add_argument("--imagine-trials", type=int, default=2000)
     parser.add_argument("--imagine-round", type=int, default=None)
     parser.add_argument("--imagine-duration", type=float, default=None)
+    parser.add_argument(
+        "--imagine-margin",
+        type=float,
+        default=None,
+        help="none: the model's robust preset (generic-gains: 0.1)",
+    )
     parser.add_argument("--json", default=None, help="write each run's record here")
     args = parser.parse_args()
     print(f"load average before: {os.getloadavg()}")
@@ -112,6 +118,7 @@ def main() -> None:
             imagine_trials=args.imagine_trials,
             imagine_round=args.imagine_round,
             imagine_duration=args.imagine_duration,
+            **({} if args.imagine_margin is None else {"imagine_margin": args.imagine_margin}),
         )
         cpu = time.process_time() - cpu
         endings = recorder.endings()

@@ -175,6 +175,24 @@ def test_the_defaults_change_no_run_and_no_run_id() -> None:
     assert margin.run_id != plain.run_id
 
 
+def test_generic_gains_robust_preset_carries_the_margin_and_an_explicit_option_overrides_it() -> (
+    None
+):
+    """generic-gains with --robust asks imagination for the +-30 % corners by default
+    (stored in its settings, so its runs have new ids); an explicit 0 is kept, the other
+    models and a run without --robust are unchanged, and the preset names its root."""
+    preset = default_config("forward", robust=True, forward_model="generic-gains")
+    assert preset.imagine_margin == forward.GENERIC_GAINS_ROBUST["imagine_margin"] == 0.1
+    assert preset.to_dict()["imagine_margin"] == 0.1
+    off = default_config("forward", robust=True, forward_model="generic-gains", imagine_margin=0.0)
+    assert off.imagine_margin == 0.0 and "imagine_margin" not in off.to_dict()
+    for model in ("structured", "generic", "conditioned"):
+        assert default_config("forward", robust=True, forward_model=model).imagine_margin == 0.0
+    assert default_config("forward", forward_model="generic-gains").imagine_margin == 0.0
+    assert forward.FORWARD.tuning_root_of(preset) == 0
+    assert forward.FORWARD.tuning_root_of(default_config("forward")) is None
+
+
 def test_a_sweeps_baselines_keep_the_plain_stop_rule() -> None:
     config = default_config("pgpe", robust=True, stop_margin=0.1)
     assert "margin corners" not in baselines.Budget.of(config).checks
@@ -241,8 +259,11 @@ def test_generic_gains_imagines_the_pole_answering_as_the_wider_corners_would(
     learn(Plant(), template, default_config("forward", imagine_margin=0.1, **changes), 101)
     assert seen and set(seen) == {forward.response_gains(0.3)}
     seen.clear()
-    learn(Plant(), template, default_config("forward", **changes), 101)
+    learn(Plant(), template, default_config("forward", imagine_margin=0.0, **changes), 101)
     assert seen and set(seen) == {forward.RESPONSE_GAINS}
+    seen.clear()  # generic-gains' robust preset carries the margin 0.1
+    learn(Plant(), template, default_config("forward", **changes), 101)
+    assert seen and set(seen) == {forward.response_gains(0.3)}
 
 
 def test_a_sweep_takes_the_margins_and_random_search_keeps_its_rule() -> None:

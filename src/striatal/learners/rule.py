@@ -242,6 +242,12 @@ class Rule:
                 "judged on the mean policy (success_on 'mean')"
             )
 
+    def robust_preset_of(self, changes: Mapping[str, Any]) -> Mapping[str, Any]:
+        """The changes ``robust=True`` adds for a run asked with the options ``changes``:
+        :attr:`robust_preset`, unless the rule's robust preset depends on another option
+        (forward's on its model)."""
+        return self.robust_preset
+
     def tuning_root_of(self, config: LearnerConfig) -> int | None:
         """The root :func:`striatal.learners.default_config` took ``config``'s preset from
         (:attr:`robust_tuning_root` with ``config.robust``, else :attr:`tuning_root`)."""

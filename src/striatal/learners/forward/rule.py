@@ -32,7 +32,8 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    first. The candidate, found or not, is the next real trial's controller. With
    ``imagine_margin`` M the plant corners imagination asks for are those at
    x(1 +- (0.2 + M)) (structured: the inner pgpe's jitter and each family plant's set;
-   generic-gains: :func:`response_gains`), a margin beyond the real checks' +-20 %.
+   generic-gains: :func:`response_gains`), a margin beyond the real checks' +-20 %;
+   generic-gains' robust preset sets M = 0.1 (:data:`GENERIC_GAINS_ROBUST`).
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
 imagined simulations and simulated seconds; history column ``imagined``), never in
@@ -50,8 +51,10 @@ from __future__ import annotations
 
 import importlib.util
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
@@ -77,6 +80,7 @@ from striatal.sim.rollout import Protocol
 __all__ = [
     "FORWARD",
     "GENERIC_DURATION",
+    "GENERIC_GAINS_ROBUST",
     "GENERIC_ROUND",
     "MAX_TRANSITIONS",
     "RESPONSE_GAINS",
@@ -110,6 +114,11 @@ RESPONSE_GAINS = (1.0 / 1.2, 1.0 / 0.8)
 #: model, round 4"); the structured world has none (its rounds end in a few hundred
 #: trials).
 GENERIC_ROUND = 500
+#: generic-gains' robust preset: imagination asks for the plant corners at x(1 +- 0.3)
+#: (``imagine_margin`` 0.1, chosen on root 0; docs/results.md, "A margin beyond the box"
+#: and round 5), so that its controllers hold beyond the robustness set's box; an
+#: explicit ``imagine_margin`` (0 included) overrides it.
+GENERIC_GAINS_ROBUST = MappingProxyType({"imagine_margin": 0.1})
 #: The generic worlds' own imagined-trial duration [s] (``imagine_duration`` none;
 #: None: the real trial's), chosen with :data:`GENERIC_ROUND`.
 GENERIC_DURATION: float | None = None
@@ -361,6 +370,9 @@ class ForwardRule(Rule):
 
     The preset has no tuned number of its own (the inner learner's presets are pgpe's,
     its imagined budget 2000 trials set before any sweep ran): ``tuning_root`` None.
+    With ``robust`` the inner learner is pgpe's robust preset, the generic worlds' round
+    cap (:data:`GENERIC_ROUND`) and generic-gains' margin (:data:`GENERIC_GAINS_ROBUST`)
+    were chosen on root 0: ``robust_tuning_root`` 0.
     """
 
     name = "forward"
@@ -375,9 +387,16 @@ class ForwardRule(Rule):
         "no model is fitted and nothing is learned: the same real-trial schedule, each "
         "trial the noise-free W(0) with its checks"
     )
+    robust_tuning_root = 0
     history_columns = ("imagined", "model_pole_mass", "model_length", "solved_in_imagination")
     memory_names = ("data", "imagined")
     judging = Judging("candidate", mean_policy_only="runs its real trials with the mean policy")
+
+    def robust_preset_of(self, changes: Mapping[str, Any]) -> Mapping[str, Any]:
+        """:data:`GENERIC_GAINS_ROBUST` for the generic-gains model, else none."""
+        if changes.get("forward_model") == "generic-gains":
+            return GENERIC_GAINS_ROBUST
+        return self.robust_preset
 
     def check(self, config: LearnerConfig) -> None:
         """Also: the generic model needs scikit-learn (refused before the first trial)."""
