@@ -164,7 +164,7 @@ def test_pgpe_with_a_margin_counts_every_run_and_its_controller_holds_the_wider_
 def test_the_defaults_change_no_run_and_no_run_id() -> None:
     config = default_config("pgpe", robust=True)
     assert config.stop_margin == 0.0 and "stop_margin" not in config.to_dict()
-    forward_config = default_config("forward", robust=True)
+    forward_config = default_config("forward", robust=True, imagine_margin=0.0)
     assert forward_config.imagine_margin == 0.0
     assert "imagine_margin" not in forward_config.to_dict()
     assert forward.response_gains() == forward.RESPONSE_GAINS
@@ -175,20 +175,23 @@ def test_the_defaults_change_no_run_and_no_run_id() -> None:
     assert margin.run_id != plain.run_id
 
 
-def test_generic_gains_robust_preset_carries_the_margin_and_an_explicit_option_overrides_it() -> (
-    None
-):
-    """generic-gains with --robust asks imagination for the +-30 % corners by default
-    (stored in its settings, so its runs have new ids); an explicit 0 is kept, the other
-    models and a run without --robust are unchanged, and the preset names its root."""
-    preset = default_config("forward", robust=True, forward_model="generic-gains")
-    assert preset.imagine_margin == forward.GENERIC_GAINS_ROBUST["imagine_margin"] == 0.1
+@pytest.mark.parametrize("model", [None, "structured", "generic-gains"])
+def test_the_margin_models_robust_preset_carries_the_margin_and_an_explicit_option_overrides_it(
+    model: str | None,
+) -> None:
+    """The structured (the default model) and generic-gains models with --robust ask
+    imagination for the +-30 % corners by default (stored in their settings, so their
+    runs have new ids); an explicit 0 is kept, the other models and a run without
+    --robust are unchanged, and the preset names its root."""
+    named = {} if model is None else {"forward_model": model}
+    preset = default_config("forward", robust=True, **named)
+    assert preset.imagine_margin == forward.MARGIN_ROBUST["imagine_margin"] == 0.1
     assert preset.to_dict()["imagine_margin"] == 0.1
-    off = default_config("forward", robust=True, forward_model="generic-gains", imagine_margin=0.0)
+    off = default_config("forward", robust=True, imagine_margin=0.0, **named)
     assert off.imagine_margin == 0.0 and "imagine_margin" not in off.to_dict()
-    for model in ("structured", "generic", "conditioned"):
-        assert default_config("forward", robust=True, forward_model=model).imagine_margin == 0.0
-    assert default_config("forward", forward_model="generic-gains").imagine_margin == 0.0
+    for other in ("generic", "conditioned"):
+        assert default_config("forward", robust=True, forward_model=other).imagine_margin == 0.0
+    assert default_config("forward", **named).imagine_margin == 0.0
     assert forward.FORWARD.tuning_root_of(preset) == 0
     assert forward.FORWARD.tuning_root_of(default_config("forward")) is None
 

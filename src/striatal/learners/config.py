@@ -246,8 +246,8 @@ class LearnerConfig:
         "for the plant corners at pole mass and length x(1 +- (0.2 + M)) instead of the "
         "robustness set's (structured: the inner pgpe's jittered plants and each family "
         "plant's checks; generic-gains: the angular-acceleration gains 1/(1 +- (0.2 + M))); "
-        "the real checks are unchanged. 0: the set's box (generic-gains with --robust: 0.1 "
-        "unless given, its robust preset)",
+        "the real checks are unchanged. 0: the set's box (with --robust, both models: 0.1 "
+        "unless given, their robust preset)",
         bounds="[0, 0.5]",
     )
     max_force: float | None = option(

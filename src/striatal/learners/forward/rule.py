@@ -33,7 +33,7 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    ``imagine_margin`` M the plant corners imagination asks for are those at
    x(1 +- (0.2 + M)) (structured: the inner pgpe's jitter and each family plant's set;
    generic-gains: :func:`response_gains`), a margin beyond the real checks' +-20 %;
-   generic-gains' robust preset sets M = 0.1 (:data:`GENERIC_GAINS_ROBUST`).
+   the robust preset of both sets M = 0.1 (:data:`MARGIN_ROBUST`).
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
 imagined simulations and simulated seconds; history column ``imagined``), never in
@@ -80,8 +80,9 @@ from striatal.sim.rollout import Protocol
 __all__ = [
     "FORWARD",
     "GENERIC_DURATION",
-    "GENERIC_GAINS_ROBUST",
     "GENERIC_ROUND",
+    "MARGIN_MODELS",
+    "MARGIN_ROBUST",
     "MAX_TRANSITIONS",
     "RESPONSE_GAINS",
     "ForwardConfig",
@@ -114,11 +115,14 @@ RESPONSE_GAINS = (1.0 / 1.2, 1.0 / 0.8)
 #: model, round 4"); the structured world has none (its rounds end in a few hundred
 #: trials).
 GENERIC_ROUND = 500
-#: generic-gains' robust preset: imagination asks for the plant corners at x(1 +- 0.3)
-#: (``imagine_margin`` 0.1, chosen on root 0; docs/results.md, "A margin beyond the box"
-#: and round 5), so that its controllers hold beyond the robustness set's box; an
+#: The robust preset of the models that take a margin (:data:`MARGIN_MODELS`):
+#: imagination asks for the plant corners at x(1 +- 0.3) (``imagine_margin`` 0.1, chosen
+#: on root 0; docs/results.md, "A margin beyond the box" and "The generic forward model,
+#: round 5"), so that their controllers hold beyond the robustness set's box; an
 #: explicit ``imagine_margin`` (0 included) overrides it.
-GENERIC_GAINS_ROBUST = MappingProxyType({"imagine_margin": 0.1})
+MARGIN_ROBUST = MappingProxyType({"imagine_margin": 0.1})
+#: The forward models whose imagination can ask for wider corners than the checks'.
+MARGIN_MODELS: tuple[str, ...] = ("structured", "generic-gains")
 #: The generic worlds' own imagined-trial duration [s] (``imagine_duration`` none;
 #: None: the real trial's), chosen with :data:`GENERIC_ROUND`.
 GENERIC_DURATION: float | None = None
@@ -371,7 +375,7 @@ class ForwardRule(Rule):
     The preset has no tuned number of its own (the inner learner's presets are pgpe's,
     its imagined budget 2000 trials set before any sweep ran): ``tuning_root`` None.
     With ``robust`` the inner learner is pgpe's robust preset, the generic worlds' round
-    cap (:data:`GENERIC_ROUND`) and generic-gains' margin (:data:`GENERIC_GAINS_ROBUST`)
+    cap (:data:`GENERIC_ROUND`) and the models' margin (:data:`MARGIN_ROBUST`)
     were chosen on root 0: ``robust_tuning_root`` 0.
     """
 
@@ -393,16 +397,18 @@ class ForwardRule(Rule):
     judging = Judging("candidate", mean_policy_only="runs its real trials with the mean policy")
 
     def robust_preset_of(self, changes: Mapping[str, Any]) -> Mapping[str, Any]:
-        """:data:`GENERIC_GAINS_ROBUST` for the generic-gains model, else none."""
-        if changes.get("forward_model") == "generic-gains":
-            return GENERIC_GAINS_ROBUST
+        """:data:`MARGIN_ROBUST` for the models of :data:`MARGIN_MODELS` (the structured
+        model when ``changes`` name none), else none."""
+        model = changes.get("forward_model", LearnerConfig().forward_model)
+        if model in MARGIN_MODELS:
+            return MARGIN_ROBUST
         return self.robust_preset
 
     def check(self, config: LearnerConfig) -> None:
         """Also: the generic model needs scikit-learn (refused before the first trial)."""
         super().check(config)
         if config.imagine_margin > 0.0 and not (
-            config.robust and config.forward_model in ("structured", "generic-gains")
+            config.robust and config.forward_model in MARGIN_MODELS
         ):
             raise ParameterError(
                 "imagine_margin widens the plant corners imagination checks: it needs --robust "
