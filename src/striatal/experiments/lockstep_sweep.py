@@ -29,7 +29,8 @@ of the same experiment: the arms' success rates agree within their intervals
 
 W(0)'s evaluation, which the runs of one init and seed share (a learner and its control:
 :func:`striatal.experiments.runner.shared_w0`), runs once, as a computation of its own
-beside the runs from the first round; a run takes its result when it gets there (it
+beside the runs from the first round (all of them together taking at most about
+:data:`SHARED_DRAWS` draws a round); a run takes its result when it gets there (it
 makes its own should it get there first) and its row counts the trials as before.
 
 ``wall_seconds`` of a row is its share of the engine's time: its run's own Python plus
@@ -45,13 +46,18 @@ from collections.abc import Iterator, Sequence
 from typing import Any, Literal
 
 from striatal.errors import ParameterError
-from striatal.experiments.evaluate import PassProbability
+from striatal.experiments.evaluate import DRAWS_AT_ONCE, PassProbability
 from striatal.experiments.runner import W0Key, W0Source, run_steps, shared_w0, w0_steps
 from striatal.experiments.spec import RunSpec
 from striatal.learners import check_config
 from striatal.sim.batch import BATCH_ENGINES, Lockstep, Steps
 
-__all__ = ["BATCH_ENGINES", "check_specs", "execute_batch"]
+__all__ = ["BATCH_ENGINES", "SHARED_DRAWS", "check_specs", "execute_batch"]
+
+#: The noisy trials the shared W(0) evaluations of a sweep ask for in one round, at most
+#: about (each draws 6 000 normals, 48 kB, for a 60-s trial): they all start in the
+#: first round, so they take their draws in chunks that sum to this.
+SHARED_DRAWS = 2048
 
 
 def check_specs(specs: Sequence[RunSpec]) -> None:
@@ -85,8 +91,10 @@ def execute_batch(
     def source(key: W0Key | None) -> W0Source | None:
         return None if key is None else lambda: made.get(key)
 
-    # the shared evaluations first (indices 0 .. len(keys) - 1), then the runs
-    steps: list[Steps[Any]] = [w0_steps(specs[groups[k][0]]) for k in keys]
+    # the shared evaluations first (indices 0 .. len(keys) - 1), then the runs; together
+    # they ask for at most about SHARED_DRAWS trials a round (their noise's memory)
+    chunk = max(1, min(DRAWS_AT_ONCE, SHARED_DRAWS // max(len(keys), 1)))
+    steps: list[Steps[Any]] = [w0_steps(specs[groups[k][0]], chunk) for k in keys]
     steps += [run_steps(s, w0=source(group_of.get(i))) for i, s in enumerate(specs)]
     runs = Lockstep(steps, engine)
     for i, value in runs.run():

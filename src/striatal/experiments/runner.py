@@ -40,7 +40,7 @@ from typing import Any
 
 from striatal.errors import ParameterError
 from striatal.experiments import baselines
-from striatal.experiments.evaluate import PassProbability, pass_probability_steps
+from striatal.experiments.evaluate import DRAWS_AT_ONCE, PassProbability, pass_probability_steps
 from striatal.experiments.spec import RunSpec, initial_gains
 from striatal.learners import LearnerConfig, check_config, rule_of
 from striatal.learners.common import initial_state
@@ -203,14 +203,14 @@ def shared_w0(specs: Sequence[RunSpec]) -> dict[W0Key, list[int]]:
     return {k: g for k, g in groups.items() if len(g) > 1}
 
 
-def w0_steps(spec: RunSpec) -> Steps[PassProbability]:
+def w0_steps(spec: RunSpec, chunk: int = DRAWS_AT_ONCE) -> Steps[PassProbability]:
     """W(0)'s evaluation of ``spec``'s run: the pass probability of its starting gains
     (``spec.eval_draws`` draws, noise from ``default_rng(seed)``; the row's
-    ``pass_rate_W0``)."""
+    ``pass_rate_W0``), its draws requested ``chunk`` at a time (the same result)."""
     template = spec.template.with_gains(initial_gains(spec.init, spec.seed), spec.template.theta_c)
     return (
         yield from pass_probability_steps(
-            spec.plant, template, spec.sim, Protocol(), spec.eval_draws, spec.seed
+            spec.plant, template, spec.sim, Protocol(), spec.eval_draws, spec.seed, chunk=chunk
         )
     )
 
