@@ -136,3 +136,35 @@ def test_lockstep_equals_scalar_in_every_mode(kwargs: dict[str, object]) -> None
 
 def test_lockstep_single_trial() -> None:
     _compare(Controller(), B=1)
+
+
+def test_packed_lanes_give_each_trial_its_result_alone() -> None:
+    """Trials that end at the eq-24 check or on a fault are written out and the running
+    ones packed into the first lanes: each trial's row and trace equal, bit for bit, the
+    same trial run alone (a block of one, where nothing is packed)."""
+    B = 70
+    states0, W, theta_c = _rows(B, 99)
+    noise = np.random.default_rng(5).standard_normal((B, SIM.n_steps))
+    requests = [
+        TrialRequest(
+            Plant(),
+            replace(Controller(), theta_c=theta_c[b]),
+            SIM,
+            Protocol(),
+            gains=W[b],
+            state0=states0[b],
+            gamma=0.999,
+            trace=np.zeros(6),
+        )
+        for b in range(B)
+    ]
+    args = batch_args(requests, noise)
+    kernel.run_trials_lockstep(*args)
+    outs, traces = args[-1], args[-2].trace
+    ended = outs[:, kernel.OUT_END_STEP] < SIM.n_steps
+    assert ended[2::5].all() and ended[4::5].all() and not ended.all()  # packing happened
+    for b in range(B):
+        one = batch_args([replace(requests[b], trace=np.zeros(6))], noise[b : b + 1])
+        kernel.run_trials_lockstep(*one)
+        np.testing.assert_array_equal(outs[b], one[-1][0], err_msg=f"row {b}")
+        np.testing.assert_array_equal(traces[b], one[-2].trace[0], err_msg=f"row {b}")

@@ -5,14 +5,16 @@ from __future__ import annotations
 import json
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import pytest
+from conftest import KernelCounter
 
 from striatal.cli import main
 from striatal.errors import ParameterError
-from striatal.experiments import pool, runs_csv, sweeps
+from striatal.experiments import pool, runner, runs_csv, sweeps
 from striatal.experiments.lockstep_sweep import execute_batch
 from striatal.experiments.spec import RunSpec, spawn_seeds
 from striatal.learners import LearnerConfig, default_config
@@ -24,7 +26,7 @@ from striatal.params import (
     Simulation,
 )
 from striatal.sim import kernel
-from striatal.sim.batch import LANES
+from striatal.sim.batch import LANES, drive
 
 SHORT = Simulation(duration=20.0)
 SEEDS = spawn_seeds(0, 4)
@@ -174,7 +176,10 @@ def test_trials_of_different_runs_share_kernel_calls(monkeypatch: pytest.MonkeyP
     specs = _specs(default_config("chapter", max_trials=4), eval_draws=3)
     rows = list(execute_batch(specs))
     trials = sum(r["simulations"] + r["eval_simulations"] for r in rows)
-    assert sum(sizes) == trials  # every trial of the sweep went through the batch kernel
+    # every trial of the sweep went through the batch kernel, W(0)'s evaluation (the mean
+    # policy and 3 draws) once for a learner and its control of one init and seed
+    shared = len({(r["init"], r["seed"]) for r in rows}) * (1 + 3)
+    assert sum(sizes) == trials - shared
     assert max(sizes) >= len(specs)  # trial k of every run in one call
     assert len(sizes) < trials / 4
 
@@ -282,3 +287,40 @@ def test_cli_simd_engine_gives_the_same_statistics_not_the_same_rows(
     )
     sweeps.run_sweep(specs, {"x": 1}, out=tmp_path / "api", max_trials=1, engine="simd")
     assert "trial_kernel" in json.loads((tmp_path / "api" / "sweep.json").read_text())
+
+
+def test_a_shared_w0_evaluation_gives_the_rows_of_separate_ones(counted: KernelCounter) -> None:
+    """A learner and its control of one init and seed evaluate W(0) once, in every local
+    engine; each row is the row of a run that evaluates W(0) alone, counts included."""
+    specs = _specs(default_config("chapter", max_trials=4), seeds=SEEDS[:2], eval_draws=3)
+    alone = []
+    for s in specs:  # each run alone: nothing to share with
+        (row,) = pool.execute([s])
+        alone.append(row)
+    separate = counted.calls
+    serial = list(pool.execute(specs))
+    # 2 seeds x 2 inits evaluate W(0) (the mean policy and 3 draws) once, not twice
+    assert separate - (counted.calls - separate) == 2 * 2 * (1 + 3)
+    two = list(pool.execute(specs, workers=2))
+    batch = list(execute_batch(specs))
+    for rows in (serial, two, batch):
+        assert _no_wall(runs_csv.sort_rows(rows)) == _no_wall(runs_csv.sort_rows(alone))
+        assert all(r["wall_seconds"] > 0 for r in rows)
+    assert len(runner.shared_w0(specs)) == 4
+    # nothing to share without evaluation draws, or for a run alone
+    assert runner.shared_w0(_specs(CASES["chapter"], eval_draws=0)) == {}
+    assert runner.shared_w0(specs[:1]) == {}
+
+
+def test_a_run_takes_w0_evaluation_from_its_source_or_makes_its_own() -> None:
+    (spec, *_) = _specs(default_config("chapter", max_trials=2), seeds=SEEDS[:1], eval_draws=3)
+    own = drive(runner.run_steps(spec))
+    made = runner.evaluate_w0(spec)
+    assert made.rate == own["pass_rate_W0"] and made.simulations == 4
+    # not made yet: the run makes its own, with the same result
+    assert _no_wall(drive(runner.run_steps(spec, w0=lambda: None))) == _no_wall(own)
+    # made: taken as it is (a different rate shows it was not recomputed)
+    other = replace(made, rate=0.5)
+    taken = drive(runner.run_steps(spec, w0=lambda: other))
+    assert taken["pass_rate_W0"] == 0.5
+    assert taken["eval_simulations"] == own["eval_simulations"]

@@ -27,11 +27,17 @@ swing-up and learning over many trials amplify that, so its rows are a different
 of the same experiment: the arms' success rates agree within their intervals
 (tests/test_lockstep_sweep.py, docs/performance.md), a given run's row need not.
 
+W(0)'s evaluation, which the runs of one init and seed share (a learner and its control:
+:func:`striatal.experiments.runner.shared_w0`), runs once, as a computation of its own
+beside the runs from the first round (all of them together taking at most about
+:data:`SHARED_DRAWS` draws a round); a run takes its result when it gets there (it
+makes its own should it get there first) and its row counts the trials as before.
+
 ``wall_seconds`` of a row is its share of the engine's time: its run's own Python plus
 an even share of each batched call it was in (preparing it, the kernel, reading the
-outcomes). The runs' Python and the lanes' kernel calls overlap
-(:class:`striatal.sim.batch.Lockstep`'s lanes, a worker each), so the rows of a sweep
-sum to between its wall time and three times it.
+outcomes), and an even share of a shared W(0) evaluation's time. The runs' Python and
+the lanes' kernel calls overlap (:class:`striatal.sim.batch.Lockstep`'s lanes, a worker
+each), so the rows of a sweep sum to between its wall time and three times it.
 """
 
 from __future__ import annotations
@@ -40,12 +46,18 @@ from collections.abc import Iterator, Sequence
 from typing import Any, Literal
 
 from striatal.errors import ParameterError
-from striatal.experiments.runner import run_steps
+from striatal.experiments.evaluate import DRAWS_AT_ONCE, PassProbability
+from striatal.experiments.runner import W0Key, W0Source, run_steps, shared_w0, w0_steps
 from striatal.experiments.spec import RunSpec
 from striatal.learners import check_config
-from striatal.sim.batch import BATCH_ENGINES, Lockstep
+from striatal.sim.batch import BATCH_ENGINES, Lockstep, Steps
 
-__all__ = ["BATCH_ENGINES", "check_specs", "execute_batch"]
+__all__ = ["BATCH_ENGINES", "SHARED_DRAWS", "check_specs", "execute_batch"]
+
+#: The noisy trials the shared W(0) evaluations of a sweep ask for in one round, at most
+#: about (each draws 6 000 normals, 48 kB, for a 60-s trial): they all start in the
+#: first round, so they take their draws in chunks that sum to this.
+SHARED_DRAWS = 2048
 
 
 def check_specs(specs: Sequence[RunSpec]) -> None:
@@ -70,6 +82,26 @@ def execute_batch(
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
     check_specs(specs)
-    runs = Lockstep([run_steps(s) for s in specs], engine)
-    for i, row in runs.run():
-        yield {**row, "wall_seconds": float(runs.seconds[i])}
+    groups = shared_w0(specs)
+    keys = list(groups)
+    index = {key: n for n, key in enumerate(keys)}
+    group_of = {i: key for key, members in groups.items() for i in members}
+    made: dict[W0Key, PassProbability] = {}
+
+    def source(key: W0Key | None) -> W0Source | None:
+        return None if key is None else lambda: made.get(key)
+
+    # the shared evaluations first (indices 0 .. len(keys) - 1), then the runs; together
+    # they ask for at most about SHARED_DRAWS trials a round (their noise's memory)
+    chunk = max(1, min(DRAWS_AT_ONCE, SHARED_DRAWS // max(len(keys), 1)))
+    steps: list[Steps[Any]] = [w0_steps(specs[groups[k][0]], chunk) for k in keys]
+    steps += [run_steps(s, w0=source(group_of.get(i))) for i, s in enumerate(specs)]
+    runs = Lockstep(steps, engine)
+    for i, value in runs.run():
+        if i < len(keys):
+            made[keys[i]] = value
+            continue
+        run = i - len(keys)
+        key = group_of.get(run)
+        share = 0.0 if key is None else runs.seconds[index[key]] / len(groups[key])
+        yield {**value, "wall_seconds": float(runs.seconds[i] + share)}

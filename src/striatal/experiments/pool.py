@@ -1,7 +1,10 @@
 """Where the runs of a sweep execute: a local process pool or a Ray cluster.
 
 :func:`execute` yields one row per spec (:func:`striatal.experiments.runner.run_one`),
-in completion order. Local workers die with the sweep that started them (Linux's
+in completion order. Locally, the runs that evaluate the same W(0) with the same noise
+(a learner and its control on one seed: :func:`striatal.experiments.runner.shared_w0`)
+share one evaluation, made first as a task of its own; each row still counts its
+trials. Local workers die with the sweep that started them (Linux's
 PR_SET_PDEATHSIG, and a watchdog thread where that is missing); the Ray backend waits
 for its address to answer a whole connection first (:func:`check_cluster`).
 """
@@ -19,12 +22,13 @@ import sys
 import threading
 import time
 from collections.abc import Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any, Literal
 
 from striatal.arguments import CONNECT_TIMEOUT
 from striatal.errors import ParameterError
-from striatal.experiments.runner import run_one
+from striatal.experiments.evaluate import PassProbability
+from striatal.experiments.runner import W0Key, evaluate_w0, run_one, shared_w0
 from striatal.experiments.spec import RunSpec
 from striatal.learners.config import require_count
 
@@ -130,31 +134,70 @@ def execute(
 
     local: in this process (workers 1) or a ProcessPoolExecutor of ``workers``
     processes, never more than there are specs (module-level worker, safe under spawn
-    and forkserver; each worker exits when its parent dies). ray: tasks on the existing
-    Ray cluster at ``address`` (extra [cluster]), given up after ``connect_timeout``
-    seconds if the address does not accept a connection.
+    and forkserver; each worker exits when its parent dies). The runs of a
+    :func:`~striatal.experiments.runner.shared_w0` group get W(0)'s evaluation from one
+    task made before them (:func:`~striatal.experiments.runner.evaluate_w0`), and each
+    row's ``wall_seconds`` an even share of its time. ray: tasks on the existing Ray
+    cluster at ``address`` (extra [cluster]), given up after ``connect_timeout`` seconds
+    if the address does not accept a connection; every run evaluates its own W(0).
     """
     check_backend(backend, workers, address, connect_timeout)
     if backend == "ray":
         yield from _execute_ray(specs, address, connect_timeout)
         return
+    groups = shared_w0(specs)
+    group_of = {i: key for key, members in groups.items() for i in members}
     if workers == 1 or len(specs) <= 1:
-        for spec in specs:
-            yield run_one(spec)
+        made: dict[W0Key, tuple[PassProbability, float]] = {}
+        for i, spec in enumerate(specs):
+            key = group_of.get(i)
+            if key is None:
+                yield run_one(spec)
+                continue
+            if key not in made:
+                made[key] = _timed_w0(spec)
+            result, seconds = made[key]
+            yield _with_share(run_one(spec, result), seconds / len(groups[key]))
         return
     pool = ProcessPoolExecutor(
         max_workers=min(workers, len(specs)), initializer=_worker_init, initargs=(os.getpid(),)
     )
     try:
-        pending = {pool.submit(run_one, s) for s in specs}
+        # the shared evaluations first (the pool serves its queue in order), then the
+        # runs; a group's runs are queued when its evaluation is there
+        evaluations = {pool.submit(_timed_w0, specs[g[0]]): key for key, g in groups.items()}
+        # each run's share of its group's evaluation time [s]
+        runs = {pool.submit(run_one, s): 0.0 for i, s in enumerate(specs) if i not in group_of}
+        pending: set[Future[Any]] = {*evaluations, *runs}
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
             for fut in done:
-                yield fut.result()
+                if fut in runs:
+                    yield _with_share(fut.result(), runs.pop(fut))
+                    continue
+                key = evaluations.pop(fut)
+                result, seconds = fut.result()
+                for i in groups[key]:
+                    run = pool.submit(run_one, specs[i], result)
+                    runs[run] = seconds / len(groups[key])
+                    pending.add(run)
     except BaseException:
         _stop_pool(pool)
         raise
     pool.shutdown(wait=True)
+
+
+def _timed_w0(spec: RunSpec) -> tuple[PassProbability, float]:
+    """W(0)'s evaluation of ``spec`` (:func:`striatal.experiments.runner.evaluate_w0`) and
+    the wall time it took [s]."""
+    t0 = time.perf_counter()
+    result = evaluate_w0(spec)
+    return result, time.perf_counter() - t0
+
+
+def _with_share(row: dict[str, Any], seconds: float) -> dict[str, Any]:
+    """``row`` with ``seconds`` (its share of a shared evaluation) added to its wall time."""
+    return {**row, "wall_seconds": row["wall_seconds"] + seconds} if seconds else row
 
 
 def _stop_pool(pool: ProcessPoolExecutor) -> None:

@@ -35,19 +35,19 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Hashable, Sequence
 from typing import Any
 
 from striatal.errors import ParameterError
 from striatal.experiments import baselines
-from striatal.experiments.evaluate import pass_probability_steps
+from striatal.experiments.evaluate import DRAWS_AT_ONCE, PassProbability, pass_probability_steps
 from striatal.experiments.spec import RunSpec, initial_gains
 from striatal.learners import LearnerConfig, check_config, rule_of
 from striatal.learners.common import initial_state
 from striatal.learners.loop import learn_steps
 from striatal.learners.state import LearnerState, TrialRecord
 from striatal.params import Controller, Plant, Simulation
-from striatal.sim.batch import Steps, TrialRequest, drive
+from striatal.sim.batch import Steps, TrialRequest, drive, driven
 from striatal.sim.robust import check_robust
 from striatal.sim.rollout import Protocol
 
@@ -156,12 +156,13 @@ def search(
     raise ParameterError(f"unknown method {spec.method!r}; choose from {', '.join(METHODS)}")
 
 
-def run_one(spec: RunSpec) -> dict[str, Any]:
+def run_one(spec: RunSpec, w0: PassProbability | None = None) -> dict[str, Any]:
     """One run -> one row (RUN_COLUMNS), its trials on the scalar kernel, or on the
     spiking network of ``spec.network`` (:func:`striatal.neural.driver.network_drive`,
     network seed = the run's seed; the row also carries ``trial_rewards``, each learning
     trial's reward, for the sweep's trials.csv). Pure: the same spec gives the same row
-    (except wall_seconds). :func:`run_steps` for other drivers."""
+    (except wall_seconds). :func:`run_steps` for other drivers; ``w0``: W(0)'s evaluation
+    when another run of the same :func:`w0_key` has made it (:func:`evaluate_w0`)."""
     if spec.network is not None:
         from striatal.neural.driver import network_drive
 
@@ -173,17 +174,64 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
             spec.network.simulator,
         )
         return {**row, "trial_rewards": rewards}
-    return drive(run_steps(spec))
+    return drive(run_steps(spec, w0=None if w0 is None else lambda: w0))
 
 
-def run_steps(spec: RunSpec, on_trial: OnTrial | None = None) -> Steps[dict[str, Any]]:
+#: What identifies W(0)'s evaluation of a run (:func:`w0_key`).
+W0Key = tuple[Hashable, ...]
+#: Where a run finds W(0)'s evaluation made by another run: None, not (yet) made.
+W0Source = Callable[[], PassProbability | None]
+
+
+def w0_key(spec: RunSpec) -> W0Key | None:
+    """What W(0)'s evaluation of ``spec`` depends on: runs with the same key (a learner,
+    its control and the baselines of one init and seed) evaluate the same W(0) with the
+    same noise, so one evaluation serves them all. None: nothing to share (no evaluation
+    draws, or the trials run on a spiking network)."""
+    if spec.eval_draws <= 0 or spec.network is not None:
+        return None
+    return (spec.init, spec.seed, spec.template, spec.plant, spec.sim, spec.eval_draws)
+
+
+def shared_w0(specs: Sequence[RunSpec]) -> dict[W0Key, list[int]]:
+    """The indices of ``specs`` by :func:`w0_key`, for the keys that two or more share."""
+    groups: dict[W0Key, list[int]] = {}
+    for i, spec in enumerate(specs):
+        key = w0_key(spec)
+        if key is not None:
+            groups.setdefault(key, []).append(i)
+    return {k: g for k, g in groups.items() if len(g) > 1}
+
+
+def w0_steps(spec: RunSpec, chunk: int = DRAWS_AT_ONCE) -> Steps[PassProbability]:
+    """W(0)'s evaluation of ``spec``'s run: the pass probability of its starting gains
+    (``spec.eval_draws`` draws, noise from ``default_rng(seed)``; the row's
+    ``pass_rate_W0``), its draws requested ``chunk`` at a time (the same result)."""
+    template = spec.template.with_gains(initial_gains(spec.init, spec.seed), spec.template.theta_c)
+    return (
+        yield from pass_probability_steps(
+            spec.plant, template, spec.sim, Protocol(), spec.eval_draws, spec.seed, chunk=chunk
+        )
+    )
+
+
+#: :func:`w0_steps` on the scalar kernel.
+evaluate_w0 = driven(w0_steps)
+
+
+def run_steps(
+    spec: RunSpec, on_trial: OnTrial | None = None, w0: W0Source | None = None
+) -> Steps[dict[str, Any]]:
     """:func:`run_one` as :data:`striatal.sim.batch.Steps`.
 
     After the search: one noise-free re-simulation of the final gains
     (``mean_policy_success``) and, with ``spec.eval_draws`` > 0, the pass probability
     (:func:`striatal.experiments.evaluate.pass_probability`, noise from ``default_rng(seed)``) of
-    W(0) and of the final gains; their trials are ``eval_simulations``, apart from the
-    arm's budget ``simulations``.
+    W(0) (:func:`w0_steps`) and of the final gains; their trials are ``eval_simulations``,
+    apart from the arm's budget ``simulations``. ``w0``: asked for W(0)'s evaluation when
+    the run needs it, made by another run of the same :func:`w0_key` (the same result:
+    the same gains, trials and noise); the run makes its own when it answers None. The
+    row counts that evaluation's trials either way.
     """
     t0 = time.perf_counter()
     W0 = initial_gains(spec.init, spec.seed)
@@ -205,9 +253,9 @@ def run_steps(spec: RunSpec, on_trial: OnTrial | None = None) -> Steps[dict[str,
         robust, evals = float(report.robust), evals + report.simulations
     rate0 = rate = math.nan
     if spec.eval_draws > 0:
-        before = yield from pass_probability_steps(
-            spec.plant, template, spec.sim, Protocol(), spec.eval_draws, spec.seed
-        )
+        before = None if w0 is None else w0()
+        if before is None:
+            before = yield from w0_steps(spec)
         rate0, evals = before.rate, evals + before.simulations
         if final is not None:
             after = yield from pass_probability_steps(

@@ -380,9 +380,13 @@ def learn_steps(
     on_trial: Callable[[LearnerState, TrialRecord], None] | None = None,
 ) -> Steps[LearnerState]:
     """:func:`learn`'s trials from ``state`` as :data:`striatal.sim.batch.Steps`: the
-    learning steps until success or ``config.max_trials``; returns the last state."""
+    learning steps until success or ``config.max_trials``; returns the last state. The
+    steps share one generator, its state set from each step's ``rng_state``."""
+    rng = np.random.Generator(np.random.PCG64(_BLANK))
     while not state.success and state.trials_done < config.max_trials:
-        state, record = yield from learning_steps(state, plant, template, sim, protocol, config)
+        state, record = yield from learning_steps(
+            state, plant, template, sim, protocol, config, rng
+        )
         if on_trial is not None:
             on_trial(state, record)
     return state

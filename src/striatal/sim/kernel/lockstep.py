@@ -77,13 +77,20 @@ def _lockstep_block(
     The state array always has LOCKSTEP_BLOCK lanes (a compile-time row stride, so the
     loops over lanes vectorise without run-time alias checks); the loops step the
     trials rounded up to a multiple of 4, the extra lanes idle copies of the first
-    trial, inactive from the start.
+    trial, inactive from the start. When trials end (at the eq-24 check, on a fault)
+    and the running ones fit in fewer vectors of 4, the ended ones are written out and
+    the running ones packed into the first lanes (:func:`_pack`), so the loops step
+    fewer lanes; a lane's arithmetic does not depend on its place, so the results
+    are the same.
     """
     states0, gains, plant, control, protocol, noise, learning = args
     n = hi - lo
     # lanes actually stepped: the trials rounded up to a multiple of 4 (one AVX2
     # vector); the array keeps LOCKSTEP_BLOCK lanes so its row stride is a constant
     L = min(LOCKSTEP_BLOCK, (n + 3) // 4 * 4)
+    # lane j holds trial lo + trial[j], for j < live (the lanes not yet written out)
+    trial = np.arange(LOCKSTEP_BLOCK)
+    live = n
     S = np.zeros((_N_FIELDS, LOCKSTEP_BLOCK))
     status = np.full(LOCKSTEP_BLOCK, STATUS_RUNNING)
     end_step = np.full(LOCKSTEP_BLOCK, protocol.n_steps)
@@ -136,8 +143,8 @@ def _lockstep_block(
         if act:
             hold = control.action_every
             if stochastic:
-                for j in range(n):
-                    S[_F_EPS, j] = noise[lo + j, draw]
+                for j in range(live):
+                    S[_F_EPS, j] = noise[lo + trial[j], draw]
             draw += 1
         hold -= 1
         # pass 1: switch and statistics
@@ -245,21 +252,76 @@ def _lockstep_block(
                         n_active -= 1
                     if st != STATUS_FAULT and abs(S[_F_X, j]) > S[_F_MAXX, j]:
                         S[_F_MAXX, j] = abs(S[_F_X, j])
+            if k < n_steps and (n_active + 3) // 4 * 4 < L:
+                live = _pack(
+                    S, live, lo, trial, status, reward, end_step, outs, learning, stochastic
+                )
+                L = (live + 3) // 4 * 4
         else:
             for j in range(L):
                 ax = abs(S[_F_X, j])
                 mx = S[_F_MAXX, j]
                 S[_F_MAXX, j] = ax if (S[_F_ACTIVE, j] > 0.0 and ax > mx) else mx
-    for j in range(n):
-        b = lo + j
-        tally = Tally(
-            S[_F_MINSW, j], S[_F_MINALL, j], int(S[_F_NSW, j]), -1, S[_F_MAXX, j], S[_F_MAXF, j]
-        )
-        x, x_dot, theta, theta_dot = S[_F_X, j], S[_F_XD, j], S[_F_TH, j], S[_F_THD, j]
-        write_summary(outs[b], status[j], reward[j], end_step[j], x, x_dot, theta, theta_dot, tally)
-        if stochastic:
-            for i in range(6):
-                learning.trace[b, i] = S[_F_D0 + i, j]
+    for j in range(live):
+        _write_lane(S, j, lo + trial[j], status, reward, end_step, outs, learning, stochastic)
+
+
+@njit(cache=True, inline="always")
+def _write_lane(
+    S: np.ndarray,
+    j: int,
+    b: int,
+    status: np.ndarray,
+    reward: np.ndarray,
+    end_step: np.ndarray,
+    outs: np.ndarray,
+    learning: TraceArgs,
+    stochastic: bool,
+) -> None:
+    """Write lane j of a lockstep block's state ``S`` as trial b's summary row (and its
+    trace, when the trials draw noise)."""
+    tally = Tally(
+        S[_F_MINSW, j], S[_F_MINALL, j], int(S[_F_NSW, j]), -1, S[_F_MAXX, j], S[_F_MAXF, j]
+    )
+    x, x_dot, theta, theta_dot = S[_F_X, j], S[_F_XD, j], S[_F_TH, j], S[_F_THD, j]
+    write_summary(outs[b], status[j], reward[j], end_step[j], x, x_dot, theta, theta_dot, tally)
+    if stochastic:
+        for i in range(6):
+            learning.trace[b, i] = S[_F_D0 + i, j]
+
+
+@njit(cache=True)
+def _pack(
+    S: np.ndarray,
+    m: int,
+    lo: int,
+    trial: np.ndarray,
+    status: np.ndarray,
+    reward: np.ndarray,
+    end_step: np.ndarray,
+    outs: np.ndarray,
+    learning: TraceArgs,
+    stochastic: bool,
+) -> int:
+    """Write out the ended trials of lanes 0..m-1 and move the running ones, in order, to
+    the first lanes (state, outcome so far, ``trial``); the number of running lanes.
+    The lanes after them up to the next multiple of 4 are left inactive."""
+    p = 0
+    for j in range(m):
+        if S[_F_ACTIVE, j] > 0.0:
+            if p != j:
+                for f in range(_N_FIELDS):
+                    S[f, p] = S[f, j]
+                status[p] = status[j]
+                reward[p] = reward[j]
+                end_step[p] = end_step[j]
+                trial[p] = trial[j]
+            p += 1
+        else:
+            _write_lane(S, j, lo + trial[j], status, reward, end_step, outs, learning, stochastic)
+    for j in range(p, (p + 3) // 4 * 4):
+        S[_F_ACTIVE, j] = 0.0
+    return p
 
 
 @njit(cache=True, parallel=True, nogil=True, error_model="numpy")
