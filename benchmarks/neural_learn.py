@@ -24,7 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from dataclasses import replace
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -97,14 +97,53 @@ def run_network_side(args: argparse.Namespace, seed: int) -> None:
     )
 
 
+def _lockstep(
+    args: argparse.Namespace,
+    base: Callable[[int, float], dict[str, Any]],
+    step: Callable[[int, float, int, dict[str, Any] | None], tuple[list[dict[str, Any]], Any]],
+) -> None:
+    """Trial k of every seed and alpha before trial k + 1, so that a run stopped at any
+    time leaves every arm with the same trials per seed.
+
+    ``step(seed, alpha, k, old)`` continues the run of (seed, alpha) from ``old`` (its last
+    ``"state"`` row, None for a new run) up to k trials and returns that trial's rows and
+    the new state row (a :class:`LearnerState` dict under ``"state"``, written with the
+    rows in one write: a stopped run has both or none). A rerun with the same ``--out``
+    continues each (seed, alpha) from its last state row of the same settings."""
+    own = ("seed", "alpha", "kind", "state", "neurons")
+    settings = {k: v for k, v in base(0, 0.0).items() if k not in own}
+    last: dict[tuple[int, float], dict[str, Any]] = {}
+    if args.out.exists():
+        for line in args.out.read_text().splitlines():
+            row = json.loads(line) if line else {}
+            if (
+                row.get("kind") != "state"
+                or {k: v for k, v in row.items() if k not in own} != settings
+            ):
+                continue
+            key = (int(row["seed"]), float(row["alpha"]))
+            if key[0] in args.seeds and key[1] in args.alpha:
+                last[key] = row
+    for k in range(1, args.trials + 1):
+        for seed in args.seeds:
+            for alpha in args.alpha:
+                old = last.get((seed, alpha))
+                if old is not None and (
+                    old["state"]["trials_done"] >= k or old["state"]["success"]
+                ):
+                    continue
+                rows, state_row = step(seed, alpha, k, old)
+                last[(seed, alpha)] = state_row
+                with args.out.open("a") as fh:
+                    fh.write("".join(json.dumps(row) + "\n" for row in rows))
+                    fh.write(json.dumps(state_row) + "\n")
+
+
 def run_network_lockstep(args: argparse.Namespace) -> None:
-    """``--side network --lockstep``: trial k of every seed and alpha before trial k + 1,
-    so that a run stopped at any time leaves every arm with the same trials per seed.
+    """``--side network --lockstep``: :func:`_lockstep` of the chapter's rule on the network.
 
     Each (seed, alpha) is one :func:`striatal.neural.driver.learn_network` run continued
-    one trial at a time (``resume=``, equal to one run in one go, tested); each trial's
-    row is written with a ``"state"`` row holding the learner state it left, and a rerun
-    with the same ``--out`` continues from the last one of each (seed, alpha)."""
+    one trial at a time (``resume=``, equal to one run in one go, tested)."""
     from striatal.experiments.spec import initial_gains
     from striatal.learners.state import LearnerState
     from striatal.neural.driver import NeuralLearning, NeuralTrial, learn_network
@@ -122,116 +161,161 @@ def run_network_lockstep(args: argparse.Namespace) -> None:
             "init": args.init,
         }
 
-    def controller(seed: int) -> Controller:
-        return Controller(gains=initial_gains(args.init, seed), theta_c=CHAPTER_INITIAL_THETA_C)
+    def step(
+        seed: int, alpha: float, k: int, old: dict[str, Any] | None
+    ) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+        ctl = Controller(gains=initial_gains(args.init, seed), theta_c=CHAPTER_INITIAL_THETA_C)
+        resume = None
+        if old is not None:
+            state = LearnerState.from_dict(old["state"])
+            resume = NeuralLearning(
+                trials=(),
+                W=state.W,
+                theta_c=state.theta_c,
+                W0=tuple(float(w) for w in ctl.gains),
+                theta_c0=float(ctl.theta_c),
+                solved=state.success,
+                seed=seed,
+                neurons=int(old["neurons"]),
+                config=default_config("chapter", reward="sparse", alpha=alpha),
+                state=state,
+            )
+        rows: list[dict[str, Any]] = []
 
-    runs: dict[tuple[int, float], NeuralLearning] = {}
-    if args.out.exists():
-        keys = ("side", "neurons_requested", "duration", "simulator", "init")
-        for line in args.out.read_text().splitlines():
-            row = json.loads(line) if line else {}
-            if row.get("kind") != "state" or any(row[k] != base(0, 0.0)[k] for k in keys):
-                continue
-            key = (int(row["seed"]), float(row["alpha"]))
-            if key[0] in args.seeds and key[1] in args.alpha:
-                ctl = controller(key[0])
-                state = LearnerState.from_dict(row["state"])
-                runs[key] = NeuralLearning(
-                    trials=(),
-                    W=state.W,
-                    theta_c=state.theta_c,
-                    W0=tuple(float(w) for w in ctl.gains),
-                    theta_c0=float(ctl.theta_c),
-                    solved=state.success,
-                    seed=key[0],
-                    neurons=int(row["neurons"]),
-                    config=default_config("chapter", reward="sparse", alpha=key[1]),
-                    state=state,
-                )
-    for k in range(1, args.trials + 1):
-        for seed in args.seeds:
-            for alpha in args.alpha:
-                old = runs.get((seed, alpha))
-                if old is not None and (old.state.trials_done >= k or old.solved):
-                    continue
+        def on_trial(t: NeuralTrial) -> None:
+            rows.append({**base(seed, alpha), "kind": "trial", **t.to_dict()})
+            print(
+                f"network seed={seed} alpha={alpha:g} trial={t.trial} "
+                f"reward={t.reward:+g} cpu={t.cpu_time:.2f}s",
+                file=sys.stderr,
+                flush=True,
+            )
 
-                rows: list[dict[str, Any]] = []
+        r = learn_network(
+            ctl,
+            Plant(),
+            Simulation(duration=args.duration),
+            NetworkConfig(neurons=args.neurons),
+            seed,
+            trials=k,
+            alpha=alpha,
+            on_trial=on_trial,
+            simulator=args.simulator,
+            resume=resume,
+        )
+        state_row = {**base(seed, alpha), "kind": "state", "neurons": r.neurons}
+        return rows, {**state_row, "state": r.state.to_dict()}
 
-                def on_trial(
-                    t: NeuralTrial,
-                    seed: int = seed,
-                    alpha: float = alpha,
-                    rows: list[dict[str, Any]] = rows,
-                ) -> None:
-                    rows.append({**base(seed, alpha), "kind": "trial", **t.to_dict()})
-                    print(
-                        f"network seed={seed} alpha={alpha:g} trial={t.trial} "
-                        f"reward={t.reward:+g} cpu={t.cpu_time:.2f}s",
-                        file=sys.stderr,
-                        flush=True,
-                    )
+    _lockstep(args, base, step)
 
-                r = learn_network(
-                    controller(seed),
-                    Plant(),
-                    Simulation(duration=args.duration),
-                    NetworkConfig(neurons=args.neurons),
-                    seed,
-                    trials=k,
-                    alpha=alpha,
-                    on_trial=on_trial,
-                    simulator=args.simulator,
-                    resume=old,
-                )
-                runs[(seed, alpha)] = replace(r, trials=())
-                state = {**base(seed, alpha), "kind": "state", "neurons": r.neurons}
-                # the trial and the state it left in one write: a stopped run has both or none
-                with args.out.open("a") as fh:
-                    fh.write("".join(json.dumps(row) + "\n" for row in rows))
-                    fh.write(json.dumps({**state, "state": r.state.to_dict()}) + "\n")
+
+def run_loop_lockstep(args: argparse.Namespace) -> None:
+    """``--side loop --lockstep``: :func:`_lockstep` of rule ``--learner`` through the
+    project's learning loop on the network (:func:`striatal.neural.driver.learn_with_rule`
+    continued from its state, equal to one run in one go, tested)."""
+    from striatal.experiments.spec import initial_gains
+    from striatal.learners.state import LearnerState
+    from striatal.neural.driver import learn_with_rule
+    from striatal.neural.network import NetworkConfig
+    from striatal.params import Plant
+
+    def base(seed: int, alpha: float) -> dict[str, Any]:
+        return {
+            **_loop_base(args, seed, alpha),
+            "neurons_requested": args.neurons,
+            "simulator": args.simulator,
+        }
+
+    def step(
+        seed: int, alpha: float, k: int, old: dict[str, Any] | None
+    ) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+        rows: list[dict[str, Any]] = []
+
+        def on_trial(_state: Any, rec: Any) -> None:
+            rows.append({**base(seed, alpha), "kind": "trial", **_record(rec)})
+            print(
+                f"loop-{args.learner} seed={seed} alpha={alpha:g} trial={rec.trial} "
+                f"reward={rec.reward:+g}",
+                file=sys.stderr,
+                flush=True,
+            )
+
+        state = learn_with_rule(
+            args.learner,
+            Controller(gains=initial_gains(args.init, seed), theta_c=CHAPTER_INITIAL_THETA_C),
+            Plant(),
+            Simulation(duration=args.duration),
+            NetworkConfig(neurons=args.neurons),
+            seed,
+            trials=k,
+            simulator=args.simulator,
+            on_trial=on_trial,
+            state=None if old is None else LearnerState.from_dict(old["state"]),
+            **_options(args, alpha),
+        )
+        return rows, {**base(seed, alpha), "kind": "state", "state": state.to_dict()}
+
+    _lockstep(args, base, step)
+
+
+def _options(args: argparse.Namespace, alpha: float) -> dict[str, Any]:
+    """The rule's options: alpha, its declared control's (pgpe: sigma_rate 0 with alpha 0),
+    and ``--theta-c-rule`` if given."""
+    options: dict[str, Any] = {"alpha": alpha}
+    if args.learner == "pgpe" and alpha == 0:
+        options["sigma_rate"] = 0.0
+    if args.theta_c_rule is not None:
+        options["theta_c_rule"] = args.theta_c_rule
+    return options
+
+
+def _loop_base(args: argparse.Namespace, seed: int, alpha: float) -> dict[str, Any]:
+    chapter_rate = args.side == "rate" and args.learner == "chapter"
+    side = "rate" if chapter_rate else f"{args.side}-{args.learner}"
+    row = {"side": side, "seed": seed, "duration": args.duration, "alpha": alpha}
+    row["init"] = args.init
+    if args.theta_c_rule is not None:
+        row["theta_c_rule"] = args.theta_c_rule
+    return row
+
+
+def _record(rec: Any) -> dict[str, Any]:
+    return {
+        "trial": rec.trial,
+        "W": list(rec.W),
+        "theta_c": rec.theta_c,
+        "reward": rec.reward,
+        "success": rec.success,
+        "fault": rec.fault,
+    }
 
 
 def run_loop_side(args: argparse.Namespace, seed: int) -> None:
     """``--side loop``: rule ``--learner`` through the project's learning loop, its trials
     on the network (:func:`striatal.neural.driver.learn_with_rule`); alpha 0 (and pgpe's
     sigma_rate 0) is the rule's no-learning control."""
+    from striatal.experiments.spec import initial_gains
     from striatal.neural.driver import learn_with_rule
     from striatal.neural.network import NetworkConfig
     from striatal.params import Plant
 
     base = {
-        "side": f"loop-{args.learner}",
-        "seed": seed,
+        **_loop_base(args, seed, args.alpha),
         "neurons_requested": args.neurons,
-        "duration": args.duration,
-        "alpha": args.alpha,
         "simulator": args.simulator,
     }
 
     def on_trial(_state: Any, rec: Any) -> None:
-        append(
-            args.out,
-            {
-                **base,
-                "kind": "trial",
-                "trial": rec.trial,
-                "W": list(rec.W),
-                "theta_c": rec.theta_c,
-                "reward": rec.reward,
-                "success": rec.success,
-                "fault": rec.fault,
-            },
-        )
+        append(args.out, {**base, "kind": "trial", **_record(rec)})
         print(
             f"loop-{args.learner} seed={seed} trial={rec.trial} reward={rec.reward:+g}",
             file=sys.stderr,
             flush=True,
         )
 
-    control = {"sigma_rate": 0.0} if args.learner == "pgpe" and args.alpha == 0 else {}
     state = learn_with_rule(
         args.learner,
-        Controller(gains=CHAPTER_INITIAL_W, theta_c=CHAPTER_INITIAL_THETA_C),
+        Controller(gains=initial_gains(args.init, seed), theta_c=CHAPTER_INITIAL_THETA_C),
         Plant(),
         Simulation(duration=args.duration),
         NetworkConfig(neurons=args.neurons),
@@ -239,65 +323,35 @@ def run_loop_side(args: argparse.Namespace, seed: int) -> None:
         trials=args.trials,
         simulator=args.simulator,
         on_trial=on_trial,
-        alpha=args.alpha,
-        **control,
+        **_options(args, args.alpha),
     )
-    append(
-        args.out,
-        {
-            **base,
-            "kind": "final",
-            "W": list(state.W),
-            "theta_c": state.theta_c,
-            "solved": state.success,
-        },
-    )
+    final = {"W": list(state.W), "theta_c": state.theta_c, "solved": state.success}
+    append(args.out, {**base, "kind": "final", **final})
 
 
 def run_rate_side(args: argparse.Namespace, seed: int) -> None:
+    """``--side rate``: ``striatal.train`` of rule ``--learner`` from the same W(0) and
+    theta_c(0), with the same options and the sparse reward of eq 25."""
     import striatal
-
-    base = {
-        "side": "rate" if args.learner == "chapter" else f"rate-{args.learner}",
-        "seed": seed,
-        "duration": args.duration,
-        "alpha": args.alpha,
-        "init": args.init,
-    }
-
-    def on_trial(_state: Any, rec: Any) -> None:
-        append(
-            args.out,
-            {
-                **base,
-                "kind": "trial",
-                "trial": rec.trial,
-                "W": list(rec.W),
-                "theta_c": rec.theta_c,
-                "reward": rec.reward,
-                "success": rec.success,
-                "fault": rec.fault,
-            },
-        )
-
     from striatal.experiments.spec import initial_gains
 
-    control = {"sigma_rate": 0.0} if args.learner == "pgpe" and args.alpha == 0 else {}
+    base = _loop_base(args, seed, args.alpha)
+
+    def on_trial(_state: Any, rec: Any) -> None:
+        append(args.out, {**base, "kind": "trial", **_record(rec)})
+
     run = striatal.train(
         args.learner,
         init_gains=initial_gains(args.init, seed),
         seed=seed,
         sim=Simulation(duration=args.duration),
         max_trials=args.trials,
-        alpha=args.alpha,
         reward="sparse",
         on_trial=on_trial,
-        **control,
+        **_options(args, args.alpha),
     )
-    append(
-        args.out,
-        {**base, "kind": "final", "W": list(run.W), "theta_c": run.theta_c, "solved": run.success},
-    )
+    final = {"W": list(run.W), "theta_c": run.theta_c, "solved": run.success}
+    append(args.out, {**base, "kind": "final", **final})
 
 
 def summarize(paths: list[Path]) -> None:
@@ -366,7 +420,8 @@ def _groups(paths: list[Path], max_trial: int) -> dict[str, dict[int, list[bool]
             r["side"] if simulator == "nengo" or r["side"] != "network" else f"network-{simulator}"
         )
         init = "" if r.get("init", "chapter") == "chapter" else f" init={r['init']}"
-        name = f"{side}{init} alpha={r['alpha']:g}"
+        rule = f" theta_c={r['theta_c_rule']}" if "theta_c_rule" in r else ""
+        name = f"{side}{init}{rule} alpha={r['alpha']:g}"
         out.setdefault(name, {}).setdefault(r["seed"], []).append(r["reward"] > 0)
         if r["success"]:
             solved.setdefault(name, set()).add(r["seed"])
@@ -553,10 +608,17 @@ def main() -> int:
     )
     parser.add_argument("--out", type=Path)
     parser.add_argument(
+        "--theta-c-rule",
+        choices=("swingup", "trial", "clamped", "fixed", "learned"),
+        default=None,
+        help="--side rate or loop: the rule's eq-21 reading instead of its preset's "
+        "(learners.common.theta_c_rule; 'fixed' keeps theta_c(0))",
+    )
+    parser.add_argument(
         "--lockstep",
         action="store_true",
-        help="--side network: trial k of every seed and alpha before trial k + 1 (a stopped "
-        "run leaves every arm with the same trials per seed); a rerun continues --out",
+        help="--side network or loop: trial k of every seed and alpha before trial k + 1 (a "
+        "stopped run leaves every arm with the same trials per seed); a rerun continues --out",
     )
     parser.add_argument("--figure", type=Path, help="with --summary: also draw W per trial here")
     parser.add_argument(
@@ -579,10 +641,15 @@ def main() -> int:
     side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
     if args.learner is None:
         args.learner = "pgpe" if args.side == "loop" else "chapter"
+    if args.side == "network" and args.theta_c_rule is not None:
+        parser.error(
+            "--side network runs the chapter's options: give --side loop --learner chapter "
+            "for another --theta-c-rule"
+        )
     if args.lockstep:
-        if args.side != "network":
-            parser.error("--lockstep runs --side network only")
-        run_network_lockstep(args)
+        if args.side == "rate":
+            parser.error("--lockstep runs the network sides (network, loop) only")
+        (run_network_lockstep if args.side == "network" else run_loop_lockstep)(args)
         return 0
     for seed in args.seeds:
         for alpha in args.alpha:
