@@ -403,33 +403,90 @@ def summarize(paths: list[Path]) -> None:
             )
 
 
-def _groups(paths: list[Path], max_trial: int) -> dict[str, dict[int, list[bool]]]:
-    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial.
+#: The columns of a trimmed trial table (``--trim``): what ``--compare``, its figure and
+#: ``benchmarks/eq21_ratchet.py`` read, and the trial's end (x, theta at T; network only).
+TRIM_COLUMNS = (
+    "side", "simulator", "init", "theta_c_rule", "alpha", "seed", "trial",
+    "reward", "success", "fault", "theta_c", "x_final", "theta_final",
+)  # fmt: skip
+
+
+def trial_rows(paths: list[Path]) -> list[dict[str, Any]]:
+    """The trial rows of ``benchmarks/neural_learn.py`` files (JSONL) or of their trimmed
+    tables (``.csv``, :data:`TRIM_COLUMNS`; empty cells are absent keys)."""
+    import csv
+
+    rows: list[dict[str, Any]] = []
+    for path in paths:
+        if path.suffix != ".csv":
+            got = (json.loads(line) for line in path.read_text().splitlines() if line)
+            rows += [r for r in got if r["kind"] == "trial"]
+            continue
+        with path.open(newline="") as fh:
+            for r in csv.DictReader(fh):
+                row: dict[str, Any] = {k: v for k, v in r.items() if v != ""}
+                for k in ("alpha", "reward", "theta_c", "x_final", "theta_final"):
+                    if k in row:
+                        row[k] = float(row[k])
+                for k in ("seed", "trial"):
+                    row[k] = int(row[k])
+                for k in ("success", "fault"):
+                    row[k] = row[k] == "True"
+                rows.append({**row, "kind": "trial"})
+    return rows
+
+
+def trim(path: Path, out: Path) -> None:
+    """Write ``path``'s trial rows as a table of :data:`TRIM_COLUMNS` (atomically)."""
+    import csv
+    import io
+    import os
+
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=TRIM_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    for r in trial_rows([path]):
+        end = r.get("final_state")
+        row = {k: r.get(k, "") for k in TRIM_COLUMNS}
+        row["x_final"] = "" if end is None else f"{end[0]:.4f}"
+        row["theta_final"] = "" if end is None else f"{end[2]:.4f}"
+        row["theta_c"] = f"{r['theta_c']:.5f}"
+        writer.writerow(row)
+    tmp = out.with_name(out.name + ".tmp")
+    tmp.write_text(buf.getvalue())
+    os.replace(tmp, out)
+
+
+def _groups(
+    paths: list[Path], max_trial: int
+) -> tuple[dict[str, dict[int, list[bool]]], dict[str, int]]:
+    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial, and per
+    group the number of trials filled in after a passed success test.
 
     A run that passed the chapter's success test ended there (as ``striatal train`` does);
     its later trials count as +10 (the success box at T_f lies inside eq 25's)."""
-    rows = [json.loads(line) for p in paths for line in p.read_text().splitlines() if line]
     out: dict[str, dict[int, list[bool]]] = {}
     solved: dict[str, set[int]] = {}
     for r in sorted(
-        (r for r in rows if r["kind"] == "trial" and r["trial"] <= max_trial),
-        key=lambda r: r["trial"],
+        (r for r in trial_rows(paths) if r["trial"] <= max_trial), key=lambda r: r["trial"]
     ):
         simulator = r.get("simulator", "nengo")
         side = (
             r["side"] if simulator == "nengo" or r["side"] != "network" else f"network-{simulator}"
         )
         init = "" if r.get("init", "chapter") == "chapter" else f" init={r['init']}"
-        rule = f" theta_c={r['theta_c_rule']}" if "theta_c_rule" in r else ""
+        rule = f" theta_c={r['theta_c_rule']}" if r.get("theta_c_rule") else ""
         name = f"{side}{init}{rule} alpha={r['alpha']:g}"
         out.setdefault(name, {}).setdefault(r["seed"], []).append(r["reward"] > 0)
         if r["success"]:
             solved.setdefault(name, set()).add(r["seed"])
+    filled = dict.fromkeys(out, 0)
     for name, seeds in solved.items():
         for s in seeds:
             got = out[name][s]
+            filled[name] += max_trial - len(got)
             got.extend([True] * (max_trial - len(got)))
-    return out
+    return out, filled
 
 
 def compare(paths: list[Path], max_trial: int) -> None:
@@ -443,7 +500,7 @@ def compare(paths: list[Path], max_trial: int) -> None:
 
     from striatal.experiments.stats import mcnemar_test, wilson_interval
 
-    groups = _groups(paths, max_trial)
+    groups, filled = _groups(paths, max_trial)
     for name, seeds in groups.items():
         k = sum(sum(v) for v in seeds.values())
         n = sum(len(v) for v in seeds.values())
@@ -454,6 +511,12 @@ def compare(paths: list[Path], max_trial: int) -> None:
             f"(95 % Wilson {ci.low or 0:.2f}-{ci.high or 0:.2f}); last trial +10 in "
             f"{sum(last)}/{len(last)} seeds"
         )
+        if filled[name]:
+            f = filled[name]
+            print(
+                f"  of which {f} after a passed success test; in the {n - f} trials run "
+                f"+10 in {k - f} = {(k - f) / (n - f):.2f}"
+            )
         third = min(len(v) for v in seeds.values()) // 3
         if third >= 1:
             parts = []
@@ -498,8 +561,11 @@ def compare(paths: list[Path], max_trial: int) -> None:
         )
 
 
-def curve_figure(paths: list[Path], max_trial: int, out: Path) -> None:
-    """Fraction of seeds rewarded +10 at each trial, with its 95 % Wilson band, per group."""
+def curve_figure(
+    paths: list[Path], max_trial: int, out: Path, *, block: int = 1, title: str | None = None
+) -> None:
+    """Fraction rewarded +10 per block of ``block`` trials (over the block's trials of all
+    seeds), with its 95 % Wilson band, per group."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -507,23 +573,24 @@ def curve_figure(paths: list[Path], max_trial: int, out: Path) -> None:
 
     from striatal.experiments.stats import wilson_interval
 
-    groups = _groups(paths, max_trial)
+    groups, _filled = _groups(paths, max_trial)
     fig, ax = plt.subplots(figsize=(7, 4), constrained_layout=True)
     for i, (name, seeds) in enumerate(sorted(groups.items())):
         n_trials = min(len(v) for v in seeds.values())
-        t = np.arange(1, n_trials + 1)
-        k = np.array([sum(v[j] for v in seeds.values()) for j in range(n_trials)])
-        n = len(seeds)
+        starts = np.arange(0, n_trials - block + 1, block)
+        k = np.array([sum(sum(v[j : j + block]) for v in seeds.values()) for j in starts])
+        n = len(seeds) * block
         cis = [wilson_interval(int(kk), n) for kk in k]
-        ax.plot(t, k / n, marker="o", ms=3, color=f"C{i}", label=f"{name} ({n} seeds)")
+        t = starts + (block + 1) / 2
+        ax.plot(t, k / n, marker="o", ms=3, color=f"C{i}", label=f"{name} ({len(seeds)} seeds)")
         ax.fill_between(
             t, [c.low or 0 for c in cis], [c.high or 0 for c in cis], color=f"C{i}", alpha=0.12
         )
-    ax.set_xlabel("trial")
-    ax.set_ylabel("fraction of seeds rewarded +10 (eq 25)")
+    ax.set_xlabel("trial" if block == 1 else f"trial (blocks of {block})")
+    ax.set_ylabel("fraction rewarded +10 (eq 25)")
     ax.set_ylim(-0.02, 1.02)
     ax.legend(fontsize=7)
-    ax.set_title("from the chapter's W(0), 30-s trials, seeds 0-19", fontsize=10)
+    ax.set_title(title or "from the chapter's W(0), 30-s trials, seeds 0-19", fontsize=10)
     fig.savefig(out, dpi=110)
 
 
@@ -581,6 +648,17 @@ def main() -> int:
         help="rates with Wilson intervals and paired tests over trials 1..--trials of these "
         "files (with --figure: the learning curves) and stop",
     )
+    parser.add_argument(
+        "--trim",
+        type=Path,
+        nargs=2,
+        metavar=("JSONL", "CSV"),
+        help="write JSONL's trial rows as a small table (the columns --compare reads) and stop",
+    )
+    parser.add_argument(
+        "--block", type=int, default=1, help="with --compare --figure: trials per point"
+    )
+    parser.add_argument("--title", help="with --compare --figure: the figure's title")
     parser.add_argument("--side", choices=("network", "rate", "loop"))
     parser.add_argument(
         "--learner",
@@ -625,10 +703,15 @@ def main() -> int:
         "--simulator", choices=("nengo", "brian2"), default="nengo", help="the network's simulator"
     )
     args = parser.parse_args()
+    if args.block < 1:
+        parser.error(f"--block must be >= 1, got {args.block}")
     if args.compare:
         compare(args.compare, args.trials)
         if args.figure is not None:
-            curve_figure(args.compare, args.trials, args.figure)
+            curve_figure(args.compare, args.trials, args.figure, block=args.block, title=args.title)
+        return 0
+    if args.trim:
+        trim(*args.trim)
         return 0
     if args.summary:
         summarize(args.summary)
@@ -637,18 +720,18 @@ def main() -> int:
         return 0
     if args.out is None or args.side is None:
         parser.error("--side and --out are required")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
-    if args.learner is None:
-        args.learner = "pgpe" if args.side == "loop" else "chapter"
     if args.side == "network" and args.theta_c_rule is not None:
         parser.error(
             "--side network runs the chapter's options: give --side loop --learner chapter "
             "for another --theta-c-rule"
         )
+    if args.lockstep and args.side == "rate":
+        parser.error("--lockstep runs the network sides (network, loop) only")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    side = {"network": run_network_side, "rate": run_rate_side, "loop": run_loop_side}
+    if args.learner is None:
+        args.learner = "pgpe" if args.side == "loop" else "chapter"
     if args.lockstep:
-        if args.side == "rate":
-            parser.error("--lockstep runs the network sides (network, loop) only")
         (run_network_lockstep if args.side == "network" else run_loop_lockstep)(args)
         return 0
     for seed in args.seeds:

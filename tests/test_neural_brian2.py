@@ -359,21 +359,11 @@ def replace_model(req: object) -> object:
     return replace(req, model=Plant(pole_mass=0.2))  # type: ignore[type-var]
 
 
-def neural_learn_bench() -> Any:
-    """benchmarks/neural_learn.py as a module."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "neural_learn.py"
-    spec = importlib.util.spec_from_file_location("neural_learn_bench", path)
-    assert spec is not None and spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    return bench
-
-
 def test_lockstep_learning_stopped_and_rerun_equals_each_run_in_one_go(
-    brian_run: NeuralRun, tmp_path: object, monkeypatch: pytest.MonkeyPatch
+    brian_run: NeuralRun,
+    tmp_path: object,
+    monkeypatch: pytest.MonkeyPatch,
+    neural_learn_bench: Any,
 ) -> None:
     """benchmarks/neural_learn.py --lockstep runs trial k of every seed and alpha before
     trial k + 1; stopped after trial 1 and rerun to 2 on the same file, each (seed, alpha)
@@ -382,7 +372,7 @@ def test_lockstep_learning_stopped_and_rerun_equals_each_run_in_one_go(
 
     from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W
 
-    bench = neural_learn_bench()
+    bench = neural_learn_bench
     out = Path(str(tmp_path)) / "lock.jsonl"
     for trials in ("1", "2"):
         argv = ["neural_learn.py", "--side", "network", "--simulator", "brian2", "--lockstep"]
@@ -405,7 +395,10 @@ def test_lockstep_learning_stopped_and_rerun_equals_each_run_in_one_go(
 
 
 def test_loop_lockstep_stopped_and_rerun_equals_pgpe_in_one_go(
-    brian_run: NeuralRun, tmp_path: object, monkeypatch: pytest.MonkeyPatch
+    brian_run: NeuralRun,
+    tmp_path: object,
+    monkeypatch: pytest.MonkeyPatch,
+    neural_learn_bench: Any,
 ) -> None:
     """--side loop --lockstep (pgpe on the network through the learning loop): stopped
     after trial 1 and rerun to 2 on the same file, each (seed, alpha) equals
@@ -416,7 +409,7 @@ def test_loop_lockstep_stopped_and_rerun_equals_pgpe_in_one_go(
     from striatal.neural.driver import learn_with_rule
     from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W
 
-    bench = neural_learn_bench()
+    bench = neural_learn_bench
     out = Path(str(tmp_path)) / "loop.jsonl"
     argv = ["neural_learn.py", "--side", "loop", "--learner", "pgpe", "--simulator", "brian2"]
     argv += ["--lockstep", "--neurons", "2500", "--seeds", "1", "--alpha", "0.3", "0"]
