@@ -19,13 +19,14 @@ rises (until min |theta| > 1.4 resets it to 0.6). This prints:
     OPENBLAS_NUM_THREADS=1 python benchmarks/eq21_ratchet.py --rate 200 --network 20 \\
         --files docs/data/neural_learn_rate_r4.jsonl:rate \\
         docs/data/neural_learn_brian2_r4.csv:network
+
+``--files`` reads what ``benchmarks/neural_learn.py`` writes (its JSONL or ``--trim`` table).
 """
 
 from __future__ import annotations
 
 import argparse
 import itertools
-import json
 import math
 from collections import defaultdict
 from pathlib import Path
@@ -91,25 +92,13 @@ def network_sweep(n: int) -> None:
         print(_line(f"network theta_c {tc:.1f}", finals), flush=True)
 
 
-def _trials(path: Path) -> list[dict[str, Any]]:
-    if path.suffix == ".csv":  # a trimmed trial table: the columns of _groups and theta_c
-        import csv
-
-        with path.open() as fh:
-            return [
-                {**r, "trial": int(r["trial"]), "seed": int(r["seed"]), "alpha": float(r["alpha"]),
-                 "theta_c": float(r["theta_c"]), "reward": float(r["reward"])}
-                for r in csv.DictReader(fh)
-            ]  # fmt: skip
-    rows = [json.loads(line) for line in path.read_text().splitlines() if line]
-    return [r for r in rows if r["kind"] == "trial"]
-
-
 def file_report(spec: str) -> None:
+    from neural_learn import trial_rows  # beside this script (benchmarks/ is its sys.path[0])
+
     path, side = spec.rsplit(":", 1)
     rows = [
         r
-        for r in _trials(Path(path))
+        for r in trial_rows([Path(path)])
         if r["side"] == side and r["alpha"] == 0 and not r.get("theta_c_rule")
     ]
     by: dict[int, list[dict[str, Any]]] = defaultdict(list)

@@ -457,6 +457,20 @@ def trim(path: Path, out: Path) -> None:
     os.replace(tmp, out)
 
 
+def trials_done(paths: list[Path]) -> int:
+    """The number of trials every run of these files has: the least last trial of the runs
+    not ended by a passed success test (a lockstep file stopped mid-round: the round
+    before)."""
+    last: dict[tuple[str, str, float, int], int] = {}
+    solved: set[tuple[str, str, float, int]] = set()
+    for r in trial_rows(paths):
+        key = (r["side"], str(r.get("init")) + str(r.get("theta_c_rule")), r["alpha"], r["seed"])
+        last[key] = max(last.get(key, 0), r["trial"])
+        if r["success"]:
+            solved.add(key)
+    return min((k for key, k in last.items() if key not in solved), default=0)
+
+
 def _groups(
     paths: list[Path], max_trial: int
 ) -> tuple[dict[str, dict[int, list[bool]]], dict[str, int]]:
@@ -656,6 +670,13 @@ def main() -> int:
         help="write JSONL's trial rows as a small table (the columns --compare reads) and stop",
     )
     parser.add_argument(
+        "--done",
+        type=Path,
+        nargs="+",
+        help="print the number of trials every run of these files has (the runs a passed "
+        "success test ended aside) and stop",
+    )
+    parser.add_argument(
         "--block", type=int, default=1, help="with --compare --figure: trials per point"
     )
     parser.add_argument("--title", help="with --compare --figure: the figure's title")
@@ -712,6 +733,9 @@ def main() -> int:
         return 0
     if args.trim:
         trim(*args.trim)
+        return 0
+    if args.done:
+        print(trials_done(args.done))
         return 0
     if args.summary:
         summarize(args.summary)

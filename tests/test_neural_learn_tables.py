@@ -61,6 +61,11 @@ def test_a_passed_success_test_fills_the_later_trials_and_is_counted_apart(
     groups, filled = neural_learn_bench._groups([path], 4)
     assert groups == {"rate alpha=0": {0: [False, True, True, True], 1: [False] * 4}}
     assert filled == {"rate alpha=0": 2}
+    # every run not ended by a success has 4 trials; a run stopped mid-round has fewer
+    assert neural_learn_bench.trials_done([path]) == 4
+    with path.open("a") as fh:
+        fh.write("".join(json.dumps(trial(2, k, -5.0)) + "\n" for k in (1, 2, 3)))
+    assert neural_learn_bench.trials_done([path]) == 3
 
 
 def test_the_rate_side_keeps_theta_c_with_the_fixed_reading(
