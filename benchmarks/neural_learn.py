@@ -404,10 +404,12 @@ def summarize(paths: list[Path]) -> None:
 
 
 #: The columns of a trimmed trial table (``--trim``): what ``--compare``, its figure and
-#: ``benchmarks/eq21_ratchet.py`` read, and the trial's end (x, theta at T; network only).
+#: ``benchmarks/eq21_ratchet.py`` read, the trial's end (x, theta at T; network only) and
+#: the gains W it ran with (4 decimals).
 TRIM_COLUMNS = (
     "side", "simulator", "init", "theta_c_rule", "alpha", "seed", "trial",
     "reward", "success", "fault", "theta_c", "x_final", "theta_final",
+    "W1", "W2", "W3", "W4", "W5", "W6",
 )  # fmt: skip
 
 
@@ -428,6 +430,7 @@ def trial_rows(paths: list[Path]) -> list[dict[str, Any]]:
                 for k in ("alpha", "reward", "theta_c", "x_final", "theta_final"):
                     if k in row:
                         row[k] = float(row[k])
+                row["W"] = [float(row.pop(f"W{i}")) for i in range(1, 7)]
                 for k in ("seed", "trial"):
                     row[k] = int(row[k])
                 for k in ("success", "fault"):
@@ -451,6 +454,7 @@ def trim(path: Path, out: Path) -> None:
         row["x_final"] = "" if end is None else f"{end[0]:.4f}"
         row["theta_final"] = "" if end is None else f"{end[2]:.4f}"
         row["theta_c"] = f"{r['theta_c']:.5f}"
+        row.update({f"W{i + 1}": f"{w:.4f}" for i, w in enumerate(r["W"])})
         writer.writerow(row)
     tmp = out.with_name(out.name + ".tmp")
     tmp.write_text(buf.getvalue())
@@ -575,6 +579,34 @@ def compare(paths: list[Path], max_trial: int) -> None:
         )
 
 
+def drift(paths: list[Path], max_trial: int) -> None:
+    """Per learning arm (alpha > 0), over its updates between trials 1..max_trial: the
+    median of the largest |W_i change| (W1..W5) per update, the share of updates with a
+    gain at the max step (1), the dip share (reward -5) and the mean |W(last) - W(0)|."""
+    runs: dict[str, dict[int, list[dict[str, Any]]]] = {}
+    for r in trial_rows(paths):
+        if r["alpha"] > 0 and r["trial"] <= max_trial and not r.get("theta_c_rule"):
+            name = f"{r['side']}{'' if r.get('init', 'chapter') == 'chapter' else ' init=random'}"
+            runs.setdefault(f"{name} alpha={r['alpha']:g}", {}).setdefault(r["seed"], []).append(r)
+    for name, seeds in sorted(runs.items()):
+        biggest, at_max, dips, far = [], 0, 0, []
+        for rows in seeds.values():
+            rows.sort(key=lambda r: r["trial"])
+            W = np.array([r["W"] for r in rows])[:, :5]
+            step = np.abs(np.diff(W, axis=0))
+            biggest += list(step.max(axis=1, initial=0.0))
+            at_max += int(np.any(np.abs(step - 1.0) < 5e-4, axis=1).sum())
+            dips += sum(r["reward"] < 0 for r in rows)
+            far.append(np.abs(W[-1] - W[0]))
+        n = len(biggest)
+        print(
+            f"{name}: {len(seeds)} seeds, {n} updates; largest |dW| per update median "
+            f"{np.median(biggest):.3f}, a gain at the max step in {at_max / n:.2f}; reward -5 "
+            f"in {dips / sum(len(v) for v in seeds.values()):.2f} of the trials; mean "
+            f"|W(last) - W(0)| (W1..W5) {np.round(np.mean(far, axis=0), 2).tolist()}"
+        )
+
+
 def curve_figure(
     paths: list[Path], max_trial: int, out: Path, *, block: int = 1, title: str | None = None
 ) -> None:
@@ -677,6 +709,12 @@ def main() -> int:
         "success test ended aside) and stop",
     )
     parser.add_argument(
+        "--drift",
+        type=Path,
+        nargs="+",
+        help="the learning arms' steps in W over trials 1..--trials of these files, and stop",
+    )
+    parser.add_argument(
         "--block", type=int, default=1, help="with --compare --figure: trials per point"
     )
     parser.add_argument("--title", help="with --compare --figure: the figure's title")
@@ -736,6 +774,9 @@ def main() -> int:
         return 0
     if args.done:
         print(trials_done(args.done))
+        return 0
+    if args.drift:
+        drift(args.drift, args.trials)
         return 0
     if args.summary:
         summarize(args.summary)

@@ -52,6 +52,10 @@ $PY $B --trim "$tmp/rate_random.jsonl" $D/neural_learn_rate_random_r4.csv
     $PY $B --compare $D/neural_learn_rate_random_r4.csv $D/neural_learn_brian2_random_r4.csv \
         --trials "$n_random" --block 5 --figure docs/img/neural_learn_r4_random.png \
         --title "the chapter's rule from random gains, 30-s trials, seeds 0-19"
+    echo "# the learning arms' steps in W"
+    $PY $B --drift $D/neural_learn_rate_r4.csv $D/neural_learn_brian2_r4.csv --trials "$n_chapter"
+    $PY $B --drift $D/neural_learn_rate_random_r4.csv $D/neural_learn_brian2_random_r4.csv \
+        --trials "$n_random"
     echo "# eq 21's ratchet in the no-learning controls"
     $PY benchmarks/eq21_ratchet.py --files $D/neural_learn_rate_r4.csv:rate \
         $D/neural_learn_brian2_r4.csv:network

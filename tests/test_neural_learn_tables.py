@@ -42,9 +42,11 @@ def test_a_trimmed_table_gives_the_tables_of_its_jsonl(
     capsys.readouterr()
     outs = []
     for path in (ROUND3, table):
-        assert run(neural_learn_bench, monkeypatch, "--compare", str(path), "--trials", "52") == 0
+        for what in ("--compare", "--drift"):
+            assert run(neural_learn_bench, monkeypatch, what, str(path), "--trials", "52") == 0
         outs.append(capsys.readouterr().out)
     assert outs[0] == outs[1]
+    assert "rate alpha=5: 20 seeds, 955 updates" in outs[0]  # 975 trials run, 20 seeds
     # round 3's rate arms: 20 seeds x 52 trials, some ended by a passed success test
     assert "rate alpha=0: 20 seeds, 1040 trials; +10 in 575/1040" in outs[0]
     assert "of which 22 after a passed success test" in outs[0]
