@@ -414,14 +414,17 @@ TRIM_COLUMNS = (
 
 
 def trial_rows(paths: list[Path]) -> list[dict[str, Any]]:
-    """The trial rows of ``benchmarks/neural_learn.py`` files (JSONL) or of their trimmed
-    tables (``.csv``, :data:`TRIM_COLUMNS`; empty cells are absent keys)."""
+    """The trial rows of ``benchmarks/neural_learn.py`` files (JSONL; a last line without its
+    newline, still being written, is left out) or of their trimmed tables (``.csv``,
+    :data:`TRIM_COLUMNS`; empty cells are absent keys)."""
     import csv
 
     rows: list[dict[str, Any]] = []
     for path in paths:
         if path.suffix != ".csv":
-            got = (json.loads(line) for line in path.read_text().splitlines() if line)
+            # a file being appended to may end in a line not yet whole: left out
+            lines = path.read_text().split("\n")[:-1]
+            got = (json.loads(line) for line in lines if line)
             rows += [r for r in got if r["kind"] == "trial"]
             continue
         with path.open(newline="") as fh:
@@ -477,9 +480,10 @@ def trials_done(paths: list[Path]) -> int:
 
 def _groups(
     paths: list[Path], max_trial: int
-) -> tuple[dict[str, dict[int, list[bool]]], dict[str, int]]:
-    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial, and per
-    group the number of trials filled in after a passed success test.
+) -> tuple[dict[str, dict[int, list[bool]]], dict[str, dict[int, int]]]:
+    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial, and
+    group -> seed -> the number of those trials the run ran (the rest were filled in
+    after a passed success test).
 
     A run that passed the chapter's success test ended there (as ``striatal train`` does);
     its later trials count as +10 (the success box at T_f lies inside eq 25's)."""
@@ -498,13 +502,12 @@ def _groups(
         out.setdefault(name, {}).setdefault(r["seed"], []).append(r["reward"] > 0)
         if r["success"]:
             solved.setdefault(name, set()).add(r["seed"])
-    filled = dict.fromkeys(out, 0)
+    ran = {name: {s: len(v) for s, v in seeds.items()} for name, seeds in out.items()}
     for name, seeds in solved.items():
         for s in seeds:
             got = out[name][s]
-            filled[name] += max_trial - len(got)
             got.extend([True] * (max_trial - len(got)))
-    return out, filled
+    return out, ran
 
 
 def compare(paths: list[Path], max_trial: int) -> None:
@@ -518,7 +521,7 @@ def compare(paths: list[Path], max_trial: int) -> None:
 
     from striatal.experiments.stats import mcnemar_test, wilson_interval
 
-    groups, filled = _groups(paths, max_trial)
+    groups, ran = _groups(paths, max_trial)
     for name, seeds in groups.items():
         k = sum(sum(v) for v in seeds.values())
         n = sum(len(v) for v in seeds.values())
@@ -529,8 +532,8 @@ def compare(paths: list[Path], max_trial: int) -> None:
             f"(95 % Wilson {ci.low or 0:.2f}-{ci.high or 0:.2f}); last trial +10 in "
             f"{sum(last)}/{len(last)} seeds"
         )
-        if filled[name]:
-            f = filled[name]
+        f = n - sum(ran[name].values())
+        if f:
             print(
                 f"  of which {f} after a passed success test; in the {n - f} trials run "
                 f"+10 in {k - f} = {(k - f) / (n - f):.2f}"
@@ -599,6 +602,8 @@ def drift(paths: list[Path], max_trial: int) -> None:
             dips += sum(r["reward"] < 0 for r in rows)
             far.append(np.abs(W[-1] - W[0]))
         n = len(biggest)
+        if n == 0:
+            continue
         print(
             f"{name}: {len(seeds)} seeds, {n} updates; largest |dW| per update median "
             f"{np.median(biggest):.3f}, a gain at the max step in {at_max / n:.2f}; reward -5 "
@@ -608,10 +613,18 @@ def drift(paths: list[Path], max_trial: int) -> None:
 
 
 def curve_figure(
-    paths: list[Path], max_trial: int, out: Path, *, block: int = 1, title: str | None = None
+    paths: list[Path],
+    max_trial: int,
+    out: Path,
+    *,
+    block: int = 1,
+    title: str | None = None,
+    ran_only: bool = False,
 ) -> None:
     """Fraction rewarded +10 per block of ``block`` trials (over the block's trials of all
-    seeds), with its 95 % Wilson band, per group."""
+    seeds), with its 95 % Wilson band, per group (the rate learner dashed). ``ran_only``:
+    over the trials the runs ran, leaving out those filled in after a passed success test
+    (a block no run ran is not drawn)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -619,21 +632,30 @@ def curve_figure(
 
     from striatal.experiments.stats import wilson_interval
 
-    groups, _filled = _groups(paths, max_trial)
+    groups, ran = _groups(paths, max_trial)
     fig, ax = plt.subplots(figsize=(7, 4), constrained_layout=True)
     for i, (name, seeds) in enumerate(sorted(groups.items())):
         n_trials = min(len(v) for v in seeds.values())
-        starts = np.arange(0, n_trials - block + 1, block)
-        k = np.array([sum(sum(v[j : j + block]) for v in seeds.values()) for j in starts])
-        n = len(seeds) * block
-        cis = [wilson_interval(int(kk), n) for kk in k]
-        t = starts + (block + 1) / 2
-        ax.plot(t, k / n, marker="o", ms=3, color=f"C{i}", label=f"{name} ({len(seeds)} seeds)")
+        points = []
+        for j in range(0, n_trials - block + 1, block):
+            cut = {
+                s: v[j : min(j + block, ran[name][s])] if ran_only else v[j : j + block]
+                for s, v in seeds.items()
+            }
+            n = sum(len(v) for v in cut.values())
+            if n:
+                k = sum(sum(v) for v in cut.values())
+                points.append((j + (block + 1) / 2, k / n, wilson_interval(k, n)))
+        t, frac, cis = zip(*points, strict=True)
+        style = "--" if name.startswith("rate") else "-"
+        label = f"{name} ({len(seeds)} seeds)"
+        ax.plot(t, frac, style, marker="o", ms=3, color=f"C{i}", label=label)
         ax.fill_between(
             t, [c.low or 0 for c in cis], [c.high or 0 for c in cis], color=f"C{i}", alpha=0.12
         )
     ax.set_xlabel("trial" if block == 1 else f"trial (blocks of {block})")
-    ax.set_ylabel("fraction rewarded +10 (eq 25)")
+    ran_text = ", of the trials run" if ran_only else ""
+    ax.set_ylabel(f"fraction rewarded +10 (eq 25){ran_text}")
     ax.set_ylim(-0.02, 1.02)
     ax.legend(fontsize=7)
     ax.set_title(title or "from the chapter's W(0), 30-s trials, seeds 0-19", fontsize=10)
@@ -718,6 +740,12 @@ def main() -> int:
         "--block", type=int, default=1, help="with --compare --figure: trials per point"
     )
     parser.add_argument("--title", help="with --compare --figure: the figure's title")
+    parser.add_argument(
+        "--ran-only",
+        action="store_true",
+        help="with --compare --figure: the fractions over the trials run, leaving out those "
+        "filled in as +10 after a passed success test",
+    )
     parser.add_argument("--side", choices=("network", "rate", "loop"))
     parser.add_argument(
         "--learner",
@@ -767,7 +795,14 @@ def main() -> int:
     if args.compare:
         compare(args.compare, args.trials)
         if args.figure is not None:
-            curve_figure(args.compare, args.trials, args.figure, block=args.block, title=args.title)
+            curve_figure(
+                args.compare,
+                args.trials,
+                args.figure,
+                block=args.block,
+                title=args.title,
+                ran_only=args.ran_only,
+            )
         return 0
     if args.trim:
         trim(*args.trim)

@@ -44,6 +44,10 @@ $PY $B --trim "$tmp/rate_random.jsonl" $D/neural_learn_rate_random_r4.csv
     $PY $B --compare $D/neural_learn_rate_r4.csv $D/neural_learn_brian2_r4.csv \
         --trials "$n_chapter" --block 10 --figure docs/img/neural_learn_r4_chapter.png \
         --title "the chapter's rule from the chapter's W(0), 30-s trials, seeds 0-19"
+    $PY $B --compare $D/neural_learn_rate_r4.csv $D/neural_learn_brian2_r4.csv \
+        --trials "$n_chapter" --block 10 --figure docs/img/neural_learn_r4_chapter_ran.png \
+        --ran-only --title "the same, of the trials run (none filled in after a success)" \
+        > /dev/null
     echo "# from W(0), pgpe: $n_pgpe trials"
     $PY $B --compare $D/neural_learn_rate_pgpe_r4.csv $D/neural_learn_brian2_pgpe_r4.csv \
         --trials "$n_pgpe" --block 5 --figure docs/img/neural_learn_r4_pgpe.png \

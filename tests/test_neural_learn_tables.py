@@ -60,11 +60,15 @@ def test_a_passed_success_test_fills_the_later_trials_and_is_counted_apart(
     rows = [trial(0, 1, -5.0), trial(0, 2, 10.0, success=True)]
     rows += [trial(1, k, -5.0) for k in (1, 2, 3, 4)]
     path.write_text("".join(json.dumps(r) + "\n" for r in rows))
-    groups, filled = neural_learn_bench._groups([path], 4)
+    groups, ran = neural_learn_bench._groups([path], 4)
     assert groups == {"rate alpha=0": {0: [False, True, True, True], 1: [False] * 4}}
-    assert filled == {"rate alpha=0": 2}
+    assert ran == {"rate alpha=0": {0: 2, 1: 4}}
     # every run not ended by a success has 4 trials; a run stopped mid-round has fewer
     assert neural_learn_bench.trials_done([path]) == 4
+    with path.open("a") as fh:  # a line still being written is left out
+        fh.write(json.dumps(trial(1, 5, -5.0))[:40])
+    assert neural_learn_bench.trials_done([path]) == 4
+    path.write_text(path.read_text()[:-40])
     with path.open("a") as fh:
         fh.write("".join(json.dumps(trial(2, k, -5.0)) + "\n" for k in (1, 2, 3)))
     assert neural_learn_bench.trials_done([path]) == 3
