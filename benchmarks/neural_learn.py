@@ -593,11 +593,14 @@ def drift(paths: list[Path], max_trial: int) -> None:
             runs.setdefault(f"{name} alpha={r['alpha']:g}", {}).setdefault(r["seed"], []).append(r)
     for name, seeds in sorted(runs.items()):
         biggest, at_max, dips, far = [], 0, 0, []
+        by_trial: dict[int, list[float]] = {}
         for rows in seeds.values():
             rows.sort(key=lambda r: r["trial"])
             W = np.array([r["W"] for r in rows])[:, :5]
             step = np.abs(np.diff(W, axis=0))
             biggest += list(step.max(axis=1, initial=0.0))
+            for r, b in zip(rows, step.max(axis=1, initial=0.0), strict=False):
+                by_trial.setdefault(r["trial"], []).append(float(b))
             at_max += int(np.any(np.abs(step - 1.0) < 5e-4, axis=1).sum())
             dips += sum(r["reward"] < 0 for r in rows)
             far.append(np.abs(W[-1] - W[0]))
@@ -610,6 +613,14 @@ def drift(paths: list[Path], max_trial: int) -> None:
             f"in {dips / sum(len(v) for v in seeds.values()):.2f} of the trials; mean "
             f"|W(last) - W(0)| (W1..W5) {np.round(np.mean(far, axis=0), 2).tolist()}"
         )
+        last = max(by_trial)
+        third = max(1, last // 3)
+        parts = [
+            f"after trials {lo}-{lo + third - 1} "
+            f"{np.median([b for k in range(lo, lo + third) for b in by_trial.get(k, [])]):.3f}"
+            for lo in (1, last - third + 1)
+        ]
+        print("  largest |dW| per update, median: " + ", ".join(parts))
 
 
 def curve_figure(
