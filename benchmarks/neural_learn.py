@@ -584,8 +584,10 @@ def compare(paths: list[Path], max_trial: int) -> None:
 
 def drift(paths: list[Path], max_trial: int) -> None:
     """Per learning arm (alpha > 0), over its updates between trials 1..max_trial: the
-    median of the largest |W_i change| (W1..W5) per update, the share of updates with a
-    gain at the max step (1), the dip share (reward -5) and the mean |W(last) - W(0)|."""
+    median of the largest |W_i change| (W1..W5) per update (all, after the first and the
+    last third of the trials), the share of updates with a gain at the max step (1), the
+    dip share (reward -5), the mean |W(last) - W(0)| and W4 (eq 23's energy pump) at the
+    end (a negative W4 drains the swing-up's energy)."""
     runs: dict[str, dict[int, list[dict[str, Any]]]] = {}
     for r in trial_rows(paths):
         if r["alpha"] > 0 and r["trial"] <= max_trial and not r.get("theta_c_rule"):
@@ -621,6 +623,13 @@ def drift(paths: list[Path], max_trial: int) -> None:
             for lo in (1, last - third + 1)
         ]
         print("  largest |dW| per update, median: " + ", ".join(parts))
+        pump = [rows[-1]["W"][3] for rows in seeds.values() if not rows[-1]["success"]]
+        if pump:
+            print(
+                f"  W4 (the swing-up's energy pump) in the last trial of the {len(pump)} runs "
+                f"not ended by a success: median {np.median(pump):+.2f}, negative in "
+                f"{sum(w < 0 for w in pump)}"
+            )
 
 
 def curve_figure(
