@@ -480,10 +480,10 @@ def trials_done(paths: list[Path]) -> int:
 
 def _groups(
     paths: list[Path], max_trial: int
-) -> tuple[dict[str, dict[int, list[bool]]], dict[str, dict[int, int]]]:
-    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial, and
+) -> tuple[dict[str, dict[int, list[bool]]], dict[str, dict[int, int]], dict[str, set[int]]]:
+    """``"side[-simulator] alpha=A"`` -> seed -> +10 or not per trial 1..max_trial;
     group -> seed -> the number of those trials the run ran (the rest were filled in
-    after a passed success test).
+    after a passed success test); group -> the seeds whose run passed it.
 
     A run that passed the chapter's success test ended there (as ``striatal train`` does);
     its later trials count as +10 (the success box at T_f lies inside eq 25's)."""
@@ -507,21 +507,22 @@ def _groups(
         for s in seeds:
             got = out[name][s]
             got.extend([True] * (max_trial - len(got)))
-    return out, ran
+    return out, ran, {name: solved.get(name, set()) for name in out}
 
 
 def compare(paths: list[Path], max_trial: int) -> None:
     """Per group: +10 rate with its Wilson interval over trials 1..max_trial; then paired
     tests on the seeds two groups share: learning against its alpha = 0 control, and the
     network against the rate learner at the same alpha (Wilcoxon signed-rank on each
-    seed's count of +10, and McNemar on "+10 in the last trial")."""
+    seed's count of +10, and McNemar on "+10 in the last trial" and on "passed the
+    success test")."""
     import itertools
 
     from scipy.stats import wilcoxon
 
     from striatal.experiments.stats import mcnemar_test, wilson_interval
 
-    groups, ran = _groups(paths, max_trial)
+    groups, ran, solved = _groups(paths, max_trial)
     for name, seeds in groups.items():
         k = sum(sum(v) for v in seeds.values())
         n = sum(len(v) for v in seeds.values())
@@ -533,10 +534,12 @@ def compare(paths: list[Path], max_trial: int) -> None:
             f"{sum(last)}/{len(last)} seeds"
         )
         f = n - sum(ran[name].values())
-        if f:
+        if solved[name]:
+            c = wilson_interval(len(solved[name]), len(seeds))
             print(
-                f"  of which {f} after a passed success test; in the {n - f} trials run "
-                f"+10 in {k - f} = {(k - f) / (n - f):.2f}"
+                f"  passed the success test in {len(solved[name])}/{len(seeds)} seeds "
+                f"(95 % Wilson {c.low or 0:.2f}-{c.high or 0:.2f}); {f} trials after it "
+                f"counted +10; in the {n - f} trials run +10 in {k - f} = {(k - f) / (n - f):.2f}"
             )
         third = min(len(v) for v in seeds.values()) // 3
         if third >= 1:
@@ -580,6 +583,14 @@ def compare(paths: list[Path], max_trial: int) -> None:
             f"{mc.only_a} seeds only in the first, {mc.only_b} only in the second "
             f"(McNemar p = {mc.p_value:.3g})"
         )
+        if solved[a] or solved[b]:
+            ms = mcnemar_test(
+                {s: s in solved[a] for s in shared}, {s: s in solved[b] for s in shared}
+            )
+            print(
+                f"  passed the success test: {ms.only_a} seeds only in the first, {ms.only_b} "
+                f"only in the second (McNemar p = {ms.p_value:.3g})"
+            )
 
 
 def drift(paths: list[Path], max_trial: int) -> None:
@@ -652,7 +663,7 @@ def curve_figure(
 
     from striatal.experiments.stats import wilson_interval
 
-    groups, ran = _groups(paths, max_trial)
+    groups, ran, _solved = _groups(paths, max_trial)
     fig, ax = plt.subplots(figsize=(7, 4), constrained_layout=True)
     for i, (name, seeds) in enumerate(sorted(groups.items())):
         n_trials = min(len(v) for v in seeds.values())

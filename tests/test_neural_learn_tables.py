@@ -49,7 +49,7 @@ def test_a_trimmed_table_gives_the_tables_of_its_jsonl(
     assert "rate alpha=5: 20 seeds, 955 updates" in outs[0]  # 975 trials run, 20 seeds
     # round 3's rate arms: 20 seeds x 52 trials, some ended by a passed success test
     assert "rate alpha=0: 20 seeds, 1040 trials; +10 in 575/1040" in outs[0]
-    assert "of which 22 after a passed success test" in outs[0]
+    assert "22 trials after it counted +10; in the 1018 trials run +10 in 553" in outs[0]
     assert not list(tmp_path.glob("*.tmp"))
 
 
@@ -60,9 +60,10 @@ def test_a_passed_success_test_fills_the_later_trials_and_is_counted_apart(
     rows = [trial(0, 1, -5.0), trial(0, 2, 10.0, success=True)]
     rows += [trial(1, k, -5.0) for k in (1, 2, 3, 4)]
     path.write_text("".join(json.dumps(r) + "\n" for r in rows))
-    groups, ran = neural_learn_bench._groups([path], 4)
+    groups, ran, solved = neural_learn_bench._groups([path], 4)
     assert groups == {"rate alpha=0": {0: [False, True, True, True], 1: [False] * 4}}
     assert ran == {"rate alpha=0": {0: 2, 1: 4}}
+    assert solved == {"rate alpha=0": {0}}
     # every run not ended by a success has 4 trials; a run stopped mid-round has fewer
     assert neural_learn_bench.trials_done([path]) == 4
     with path.open("a") as fh:  # a line still being written is left out
@@ -89,7 +90,7 @@ def test_the_rate_side_keeps_theta_c_with_the_fixed_reading(
     assert preset[0] == fixed[0] == CHAPTER_INITIAL_THETA_C
     assert all(b >= a for a, b in itertools.pairwise(preset)) and preset[-1] > 0.6
     assert fixed == [CHAPTER_INITIAL_THETA_C] * 4
-    groups, _ = neural_learn_bench._groups([out], 4)
+    groups, _, _ = neural_learn_bench._groups([out], 4)
     assert sorted(groups) == ["rate alpha=0", "rate theta_c=fixed alpha=0"]
 
 
