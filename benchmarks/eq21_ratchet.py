@@ -12,9 +12,9 @@ rises (until min |theta| > 1.4 resets it to 0.6). This prints:
 2. ``--network N``: the same on the spiking network (Brian2, 2 500 neurons), seeds
    0..N-1: each seed's first learning trial at that theta_c (same network, same draws);
 3. ``--files F:SIDE ...``: in a ``benchmarks/neural_learn.py`` file, the alpha-0 runs of
-   SIDE with eq 21 as preset: theta_c's rise per trial, its resets, and the +10 rate of
-   the trials run (not the +10 that ``--compare`` fills in after a passed success test)
-   per third of the trials and per theta_c band.
+   SIDE, per eq-21 reading (``--theta-c-rule``; none: the preset's): theta_c's rise per
+   trial, its resets, and the +10 rate of the trials run (not the +10 that ``--compare``
+   fills in after a passed success test) per third of the trials and per theta_c band.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/eq21_ratchet.py --rate 200 --network 20 \\
         --files docs/data/neural_learn_rate_r4.jsonl:rate \\
@@ -93,14 +93,19 @@ def network_sweep(n: int) -> None:
 
 
 def file_report(spec: str) -> None:
+    """The alpha-0 runs of SIDE in FILE, one report per eq-21 reading the file holds."""
     from neural_learn import trial_rows  # beside this script (benchmarks/ is its sys.path[0])
 
     path, side = spec.rsplit(":", 1)
-    rows = [
-        r
-        for r in trial_rows([Path(path)])
-        if r["side"] == side and r["alpha"] == 0 and not r.get("theta_c_rule")
-    ]
+    rows = [r for r in trial_rows([Path(path)]) if r["side"] == side and r["alpha"] == 0]
+    for reading in sorted({r.get("theta_c_rule") or "" for r in rows}):
+        label = f"theta_c={reading}" if reading else "eq 21 as preset"
+        _report(f"{Path(path).name} {side} alpha=0 {label}", [
+            r for r in rows if (r.get("theta_c_rule") or "") == reading
+        ])  # fmt: skip
+
+
+def _report(label: str, rows: list[dict[str, Any]]) -> None:
     by: dict[int, list[dict[str, Any]]] = defaultdict(list)
     for r in rows:
         by[int(r["seed"])].append(r)
@@ -115,9 +120,8 @@ def file_report(spec: str) -> None:
                 rises.append(d)
     last = max(r["trial"] for r in rows)
     print(
-        f"{Path(path).name} {side} alpha=0: {len(by)} seeds, {len(rows)} trials run (to trial "
-        f"{last}); theta_c rises {np.mean(rises):.4f} a trial (median {np.median(rises):.4f}), "
-        f"{resets} resets"
+        f"{label}: {len(by)} seeds, {len(rows)} trials run (to trial {last}); theta_c rises "
+        f"{np.mean(rises):.4f} a trial (median {np.median(rises):.4f}), {resets} resets"
     )
     trial = np.array([r["trial"] for r in rows])
     tc = np.array([r["theta_c"] for r in rows])
