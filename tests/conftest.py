@@ -92,6 +92,20 @@ def cli(capsys: pytest.CaptureFixture[str]) -> Cli:
     return Cli(capsys)
 
 
+@pytest.fixture(scope="session")
+def neural_learn_bench() -> Any:
+    """benchmarks/neural_learn.py as a module (the spiking learner's runs and tables)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "neural_learn.py"
+    spec = importlib.util.spec_from_file_location("neural_learn_bench", path)
+    assert spec is not None and spec.loader is not None
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    return bench
+
+
 class Ran(NamedTuple):
     rc: int
     out: str

@@ -11,6 +11,7 @@ import json
 import math
 import shutil
 import sys
+from typing import Any
 
 import numpy as np
 import pytest
@@ -359,21 +360,19 @@ def replace_model(req: object) -> object:
 
 
 def test_lockstep_learning_stopped_and_rerun_equals_each_run_in_one_go(
-    brian_run: NeuralRun, tmp_path: object, monkeypatch: pytest.MonkeyPatch
+    brian_run: NeuralRun,
+    tmp_path: object,
+    monkeypatch: pytest.MonkeyPatch,
+    neural_learn_bench: Any,
 ) -> None:
     """benchmarks/neural_learn.py --lockstep runs trial k of every seed and alpha before
     trial k + 1; stopped after trial 1 and rerun to 2 on the same file, each (seed, alpha)
     equals its learning run in one go (every recorded number but the times)."""
-    import importlib.util
     from pathlib import Path
 
     from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W
 
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "neural_learn.py"
-    spec = importlib.util.spec_from_file_location("neural_learn_bench", path)
-    assert spec is not None and spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = neural_learn_bench
     out = Path(str(tmp_path)) / "lock.jsonl"
     for trials in ("1", "2"):
         argv = ["neural_learn.py", "--side", "network", "--simulator", "brian2", "--lockstep"]
@@ -393,6 +392,59 @@ def test_lockstep_learning_stopped_and_rerun_equals_each_run_in_one_go(
             expect = t.to_dict() | {"cpu_time_s": 0, "wall_time_s": 0}
             assert {k: r[k] for k in expect} | {"cpu_time_s": 0, "wall_time_s": 0} == expect
     assert got[2]["W"] != got[0]["W"] and got[3]["W"] == got[1]["W"]
+
+
+def test_loop_lockstep_stopped_and_rerun_equals_pgpe_in_one_go(
+    brian_run: NeuralRun,
+    tmp_path: object,
+    monkeypatch: pytest.MonkeyPatch,
+    neural_learn_bench: Any,
+) -> None:
+    """--side loop --lockstep (pgpe on the network through the learning loop): stopped
+    after trial 1 and rerun to 2 on the same file, each (seed, alpha) equals
+    ``learn_with_rule`` in one go; alpha 0 is pgpe's declared control (sigma_rate 0);
+    a state row of other settings (another --theta-c-rule) is not resumed."""
+    from pathlib import Path
+
+    from striatal.neural.driver import learn_with_rule
+    from striatal.params import CHAPTER_INITIAL_THETA_C, CHAPTER_INITIAL_W
+
+    bench = neural_learn_bench
+    out = Path(str(tmp_path)) / "loop.jsonl"
+    argv = ["neural_learn.py", "--side", "loop", "--learner", "pgpe", "--simulator", "brian2"]
+    argv += ["--lockstep", "--neurons", "2500", "--seeds", "1", "--alpha", "0.3", "0"]
+    for trials in ("1", "2"):
+        rest = ["--trials", trials, "--duration", "30", "--out", str(out)]
+        monkeypatch.setattr(sys, "argv", [*argv, *rest])
+        assert bench.main() == 0
+    rows = [json.loads(line) for line in out.read_text().splitlines()]
+    got = [r for r in rows if r["kind"] == "trial"]
+    assert [(r["trial"], r["alpha"]) for r in got] == [(1, 0.3), (1, 0), (2, 0.3), (2, 0)]
+    assert {r["side"] for r in got} == {"loop-pgpe"}
+    start = Controller(gains=CHAPTER_INITIAL_W, theta_c=CHAPTER_INITIAL_THETA_C)
+    for alpha, control in ((0.3, {}), (0.0, {"sigma_rate": 0.0})):
+        recs: list[object] = []
+        ref = learn_with_rule(
+            "pgpe", start, PLANT, SIM, NetworkConfig(), SEED, trials=2,
+            on_trial=lambda _s, r, got=recs: got.append(r), alpha=alpha, **control,
+        )  # fmt: skip
+        mine = [r for r in got if r["alpha"] == alpha]
+        assert [(r["W"], r["theta_c"], r["reward"]) for r in mine] == [
+            (list(r.W), r.theta_c, r.reward)  # type: ignore[attr-defined]
+            for r in recs
+        ]
+        states = [r for r in rows if r["kind"] == "state" and r["alpha"] == alpha]
+        assert states[-1]["state"] == ref.to_dict()
+    # the same file with another eq-21 reading starts its own runs
+    rest = ["--trials", "1", "--duration", "30", "--out", str(out), "--theta-c-rule", "fixed"]
+    monkeypatch.setattr(sys, "argv", [*argv[:-2], "0", *rest])
+    assert bench.main() == 0
+    new = [json.loads(line) for line in out.read_text().splitlines()][len(rows) :]
+    assert [(r["kind"], r.get("trial")) for r in new] == [
+        ("trial", 1),
+        ("state", None),
+    ]
+    assert new[0]["theta_c_rule"] == "fixed"
 
 
 def test_the_runner_says_once_that_it_compiles_and_writes_each_trial(
