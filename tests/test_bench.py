@@ -231,7 +231,9 @@ def test_bench_quick_json_reports_positive_finite_figures(
             assert _positive_finite(value)
     assert report["batch_vs_gymnasium_vector"]["batch_size"] == QUICK.batch_size
     fit = report["scaling"]["fit"]
-    assert _positive_finite(fit["slope"]) and fit["r2"] <= 1.0
+    # the slope is a timing: on a loaded machine the quick durations' costs can order
+    # either way, so only its being a number is the code's to keep
+    assert math.isfinite(fit["slope"]) and fit["r2"] <= 1.0
     assert len(report["scaling"]["rows"]) == len(QUICK.scaling_durations)
     train = report["train"]
     assert _positive_finite(train["process_wall_seconds"])
