@@ -526,3 +526,7 @@ def test_generic_gains_keeps_denser_data_and_its_runs_repeat_under_a_seed() -> N
     recent = forward.keep_recent(rows, forward.GENERIC_GAINS_KEPT)
     assert len(recent) == 2 * forward.GENERIC_GAINS_KEPT
     assert recent[0, 0] == 500 and recent[3000, 0] == 4000 and recent[-1, 0] == 6999
+    # a checkpoint holds the window: generic-gains records the nominal plant alone
+    from striatal.io.schema import MAX_MEMORY_NUMBERS
+
+    assert forward.GENERIC_GAINS_KEPT * 11 <= MAX_MEMORY_NUMBERS
