@@ -101,9 +101,9 @@ __all__ = [
 #: at most :data:`PER_TRIAL` of them, evenly spaced.
 MAX_TRANSITIONS = 1200
 PER_TRIAL = 400
-#: generic-gains' own :data:`PER_TRIAL` and :data:`MAX_TRANSITIONS`: denser data, which
-#: on the tuning root 0 spent the same real seconds at half the CPU (chosen there;
-#: docs/results.md, "The generic forward model, round 5").
+#: generic-gains' own :data:`PER_TRIAL` and :data:`MAX_TRANSITIONS`: denser data, chosen
+#: on the tuning root 0 (real seconds not worse in a paired test, less CPU; docs/results.md,
+#: "Denser data as generic-gains' default").
 GENERIC_GAINS_PER_TRIAL = 1000
 GENERIC_GAINS_KEPT = 3000
 #: Columns of one kept transition: state (4), held force, next state (4), the true
