@@ -105,7 +105,7 @@ class Recorder:
             }
             return dream
 
-        def keeping(rows: np.ndarray, factors: Any = (1.0, 1.0), *args: Any, **kwargs: Any) -> Any:
+        def keeping(rows: np.ndarray, factors: Any = (1.0, 1.0), *args: Any) -> Any:
             if factors == (1.0, 1.0) and not args:
                 self.trial_rows.append(rows)
                 if self.pending is not None:
@@ -122,7 +122,7 @@ class Recorder:
                             "real_duration": float(rows[-1, 0]),
                         }
                     )
-            return transitions_of(rows, factors, *args, **kwargs)
+            return transitions_of(rows, factors, *args)
 
         forward.fit_generic = fitting  # type: ignore[assignment]
         forward.imagine_steps = dreaming  # type: ignore[assignment]

@@ -496,37 +496,3 @@ def test_imagined_trials_last_the_imagine_duration_and_checks_keep_60_s(
     for bad in (0.5, 601.0):
         with pytest.raises(ParameterError, match="imagine_duration"):
             default_config("forward", imagine_duration=bad)
-
-
-def test_generic_gains_keeps_denser_data_and_its_runs_repeat_under_a_seed() -> None:
-    """generic-gains keeps GENERIC_GAINS_PER_TRIAL transitions of each real run and the
-    most recent GENERIC_GAINS_KEPT of each plant; the other models PER_TRIAL and
-    MAX_TRANSITIONS. A real trial of W(0) (30 s, 3 000 steps) gives each its own count,
-    the same under the same seed."""
-    dense = (forward.GENERIC_GAINS_PER_TRIAL, forward.GENERIC_GAINS_KEPT)
-    assert forward.data_sizes("generic-gains") == dense == (1000, 3000)
-    for model in ("structured", "generic", "conditioned"):
-        assert forward.data_sizes(model) == (forward.PER_TRIAL, forward.MAX_TRANSITIONS)
-    kept = {}
-    for model in ("generic", "generic-gains"):
-        config = default_config(
-            "forward", robust=True, max_trials=1, imagine_trials=0, forward_model=model
-        )
-        result = learn(Plant(), start(101), config, 101)
-        again = learn(Plant(), start(101), config, 101)
-        data = np.array(result.get("data"))
-        assert np.array_equal(data, np.array(again.get("data")))
-        kept[model] = len(data) // 11
-    assert result.simulated_seconds == pytest.approx(30.0)  # the eq-24 check ends it
-    assert kept == {"generic": forward.PER_TRIAL, "generic-gains": forward.GENERIC_GAINS_PER_TRIAL}
-    # the window: the most recent GENERIC_GAINS_KEPT of each plant, in their order
-    rows = np.zeros((2 * 3500, 11))
-    rows[:, 0] = np.arange(len(rows))
-    rows[3500:, 9:] = 1.2
-    recent = forward.keep_recent(rows, forward.GENERIC_GAINS_KEPT)
-    assert len(recent) == 2 * forward.GENERIC_GAINS_KEPT
-    assert recent[0, 0] == 500 and recent[3000, 0] == 4000 and recent[-1, 0] == 6999
-    # a checkpoint holds the window: generic-gains records the nominal plant alone
-    from striatal.io.schema import MAX_MEMORY_NUMBERS
-
-    assert forward.GENERIC_GAINS_KEPT * 11 <= MAX_MEMORY_NUMBERS

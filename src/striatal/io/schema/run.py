@@ -122,16 +122,15 @@ MEMORY: dict[str, dict[str, MemoryEntry]] = {
     },
     # the recorded transitions (n, 11): state (4), force (1), next state (4), the true
     # plant's pole mass and length factors (2); at most 1 200 of each of the five plants
-    # the real checks run (the nominal one and the robustness set's four corners), or
-    # generic-gains' 3 000 of the nominal plant alone; and the imagined trials so far and
-    # their simulated seconds
+    # the real checks run (the nominal one and the robustness set's four corners); and
+    # the imagined trials so far and their simulated seconds
     "forward": {
         "data": MemoryEntry(multiple_of=11),
         "imagined": MemoryEntry(sizes=(2,), nonnegative=True, whole_at=(0,)),
     },
 }
 #: The most numbers one memory entry holds (forward's 1 200 transitions of 11 on each of
-#: five plants; generic-gains' 3 000 of one plant hold half as many).
+#: five plants).
 MAX_MEMORY_NUMBERS = 1200 * 5 * 11
 
 MemoryNumbers = Annotated[list[Recorded], Field(max_length=MAX_MEMORY_NUMBERS)]

@@ -80,8 +80,6 @@ from striatal.sim.rollout import Protocol
 __all__ = [
     "FORWARD",
     "GENERIC_DURATION",
-    "GENERIC_GAINS_KEPT",
-    "GENERIC_GAINS_PER_TRIAL",
     "GENERIC_ROUND",
     "MARGIN_MODELS",
     "MARGIN_ROBUST",
@@ -90,7 +88,6 @@ __all__ = [
     "ForwardConfig",
     "ForwardRule",
     "World",
-    "data_sizes",
     "generic_world",
     "imagine",
     "imagine_steps",
@@ -102,11 +99,6 @@ __all__ = [
 #: at most :data:`PER_TRIAL` of them, evenly spaced.
 MAX_TRANSITIONS = 1200
 PER_TRIAL = 400
-#: generic-gains' own :data:`PER_TRIAL` and :data:`MAX_TRANSITIONS`: denser data, chosen
-#: on the tuning root 0 (real seconds not worse in a paired test, less CPU; docs/results.md,
-#: "Denser data as generic-gains' default").
-GENERIC_GAINS_PER_TRIAL = 1000
-GENERIC_GAINS_KEPT = 3000
 #: Columns of one kept transition: state (4), held force, next state (4), the true
 #: plant's pole mass and length factors (2).
 _WIDTH = 11
@@ -164,16 +156,6 @@ class Imagined:
     solved: bool
     simulations: int
     simulated_seconds: float
-
-
-def data_sizes(forward_model: ForwardModel) -> tuple[int, int]:
-    """The transitions kept from each real run and the most recent kept of each plant,
-    for ``forward_model``: generic-gains' denser :data:`GENERIC_GAINS_PER_TRIAL` and
-    :data:`GENERIC_GAINS_KEPT`, the other models' :data:`PER_TRIAL` and
-    :data:`MAX_TRANSITIONS`."""
-    if forward_model == "generic-gains":
-        return GENERIC_GAINS_PER_TRIAL, GENERIC_GAINS_KEPT
-    return PER_TRIAL, MAX_TRANSITIONS
 
 
 def transitions_of(
@@ -468,12 +450,9 @@ class ForwardRule(Rule):
         plan, success = trial.plan, trial.success
         c = pick(ForwardConfig, config)
         rows = trial.outcome.rows
-        per_trial, kept = data_sizes(c.forward_model)
-        new = [
-            transitions_of(rows, per_trial=per_trial) if rows is not None else np.empty((0, _WIDTH))
-        ]
-        new += [transitions_of(run, factors, per_trial=per_trial) for factors, run in trial.checks]
-        data = keep_recent(np.concatenate([kept_data(state), *new]), kept)
+        new = [transitions_of(rows) if rows is not None else np.empty((0, _WIDTH))]
+        new += [transitions_of(run, factors) for factors, run in trial.checks]
+        data = keep_recent(np.concatenate([kept_data(state), *new]))
         done = state.get("imagined") or (0.0, 0.0)
         W, theta_c = tuple(float(w) for w in plan.W), plan.theta_c
         report: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
