@@ -2,8 +2,9 @@
 
 Each argument is NAME=SWEEP: a sweep folder run with ``--baselines random`` on the same
 seeds as the others (its random-search rows are the same run for run); a NAME given
-more than once pools its sweeps (e.g. one per evaluation root). For each NAME the
-learner arm's row, then random search's:
+more than once pools its sweeps (e.g. one per evaluation root). A sweep's other arms
+(its control, CMA-ES) enter the margin tables as "NAME control", "NAME cmaes". For
+each NAME the learner arm's row, then random search's:
 
 1. cost: robust runs [Wilson 95 %], real simulated seconds of the solved runs (median
    and its percentile-bootstrap interval, ``np.random.default_rng(0)``), real trials,
@@ -54,6 +55,16 @@ def group(c: Perturbation) -> str:
     if (c.theta0, c.x0) != (NOMINAL.theta0, NOMINAL.x0):
         return "starts (4)"
     return "draws (20)" if c.name.startswith("draw") else "length scan (14)"
+
+
+def arm_key(name: str, arm: str) -> str:
+    """The margin tables' row of sweep arm ``arm`` given as NAME ``name``: the learner is
+    NAME, random search is one row (the same in every sweep, checked in :func:`main`), and
+    another arm (a control, CMA-ES) is NAME's own, since it shares NAME's options (a
+    control under ``--stop-margin`` stops on the wider corners too)."""
+    if arm == "learner":
+        return name
+    return arm if arm == "random" else f"{name} {arm}"
 
 
 def paired(a: np.ndarray, b: np.ndarray) -> str:
@@ -130,7 +141,7 @@ def main(args: list[str]) -> None:
         elif found.get("random", {}) != first_random:
             lines.append(f"| (random search in {name}'s sweeps differs from the first's) |")
         for arm, by_seed in found.items():
-            arms.setdefault(name if arm == "learner" else arm, {}).update(by_seed)
+            arms.setdefault(arm_key(name, arm), {}).update(by_seed)
     print("\n".join(lines) + "\n")
     print("The margin set, 40 conditions:\n")
     table, found = margin_table(arms)
