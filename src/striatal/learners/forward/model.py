@@ -374,11 +374,13 @@ def fit_generic(
     ``readout="sparse"`` (not ``conditioned``): the inputs are not standardised (mean
     0, scale 1: sine and cosine as they are, the velocities in m/s and rad/s, the force
     in N), so that a monomial is a fixed function of the state, not of one trial's
-    spread; each member's readout is scikit-learn's ``OrthogonalMatchingPursuit`` with
-    at most ``terms`` monomials per output (the constant among them; columns scaled to
-    unit norm on its resample for the choice), whose coefficients are the least-squares
-    fit on the chosen monomials (no penalty, no intercept beside the constant). Only
-    the monomials some member chose are kept in ``args.powers``. The library is the
+    spread; each member chooses, on its bootstrap resample, at most ``terms`` monomials
+    per output with scikit-learn's ``OrthogonalMatchingPursuit`` (the constant among
+    the candidates; columns scaled to unit norm for the choice), then both outputs are
+    fitted by least squares on the union of the monomials chosen for either (no
+    penalty, no intercept beside the constant): with a motor force that barely moved,
+    the cart's acceleration reveals the force's monomial and the pole's then reads it
+    too. Only the monomials some member chose are kept in ``args.powers``. The library is the
     generic one; its low-degree monomials contain the cart-pole's leading terms (sin
     theta, cos theta times the force), which is why a sparse choice can extrapolate
     from a swing to upright where the dense ridge does not (docs/results.md, round 6).
@@ -449,10 +451,16 @@ def _fit_sparse(
             warnings.simplefilter("ignore", RuntimeWarning)
             pursuit = OrthogonalMatchingPursuit(n_nonzero_coefs=terms, fit_intercept=False)
             pursuit.fit(Phi[rows] / norms, y[rows])
-        coef.append(np.atleast_2d(pursuit.coef_) / norms)
+        # both outputs read the monomials either chose: least squares on their union
+        support = (np.atleast_2d(pursuit.coef_) != 0).any(axis=0)
+        support[0] |= not support.any()  # the constant, when nothing moved
+        unit = Phi[rows][:, support] / norms[support]
+        chosen = np.zeros((2, len(powers)))
+        chosen[:, support] = np.linalg.lstsq(unit, y[rows], rcond=None)[0].T
+        coef.append(chosen / norms)
     stacked = np.stack(coef)
     kept = (stacked != 0).any(axis=(0, 1))
-    kept[0] |= not kept.any()  # the constant, when nothing moved
+    kept[0] |= not kept.any()
     args = LearnedArgs(
         mean=np.zeros(N_FEATURES),
         scale=np.ones(N_FEATURES),
