@@ -323,8 +323,8 @@ RIDGE = 1e-3
 #: the data; "sparse", a few monomials of the raw inputs per output and member.
 Readout = Literal["ridge", "sparse"]
 READOUTS: tuple[str, ...] = ("ridge", "sparse")
-#: The monomials the sparse readout keeps per output and member (chosen on root 0:
-#: docs/results.md, "The generic forward model, round 6").
+#: The monomials the sparse readout chooses per output and member (root 0: 2-8 compared
+#: offline, 4 run in the loop; docs/results.md, "The generic forward model, round 6").
 SPARSE_TERMS = 4
 
 
