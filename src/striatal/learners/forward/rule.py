@@ -27,15 +27,15 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    Generic: on the ensemble's mean, with ``robust`` pgpe's plain preset (a learned plant
    has no pole mass to jitter); a candidate must also pass every start of the robustness
    set on each member (:func:`striatal.sim.robust.family_check`), and with
-   "generic-gains" and "sparse-gains" on the mean with its angular acceleration times each of
-   :data:`RESPONSE_GAINS`, each check spent from the budget. Else imagination goes on,
+   "generic-gains" and "sparse-gains" on the mean with its angular acceleration times
+   each of :data:`RESPONSE_GAINS`, each check spent from the budget. Else imagination goes on,
    unless the round found no solution within ``imagine_round`` trials (generic:
    :data:`GENERIC_ROUND` by default): then the next real trial's data refit the model
    first. The candidate, found or not, is the next real trial's controller. With
    ``imagine_margin`` M the plant corners imagination asks for are those at
    x(1 +- (0.2 + M)) (structured: the inner pgpe's jitter and each family plant's set;
-   generic-gains: :func:`response_gains`), a margin beyond the real checks' +-20 %;
-   the robust preset of both sets M = 0.1 (:data:`MARGIN_ROBUST`).
+   generic-gains and sparse-gains: :func:`response_gains`), a margin beyond the real
+   checks' +-20 %; the robust preset of these models sets M = 0.1 (:data:`MARGIN_ROBUST`).
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
 imagined simulations and simulated seconds; history column ``imagined``), never in
