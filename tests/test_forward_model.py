@@ -281,9 +281,10 @@ def generic_inputs(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.nda
 
 def test_the_sparse_readout_recovers_a_sparse_function_with_few_terms() -> None:
     """Accelerations that are a few monomials of the inputs (x_ddot = 0.9 f - 0.5 sin cos,
-    theta_ddot = 10 sin - cos f + 0.2 theta_dot): the sparse readout keeps those
-    monomials only, with their coefficients, and predicts new inputs exactly, while the
-    library it chose from is the full generic one (56 cubic monomials)."""
+    theta_ddot = 10 sin - cos f + 0.2 theta_dot): from the full generic library (56
+    cubic monomials) the sparse readout keeps those five monomials only, each output
+    with its coefficients (and zero on the other output's), and predicts new inputs
+    exactly."""
     pytest.importorskip("sklearn")
     rng = np.random.default_rng(3)
     states, forces = generic_inputs(600, rng)
