@@ -324,7 +324,7 @@ RIDGE = 1e-3
 Readout = Literal["ridge", "sparse"]
 READOUTS: tuple[str, ...] = ("ridge", "sparse")
 #: The monomials the sparse readout chooses per output and member (root 0: 2-8 compared
-#: offline, 4 run in the loop; docs/results.md, "The generic forward model, round 6").
+#: offline, 3, 4 and 6 in the loop; docs/results.md, "The generic forward model, round 6").
 SPARSE_TERMS = 4
 
 
