@@ -289,6 +289,41 @@ def test_generic_gains_checks_candidates_on_the_mean_with_the_pole_answering_slo
     assert result.simulations >= 2
 
 
+@pytest.mark.parametrize(
+    ("model", "readout"), [("generic-gains", "ridge"), ("sparse-gains", "sparse")]
+)
+def test_sparse_gains_is_generic_gains_with_the_sparse_readout(
+    monkeypatch: pytest.MonkeyPatch, model: str, readout: str
+) -> None:
+    """--forward-model sparse-gains fits the sparse readout, and is otherwise
+    generic-gains: the two response gains checked, the margin of the robust preset;
+    generic-gains keeps the ridge (its runs unchanged)."""
+    pytest.importorskip("sklearn")
+    seen: list[tuple[str, int, int]] = []
+    fit, world = forward.fit_generic, forward.generic_world
+
+    def fitting(*args: Any, **kwargs: Any) -> Any:
+        fitted = fit(*args, **kwargs)
+        seen.append((kwargs["readout"], len(fitted.args.powers), -1))
+        return fitted
+
+    def gained(m: Any, believed: Plant, gains: tuple[float, ...] = ()) -> Any:
+        seen[-1] = (*seen[-1][:2], len(gains))
+        return world(m, believed, gains)
+
+    monkeypatch.setattr(forward, "fit_generic", fitting)
+    monkeypatch.setattr(forward, "generic_world", gained)
+    config = default_config(
+        "forward", robust=True, max_trials=2, imagine_trials=60, forward_model=model
+    )
+    assert config.imagine_margin == 0.1
+    result = learn(Plant(), start(101), config, 101)
+    assert seen and {(r, g) for r, _, g in seen} == {(readout, 2)}
+    if readout == "sparse":  # a few of the 56 monomials
+        assert all(n < 56 for _, n, _ in seen)
+    assert result.get("imagined")[0] > 0
+
+
 def test_the_generic_model_without_scikit_learn_is_refused_before_any_trial(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -307,8 +342,8 @@ def test_the_generic_model_without_scikit_learn_is_refused_before_any_trial(
     with pytest.raises(
         ParameterError,
         match=(
-            "forward_model must be 'structured', 'generic', 'generic-gains' or 'conditioned', "
-            "got 'neural'"
+            "forward_model must be 'structured', 'generic', 'generic-gains', 'sparse-gains' or "
+            "'conditioned', got 'neural'"
         ),
     ):
         default_config("forward", forward_model="neural")

@@ -104,7 +104,7 @@ def default_config(learner: str = "chapter", **changes: Any) -> LearnerConfig:
     ``default_config("chapter")`` is the chapter's learner exactly. With
     ``robust=True`` the rule's robust preset (``Rule.robust_preset_of(changes)``) is
     applied over its preset first (pgpe: plant_jitter 0.2, alpha 0.5; forward with the
-    structured or generic-gains model: imagine_margin 0.1).
+    structured, generic-gains or sparse-gains model: imagine_margin 0.1).
     """
     rule = rule_of(learner)
     robust = dict(rule.robust_preset_of(changes)) if changes.get("robust") is True else {}

@@ -17,14 +17,21 @@ declared by their prior knowledge:
   set's corners are scaled plants) to the step's mean accelerations, a smooth
   function of these inputs. Its uncertainty is the ensemble's spread, and
   :meth:`GenericModel.plant` runs trials on it (a conditioned one on any factors).
+  With ``readout="sparse"`` each member keeps only a few of the same monomials, of
+  the raw inputs (:data:`SPARSE_TERMS` per output, chosen by orthogonal matching
+  pursuit), the sparse regression of SINDy (Brunton, Proctor and Kutz 2016) bagged
+  as in ensemble SINDy (Fasel et al. 2022): the library is the same generic one, the
+  sparsity is the prior.
 
 Both are pure: the same transitions give the same model.
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -40,8 +47,11 @@ __all__ = [
     "DEGREE",
     "GENERIC_INPUTS",
     "GENERIC_OUTPUTS",
+    "READOUTS",
     "RIDGE",
+    "SPARSE_TERMS",
     "GenericModel",
+    "Readout",
     "StructuredFit",
     "Transitions",
     "fit_generic",
@@ -309,6 +319,15 @@ FACTOR_SHRINK = 0.1
 RIDGE = 1e-3
 
 
+#: The generic model's readouts: "ridge", every monomial of the inputs standardised on
+#: the data; "sparse", a few monomials of the raw inputs per output and member.
+Readout = Literal["ridge", "sparse"]
+READOUTS: tuple[str, ...] = ("ridge", "sparse")
+#: The monomials the sparse readout chooses per output and member (root 0: 2-8 compared
+#: offline, 3, 4 and 6 in the loop; docs/results.md, "The generic forward model, round 6").
+SPARSE_TERMS = 4
+
+
 def generic_powers(degree: int, conditioned: bool) -> np.ndarray:
     """The monomials' exponents (F, 5) or, ``conditioned``, (F, 7): every monomial of
     degree <= ``degree`` of the five state and force inputs (scikit-learn's
@@ -341,6 +360,8 @@ def fit_generic(
     degree: int = DEGREE,
     ridge: float = RIDGE,
     conditioned: bool = False,
+    readout: Readout = "ridge",
+    terms: int = SPARSE_TERMS,
 ) -> GenericModel:
     """A bootstrap ensemble of ``members`` regressors: scikit-learn's ``StandardScaler``
     and ``PolynomialFeatures`` (every monomial of degree <= ``degree`` of the standardised
@@ -349,6 +370,20 @@ def fit_generic(
     ``ridge``) per member, each on a bootstrap resample of ``data``. Data from one
     plant only leave the factors' monomials at zero (a factor of zero spread
     standardises to 0), so the conditioned model then predicts every plant alike.
+
+    ``readout="sparse"`` (not ``conditioned``): the inputs are not standardised (mean
+    0, scale 1: sine and cosine as they are, the velocities in m/s and rad/s, the force
+    in N), so that a monomial is a fixed function of the state, not of one trial's
+    spread; each member chooses, on its bootstrap resample, at most ``terms`` monomials
+    per output with scikit-learn's ``OrthogonalMatchingPursuit`` (the constant among
+    the candidates; columns scaled to unit norm for the choice), then both outputs are
+    fitted by least squares on the union of the monomials chosen for either (no
+    penalty, no intercept beside the constant): with a motor force that barely moved,
+    the cart's acceleration reveals the force's monomial and the pole's then reads it
+    too. Only the monomials some member chose are kept in ``args.powers``. The library is the
+    generic one; its low-degree monomials contain the cart-pole's leading terms (sin
+    theta, cos theta times the force), which is why a sparse choice can extrapolate
+    from a swing to upright where the dense ridge does not (docs/results.md, round 6).
     Needs scikit-learn (the ``model`` extra)."""
     try:
         from sklearn.linear_model import Ridge
@@ -361,6 +396,14 @@ def fit_generic(
         raise ParameterError(f"members must be >= 1, got {members}")
     if not 1 <= degree <= 6:
         raise ParameterError(f"degree must be in [1, 6], got {degree}")
+    if readout not in READOUTS:
+        raise ParameterError(f"readout must be 'ridge' or 'sparse', got {readout!r}")
+    if readout == "sparse":
+        if conditioned:
+            raise ParameterError(
+                "the sparse readout takes the plain generic model, not conditioned"
+            )
+        return _fit_sparse(data, rng, members=members, degree=degree, terms=terms)
     X = _features(data.states, data.forces, data.factors if conditioned else None)
     y = (data.next_states[:, [1, 3]] - data.states[:, [1, 3]]) / data.dt
     scaler = StandardScaler().fit(X)
@@ -372,9 +415,9 @@ def fit_generic(
     coef, intercept = [], []
     for _ in range(members):
         rows = rng.integers(0, len(data), len(data))
-        readout = Ridge(alpha=ridge).fit(Phi[rows], y[rows])
-        coef.append(readout.coef_ * shrink)
-        intercept.append(readout.intercept_)
+        fitted = Ridge(alpha=ridge).fit(Phi[rows], y[rows])
+        coef.append(fitted.coef_ * shrink)
+        intercept.append(fitted.intercept_)
     args = LearnedArgs(
         mean=np.array(scaler.mean_, dtype=float),
         scale=np.array(scaler.scale_, dtype=float),
@@ -385,3 +428,44 @@ def fit_generic(
     assert data.factors is not None
     plants = tuple((float(a), float(b)) for a, b in np.unique(data.factors, axis=0))
     return GenericModel(args, data.dt, conditioned, plants)
+
+
+def _fit_sparse(
+    data: Transitions, rng: np.random.Generator, *, members: int, degree: int, terms: int
+) -> GenericModel:
+    """:func:`fit_generic`'s sparse readout (its docstring)."""
+    from sklearn.linear_model import OrthogonalMatchingPursuit
+
+    powers = generic_powers(degree, False)
+    if not 1 <= terms <= len(powers):
+        raise ParameterError(f"terms must be in [1, {len(powers)}], got {terms}")
+    Phi = _monomials(_features(data.states, data.forces), powers)
+    y = (data.next_states[:, [1, 3]] - data.states[:, [1, 3]]) / data.dt
+    coef = []
+    for _ in range(members):
+        rows = rng.integers(0, len(data), len(data))
+        norms = np.linalg.norm(Phi[rows], axis=0)
+        norms = np.where(norms > 0, norms, 1.0)
+        with warnings.catch_warnings():
+            # fewer independent monomials than terms on a narrow trial: it stops early
+            warnings.simplefilter("ignore", RuntimeWarning)
+            pursuit = OrthogonalMatchingPursuit(n_nonzero_coefs=terms, fit_intercept=False)
+            pursuit.fit(Phi[rows] / norms, y[rows])
+        # both outputs read the monomials either chose: least squares on their union
+        support = (np.atleast_2d(pursuit.coef_) != 0).any(axis=0)
+        support[0] |= not support.any()  # the constant, when nothing moved
+        unit = Phi[rows][:, support] / norms[support]
+        chosen = np.zeros((2, len(powers)))
+        chosen[:, support] = np.linalg.lstsq(unit, y[rows], rcond=None)[0].T
+        coef.append(chosen / norms)
+    stacked = np.stack(coef)
+    kept = (stacked != 0).any(axis=(0, 1))
+    kept[0] |= not kept.any()
+    args = LearnedArgs(
+        mean=np.zeros(N_FEATURES),
+        scale=np.ones(N_FEATURES),
+        powers=np.ascontiguousarray(powers[kept]),
+        coef=np.ascontiguousarray(stacked[:, :, kept], dtype=float),
+        intercept=np.zeros((members, 2)),
+    )
+    return GenericModel(args, data.dt)

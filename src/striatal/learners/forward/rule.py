@@ -15,7 +15,9 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    "generic-gains", the same model),
    :func:`~striatal.learners.forward.model.fit_generic` (no cart-pole equations: an
    ensemble of polynomial ridge regressions, run as a
-   :class:`~striatal.sim.learned.LearnedPlant`).
+   :class:`~striatal.sim.learned.LearnedPlant`); "sparse-gains" is "generic-gains"
+   with the sparse readout (a few monomials of the raw inputs per output,
+   :data:`~striatal.learners.forward.model.SPARSE_TERMS`).
 3. **imagined learning** (the basal ganglia, reinforcement): pgpe, the project's rule
    (:mod:`striatal.learners.pgpe`, its own code through :func:`striatal.learners.loop.learn`),
    learns from W on the model's :class:`World` for at most ``imagine_trials`` trials, with
@@ -25,15 +27,15 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    Generic: on the ensemble's mean, with ``robust`` pgpe's plain preset (a learned plant
    has no pole mass to jitter); a candidate must also pass every start of the robustness
    set on each member (:func:`striatal.sim.robust.family_check`), and with
-   "generic-gains" on the mean with its angular acceleration times each of
-   :data:`RESPONSE_GAINS`, each check spent from the budget. Else imagination goes on,
+   "generic-gains" and "sparse-gains" on the mean with its angular acceleration times
+   each of :data:`RESPONSE_GAINS`, each check spent from the budget. Else imagination goes on,
    unless the round found no solution within ``imagine_round`` trials (generic:
    :data:`GENERIC_ROUND` by default): then the next real trial's data refit the model
    first. The candidate, found or not, is the next real trial's controller. With
    ``imagine_margin`` M the plant corners imagination asks for are those at
    x(1 +- (0.2 + M)) (structured: the inner pgpe's jitter and each family plant's set;
-   generic-gains: :func:`response_gains`), a margin beyond the real checks' +-20 %;
-   the robust preset of both sets M = 0.1 (:data:`MARGIN_ROBUST`).
+   generic-gains and sparse-gains: :func:`response_gains`), a margin beyond the real
+   checks' +-20 %; the robust preset of these models sets M = 0.1 (:data:`MARGIN_ROBUST`).
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
 imagined simulations and simulated seconds; history column ``imagined``), never in
@@ -63,6 +65,7 @@ from striatal.learners.common import initial_state
 from striatal.learners.config import ForwardModel, LearnerConfig, pick
 from striatal.learners.forward.model import (
     GenericModel,
+    Readout,
     StructuredFit,
     Transitions,
     fit_generic,
@@ -79,11 +82,13 @@ from striatal.sim.rollout import Protocol
 
 __all__ = [
     "FORWARD",
+    "GAINED_MODELS",
     "GENERIC_DURATION",
     "GENERIC_ROUND",
     "MARGIN_MODELS",
     "MARGIN_ROBUST",
     "MAX_TRANSITIONS",
+    "READOUT_OF",
     "RESPONSE_GAINS",
     "ForwardConfig",
     "ForwardRule",
@@ -122,7 +127,11 @@ GENERIC_ROUND = 500
 #: explicit ``imagine_margin`` (0 included) overrides it.
 MARGIN_ROBUST = MappingProxyType({"imagine_margin": 0.1})
 #: The forward models whose imagination can ask for wider corners than the checks'.
-MARGIN_MODELS: tuple[str, ...] = ("structured", "generic-gains")
+MARGIN_MODELS: tuple[str, ...] = ("structured", "generic-gains", "sparse-gains")
+#: The generic models checked on their mean with the :data:`RESPONSE_GAINS`.
+GAINED_MODELS: tuple[str, ...] = ("generic-gains", "sparse-gains")
+#: The generic models' readouts (:func:`~striatal.learners.forward.model.fit_generic`).
+READOUT_OF: Mapping[str, Readout] = MappingProxyType({"sparse-gains": "sparse"})
 #: The generic worlds' own imagined-trial duration [s] (``imagine_duration`` none;
 #: None: the real trial's), chosen with :data:`GENERIC_ROUND`.
 GENERIC_DURATION: float | None = None
@@ -412,7 +421,7 @@ class ForwardRule(Rule):
         ):
             raise ParameterError(
                 "imagine_margin widens the plant corners imagination checks: it needs --robust "
-                "and --forward-model structured or generic-gains"
+                "and --forward-model structured, generic-gains or sparse-gains"
             )
         if config.forward_model != "structured" and importlib.util.find_spec("sklearn") is None:
             raise ParameterError(
@@ -468,9 +477,10 @@ class ForwardRule(Rule):
                     transitions,
                     np.random.default_rng(seed),
                     conditioned=c.forward_model == "conditioned",
+                    readout=READOUT_OF.get(c.forward_model, "ridge"),
                 )
                 box = ROBUST_BOX + c.imagine_margin
-                gains = response_gains(box) if c.forward_model == "generic-gains" else ()
+                gains = response_gains(box) if c.forward_model in GAINED_MODELS else ()
                 world = generic_world(model, believed_plant(context.plant), gains)
                 fitted = (math.nan, math.nan)
             else:
