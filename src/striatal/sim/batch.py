@@ -174,6 +174,7 @@ class Calls:
         for call in self.calls:
             args, critic = call.args, call.critic
             sim = self.requests[call.members[0]].sim
+            values = args.outs.tolist()
             for j, i in enumerate(call.members):
                 r = self.requests[i]
                 r.trace[:] = args.learning.trace[j]
@@ -187,7 +188,7 @@ class Calls:
                         (o.gains_end, critic.gains_end),
                     ):
                         mine[:] = rows[j]
-                outcomes[i] = TrialOutcome.from_row(args.outs[j], sim)
+                outcomes[i] = TrialOutcome.from_values(values[j], sim)
         return [outcomes[i] for i in range(len(self.requests))]
 
 
@@ -205,11 +206,7 @@ def prepare(
     runs alone (then here, in request order, as it draws)."""
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
-    keys = [r.batch_key() for r in requests]
-    groups: dict[tuple[object, ...], list[int]] = {}
-    for i, key in enumerate(keys):
-        if key is not None:
-            groups.setdefault(key, []).append(i)
+    keys, groups = _groups(requests)
     rows: dict[int, np.ndarray] = {}
     blocks: list[np.ndarray | None] = []
     for members in groups.values():
@@ -237,6 +234,32 @@ def prepare(
         critic = None if group[0].online is None else _critics(group)
         calls.append(KernelCall(members, batch_args(group, block), critic))
     return Calls(requests, engine, calls, done, draw)
+
+
+def _groups(
+    requests: Sequence[TrialRequest],
+) -> tuple[list[tuple[object, ...] | None], dict[tuple[object, ...], list[int]]]:
+    """Each request's :meth:`TrialRequest.batch_key`, and the indices of the requests
+    that share a key, by key, in request order.
+
+    Requests that hold the same objects (a run's plant, readings, simulation, protocol,
+    hardware: the same for all its trials) share a key, so it is made and hashed once for
+    them (each key hashes those frozen dataclasses, a few microseconds a request)."""
+    by_objects: dict[tuple[object, ...], list[int]] = {}
+    for i, r in enumerate(requests):
+        by_objects.setdefault(r.batch_objects(), []).append(i)
+    keys: list[tuple[object, ...] | None] = [None] * len(requests)
+    groups: dict[tuple[object, ...], list[int]] = {}
+    for members in by_objects.values():
+        key = requests[members[0]].batch_key()
+        for i in members:
+            keys[i] = key
+        if key is not None:
+            groups.setdefault(key, []).extend(members)
+    if len(groups) < len(by_objects):
+        for members in groups.values():
+            members.sort()
+    return keys, groups
 
 
 def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:

@@ -141,7 +141,14 @@ class TrialOutcome:
         cls, out: np.ndarray, sim: Simulation, rows: np.ndarray | None = None
     ) -> TrialOutcome:
         """Decode a kernel summary row (layout kernel.OUT_*), with the trial's ``rows``."""
-        v = out.tolist()
+        return cls.from_values(out.tolist(), sim, rows)
+
+    @classmethod
+    def from_values(
+        cls, v: list[float], sim: Simulation, rows: np.ndarray | None = None
+    ) -> TrialOutcome:
+        """:meth:`from_row` of a summary row given as a list (``row.tolist()``: a batch's
+        rows decoded with one ``outs.tolist()``)."""
         final = (v[kernel.OUT_X], v[kernel.OUT_X_DOT], v[kernel.OUT_THETA], v[kernel.OUT_THETA_DOT])
         fault = bool(v[kernel.OUT_FAULT])
         early = bool(v[kernel.OUT_EARLY])
@@ -466,6 +473,30 @@ class TrialRequest:
         kernel runs it)."""
         learned = isinstance(self.plant, LearnedPlant)
         return self.sensor.active or self.record or (learned and self.online is not None)
+
+    def batch_objects(self) -> tuple[object, ...]:
+        """What :meth:`batch_key` is made of, the objects by identity (``id``), the
+        readings by value: requests
+        with equal ``batch_objects`` have equal keys, found without hashing the objects.
+        Only for grouping requests that are all alive (an ``id`` can be reused later)."""
+        c = self.controller
+        return (
+            id(self.plant),
+            c.balance_sign,
+            c.switch,
+            c.inhibition,
+            id(self.sim),
+            id(self.protocol),
+            self.action_every,
+            self.chapter_eligibility,
+            self.gamma,
+            id(self.model),
+            id(self.hardware),
+            self.draws_actions,
+            id(self.online),
+            self.sensor.active,
+            self.record,
+        )
 
     def batch_key(self) -> tuple[object, ...] | None:
         """What a batched kernel call shares with this trial; None if it
