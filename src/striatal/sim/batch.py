@@ -27,6 +27,7 @@ driver runs them.
 from __future__ import annotations
 
 import functools
+import sys
 import time
 from collections.abc import Callable, Generator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
@@ -51,6 +52,7 @@ from striatal.sim.rollout import (
 __all__ = [
     "BATCH_ENGINES",
     "LANES",
+    "SWITCH_INTERVAL",
     "Calls",
     "KernelCall",
     "Lockstep",
@@ -75,6 +77,11 @@ BATCH_ENGINES: tuple[str, ...] = ("batch", "simd")
 CHUNK = 2
 #: From this many normals in one round, generators fill their rows on threads.
 PARALLEL_NORMALS = 50_000
+#: Python's switch interval while :class:`Lockstep` runs [s] (its default is 5 ms): a lane's
+#: worker takes the GIL back after each call that releases it (each request's draw, the
+#: kernel, Numba's thread settings), and while the main thread runs the runs' Python it
+#: waited up to the interval for it each time (benchmarks/gil_wait.py).
+SWITCH_INTERVAL = 1e-4
 #: The groups of generators :class:`Lockstep` runs in turn (one group's trials on the
 #: kernel while the main thread advances the others).
 LANES = 2
@@ -315,6 +322,10 @@ class Lockstep:
     always in the same group, so its trials, and the order in which its generator draws
     their noise, are what they would be alone.
 
+    While it runs, Python's switch interval is :data:`SWITCH_INTERVAL` (restored after),
+    so that a worker waiting for the GIL behind the main thread's Python gets it within
+    0.1 ms rather than 5.
+
     :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value
     (the lanes are served as their calls finish, so the order of two lanes' values can
     vary from run to run, as the process engine's rows do; the values cannot).
@@ -362,6 +373,14 @@ class Lockstep:
         return out
 
     def run(self) -> Generator[tuple[int, Any], None, None]:
+        switch = sys.getswitchinterval()
+        sys.setswitchinterval(min(switch, SWITCH_INTERVAL))
+        try:
+            yield from self._run()
+        finally:
+            sys.setswitchinterval(switch)
+
+    def _run(self) -> Generator[tuple[int, Any], None, None]:
         lanes: list[dict[int, list[TrialRequest]]] = [{} for _ in range(LANES)]
         for i in range(len(self.steps)):
             try:
