@@ -372,3 +372,28 @@ def test_requests_grouped_by_their_objects_group_as_by_their_keys() -> None:
             want.setdefault(key, []).append(i)
     assert groups == want
     assert list(groups.values()) == [[0, 1, 5, 8], [2], [4], [6], [7]]
+
+
+def test_lockstep_runs_at_its_switch_interval_and_restores_python_s() -> None:
+    """While Lockstep runs, Python's switch interval is SWITCH_INTERVAL (the runs see it);
+    after, whatever it was, also when a run raises."""
+    import sys
+
+    from striatal.sim.batch import SWITCH_INTERVAL, Lockstep, Steps
+
+    seen: list[float] = []
+
+    def steps(fail: bool) -> Steps[int]:
+        seen.append(sys.getswitchinterval())
+        if fail:
+            raise RuntimeError("a run failed")
+        return 1
+        yield []
+
+    before = sys.getswitchinterval()
+    assert before > SWITCH_INTERVAL
+    assert dict(Lockstep([steps(False), steps(False)]).run()) == {0: 1, 1: 1}
+    assert seen == [pytest.approx(SWITCH_INTERVAL)] * 2 and sys.getswitchinterval() == before
+    with pytest.raises(RuntimeError, match="a run failed"):
+        list(Lockstep([steps(True)]).run())
+    assert sys.getswitchinterval() == before
