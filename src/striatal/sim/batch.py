@@ -41,7 +41,7 @@ from striatal.errors import ParameterError
 from striatal.params import CHAPTER_HARDWARE
 from striatal.sim import kernel
 from striatal.sim.learned import LearnedPlant
-from striatal.sim.noise import row_parts, run_parts
+from striatal.sim.noise import row_parts, run_parts, standard_normals
 from striatal.sim.rollout import (
     TrialOutcome,
     TrialRequest,
@@ -232,7 +232,8 @@ def prepare(
             if key is None:
                 done[i] = r.run()
             elif i in rows:
-                r.rng.standard_normal(out=rows[i])  # type: ignore[union-attr]
+                assert r.rng is not None
+                standard_normals(r.rng, rows[i])
     elif rows:
         draw = functools.partial(_draw_noise, requests, rows)
     calls = []
@@ -295,7 +296,9 @@ def _draw_noise(requests: Sequence[TrialRequest], rows: dict[int, np.ndarray]) -
         def fill() -> None:
             for c in chain_ids:
                 for i in chains[c]:
-                    requests[i].rng.standard_normal(out=rows[i])  # type: ignore[union-attr]
+                    rng = requests[i].rng
+                    assert rng is not None
+                    standard_normals(rng, rows[i])
 
         return fill
 

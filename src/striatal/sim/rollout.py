@@ -27,6 +27,7 @@ from striatal.params import (
 )
 from striatal.sim import kernel
 from striatal.sim.learned import LearnedPlant
+from striatal.sim.noise import standard_normals
 
 __all__ = [
     "NO_PROTOCOL",
@@ -219,13 +220,15 @@ def noise_arrays(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(action normals, sensor normals) of one trial, drawn from ``rng`` in that order:
     one normal per action step unless the mean policy runs, (n_steps, 2) with sensor noise."""
-    n_draws = action_draws(sim, action_every)
-    draws_actions = rng is not None and not mean_policy
-    noise = rng.standard_normal(n_draws) if draws_actions and rng is not None else np.empty(0)
+    noise = np.empty(0)
+    if rng is not None and not mean_policy:
+        noise = np.empty(action_draws(sim, action_every))
+        standard_normals(rng, noise)
     if sensor.active:
         if rng is None:
             raise ParameterError("sensor noise needs a random generator (give a seed)")
-        sensor_noise = rng.standard_normal((sim.n_steps, 2))
+        sensor_noise = np.empty((sim.n_steps, 2))
+        standard_normals(rng, sensor_noise)
     else:
         sensor_noise = np.empty((0, 2))
     return noise, sensor_noise
