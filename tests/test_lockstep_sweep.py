@@ -324,3 +324,76 @@ def test_a_run_takes_w0_evaluation_from_its_source_or_makes_its_own() -> None:
     taken = drive(runner.run_steps(spec, w0=lambda: other))
     assert taken["pass_rate_W0"] == 0.5
     assert taken["eval_simulations"] == own["eval_simulations"]
+
+
+def test_requests_grouped_by_their_objects_group_as_by_their_keys() -> None:
+    """prepare's grouping (each request's objects first, then one key a group of them)
+    gives the groups of batch_key itself: equal but distinct objects share a call,
+    another gamma, plant or readings does not, and a recorded trial runs alone."""
+    import numpy as np
+
+    from striatal.sim.batch import _groups
+    from striatal.sim.rollout import Protocol, TrialRequest
+
+    plant, other_plant = Plant(), Plant(pole_mass=0.2)
+    template = Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C)
+    chapter_sign = replace(template, balance_sign="chapter")
+    protocol = Protocol()
+
+    def request(**changes: Any) -> TrialRequest:
+        made: dict[str, Any] = {
+            "plant": plant,
+            "controller": template,
+            "sim": SHORT,
+            "protocol": protocol,
+            "rng": np.random.default_rng(0),
+            "gamma": 0.999,
+        }
+        made.update(changes)
+        return TrialRequest(**made)
+
+    requests = [
+        request(),
+        request(protocol=Protocol(), sim=Simulation(duration=20.0), plant=Plant()),
+        request(gamma=0.9),
+        request(record=True),
+        request(plant=other_plant),
+        request(controller=template.with_gains(CHAPTER_INITIAL_W, 0.5)),
+        request(controller=chapter_sign),
+        request(rng=None),
+        request(),
+    ]
+    keys, groups = _groups(requests)
+    want: dict[tuple[object, ...], list[int]] = {}
+    for i, r in enumerate(requests):
+        key = r.batch_key()
+        assert keys[i] == key
+        if key is not None:
+            want.setdefault(key, []).append(i)
+    assert groups == want
+    assert list(groups.values()) == [[0, 1, 5, 8], [2], [4], [6], [7]]
+
+
+def test_lockstep_runs_at_its_switch_interval_and_restores_python_s() -> None:
+    """While Lockstep runs, Python's switch interval is SWITCH_INTERVAL (the runs see it);
+    after, whatever it was, also when a run raises."""
+    import sys
+
+    from striatal.sim.batch import SWITCH_INTERVAL, Lockstep, Steps
+
+    seen: list[float] = []
+
+    def steps(fail: bool) -> Steps[int]:
+        seen.append(sys.getswitchinterval())
+        if fail:
+            raise RuntimeError("a run failed")
+        return 1
+        yield []
+
+    before = sys.getswitchinterval()
+    assert before > SWITCH_INTERVAL
+    assert dict(Lockstep([steps(False), steps(False)]).run()) == {0: 1, 1: 1}
+    assert seen == [pytest.approx(SWITCH_INTERVAL)] * 2 and sys.getswitchinterval() == before
+    with pytest.raises(RuntimeError, match="a run failed"):
+        list(Lockstep([steps(True)]).run())
+    assert sys.getswitchinterval() == before

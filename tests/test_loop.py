@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 
 from striatal.errors import ParameterError
-from striatal.learners import default_config, initial_state, learning_step
+from striatal.learners import default_config, initial_state, learn, learning_step
 from striatal.learners.loop import CHECKS, nominal_checked, success_checks
 from striatal.params import (
     CHAPTER_FINAL_THETA_C,
@@ -128,3 +128,32 @@ def test_a_rule_that_judges_its_candidate_must_plan_it_noise_free(
     with pytest.raises(ParameterError, match="must be noise-free"):
         learning_step(state, Plant(), Controller(), SHORT, Protocol(), config)
     assert count.n == 0
+
+
+@pytest.mark.parametrize("learner", ["chapter", "pgpe"])
+def test_a_run_restoring_its_generator_once_equals_steps_that_each_restore_it(
+    learner: str,
+) -> None:
+    """learn_steps sets its generator from the state on its first step only (the steps
+    after start where the last one left it): each state and record equals a chain of
+    learning_step calls from the same start, each of which restores the generator."""
+    config = default_config(learner, max_trials=6)
+    template = Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C)
+    start = initial_state(template.gains, template.theta_c, 11)
+    seen: list[tuple[Any, Any]] = []
+    last = learn(
+        Plant(),
+        template,
+        config,
+        11,
+        sim=SHORT,
+        protocol=Protocol(),
+        on_trial=lambda s, r: seen.append((s, r)),
+    )
+    state = start
+    for run_state, run_record in seen:
+        state, record = learning_step(state, Plant(), template, SHORT, Protocol(), config)
+        assert (state, record) == (run_state, run_record)
+    assert len(seen) == 6 and state == last
+    # the generator moved: the states do not all share one generator state
+    assert len({str(s.rng_state) for s, _ in seen}) == 6

@@ -107,6 +107,11 @@ def control_note(learner: str) -> str:
 NOTE_CONTROL = control_note("chapter")
 
 
+#: The chapter's protocol (eqs 24-25), one object for every run's trials, so that a
+#: lockstep round groups them without hashing it (:func:`striatal.sim.batch.prepare`).
+PROTOCOL = Protocol()
+
+
 #: Called with each learning trial of a run (its state after the trial and its record).
 OnTrial = Callable[[LearnerState, TrialRecord], None]
 
@@ -123,9 +128,7 @@ def learning_run_steps(
     from ``template``'s gains (:func:`striatal.learners.loop.learn_steps`)."""
     start = initial_state(template.gains, template.theta_c, seed)
     check_config(config)
-    state = yield from learn_steps(
-        plant, template, config, start, sim, Protocol(), on_trial=on_trial
-    )
+    state = yield from learn_steps(plant, template, config, start, sim, PROTOCOL, on_trial=on_trial)
     return {
         "success": state.success,
         "trials": state.trials_done,
@@ -210,7 +213,7 @@ def w0_steps(spec: RunSpec, chunk: int = DRAWS_AT_ONCE) -> Steps[PassProbability
     template = spec.template.with_gains(initial_gains(spec.init, spec.seed), spec.template.theta_c)
     return (
         yield from pass_probability_steps(
-            spec.plant, template, spec.sim, Protocol(), spec.eval_draws, spec.seed, chunk=chunk
+            spec.plant, template, spec.sim, PROTOCOL, spec.eval_draws, spec.seed, chunk=chunk
         )
     )
 
@@ -243,7 +246,7 @@ def run_steps(
     mean_ok = False
     if final is not None:
         (rerun,) = yield [
-            TrialRequest(spec.plant, final, spec.sim, Protocol(), hardware=cfg.hardware)
+            TrialRequest(spec.plant, final, spec.sim, PROTOCOL, hardware=cfg.hardware)
         ]
         mean_ok = rerun.success
     evals = 1 if final is not None else 0
@@ -259,7 +262,7 @@ def run_steps(
         rate0, evals = before.rate, evals + before.simulations
         if final is not None:
             after = yield from pass_probability_steps(
-                spec.plant, final, spec.sim, Protocol(), spec.eval_draws, spec.seed
+                spec.plant, final, spec.sim, PROTOCOL, spec.eval_draws, spec.seed
             )
             rate, evals = after.rate, evals + after.simulations
     row: dict[str, Any] = {

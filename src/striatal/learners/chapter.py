@@ -176,7 +176,7 @@ class ChapterRule(PolicyRule):
             W = chapter_gain_update(plan.W, plan.trace, reward, c)
             theta_c = theta_c_rule(outcome, state.theta_c, c.theta_c_rule)
         return Update(
-            W=tuple(float(w) for w in W),
+            W=tuple(W.tolist()),
             theta_c=float(theta_c),
             memory=(("trace", finite_trace(plan.trace)),),
             extra=(policy_sigma(plan),),

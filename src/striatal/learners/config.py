@@ -275,10 +275,11 @@ class LearnerConfig:
             if value is not getattr(self, f.name):
                 object.__setattr__(self, f.name, value)
 
-    @property
+    @functools.cached_property
     def hardware(self) -> Hardware:
         """The motor and track of every trial and check of the run: the force held with
-        ``robust`` (u otherwise, the chapter's idealisation), ``max_force`` and ``track``."""
+        ``robust`` (u otherwise, the chapter's idealisation), ``max_force`` and ``track``
+        (made once: every trial of a run asks for it)."""
         return Hardware(
             hold="force" if self.robust else "u", max_force=self.max_force, track=self.track
         )

@@ -67,6 +67,7 @@ __all__ = [
     "nominal_checked",
     "register",
     "rule_of",
+    "run_context",
     "success_checks",
 ]
 
@@ -133,13 +134,23 @@ def _finite(update: Update, state: LearnerState) -> Update:
     The rules keep non-finite numbers out themselves; this is the loop's backstop, so a
     numerical fault never reaches a checkpoint, a history row or a result.
     """
-    W = update.W if all(math.isfinite(w) for w in update.W) else state.W
+    finite = _all_finite
+    if (
+        finite(update.W)
+        and math.isfinite(update.theta_c)
+        and all(finite(v) for _, v in update.memory)
+    ):
+        return update
+    W = update.W if finite(update.W) else state.W
     theta_c = update.theta_c if math.isfinite(update.theta_c) else state.theta_c
     old = dict(state.memory)
-    memory = tuple(
-        (k, v if all(math.isfinite(x) for x in v) else old.get(k, ())) for k, v in update.memory
-    )
+    memory = tuple((k, v if finite(v) else old.get(k, ())) for k, v in update.memory)
     return Update(W=W, theta_c=theta_c, memory=memory, extra=update.extra)
+
+
+def _all_finite(values: tuple[float, ...]) -> bool:
+    """Whether every one of ``values`` is finite."""
+    return all(map(math.isfinite, values))
 
 
 #: The checks of the success test, by name: what each runs. :func:`success_checks` says
@@ -188,6 +199,14 @@ def nominal_checked(config: LearnerConfig, judging: Judging | None = None) -> bo
     )
 
 
+def run_context(
+    plant: Plant, template: Controller, sim: Simulation, protocol: Protocol, config: LearnerConfig
+) -> TrialContext:
+    """The :class:`TrialContext` of a run's trials: its plant, readings, simulation,
+    protocol, and ``config``'s hardware and action rate."""
+    return TrialContext(plant, template, sim, protocol, config.hardware, config.action_every)
+
+
 #: The seed of a generator whose state is set right after (not the OS's entropy: a run
 #: restores its generator every trial).
 _BLANK = np.random.SeedSequence(0)
@@ -201,22 +220,31 @@ def learning_steps(
     protocol: Protocol,
     config: LearnerConfig,
     rng: np.random.Generator | None = None,
+    *,
+    context: TrialContext | None = None,
+    rng_at_state: bool = False,
 ) -> Steps[tuple[LearnerState, TrialRecord]]:
     """One trial with (W, theta_c) of ``state``, the success test, then the rule's update.
 
     Pure: the same state gives the same result. ``template`` carries the readings
     (balance sign, switch, inhibition); its gains are replaced by the state's. ``rng``:
     a PCG64 generator to draw with, its state set to ``state.rng_state`` first (a run
-    reuses one; None: a new one). As
+    reuses one; None: a new one); ``rng_at_state``: ``rng`` is at ``state.rng_state``
+    already (the state the run's last step left), so it is not set again. ``context``:
+    the run's :class:`TrialContext` (None: built here from the arguments; a run builds
+    it once, :func:`learn_steps`). As
     :data:`striatal.sim.batch.Steps`: every simulation is yielded as a request (the
     learning trial, the rule's own ones, the success test's trials and the robustness
     set); :func:`learning_step` runs them on the scalar kernel.
     """
     rule = rule_of(config)
-    context = TrialContext(plant, template, sim, protocol, config.hardware, config.action_every)
+    if context is None:
+        context = run_context(plant, template, sim, protocol, config)
     if rng is None:
         rng = np.random.Generator(np.random.PCG64(_BLANK))
-    rng.bit_generator.state = state.rng_state
+        rng_at_state = False
+    if not rng_at_state:
+        rng.bit_generator.state = state.rng_state
     plan = rule.plan(state, config, rng, context)
     judging = rule.judging
     if judging.candidate and plan.rng is not None:
@@ -383,10 +411,22 @@ def learn_steps(
     learning steps until success or ``config.max_trials``; returns the last state. The
     steps share one generator, its state set from each step's ``rng_state``."""
     rng = np.random.Generator(np.random.PCG64(_BLANK))
+    context = run_context(plant, template, sim, protocol, config)
+    first = True
     while not state.success and state.trials_done < config.max_trials:
+        # after the first step the generator is where the step left it: state.rng_state
         state, record = yield from learning_steps(
-            state, plant, template, sim, protocol, config, rng
+            state,
+            plant,
+            template,
+            sim,
+            protocol,
+            config,
+            rng,
+            context=context,
+            rng_at_state=not first,
         )
+        first = False
         if on_trial is not None:
             on_trial(state, record)
     return state

@@ -27,6 +27,7 @@ driver runs them.
 from __future__ import annotations
 
 import functools
+import sys
 import time
 from collections.abc import Callable, Generator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
@@ -40,7 +41,7 @@ from striatal.errors import ParameterError
 from striatal.params import CHAPTER_HARDWARE
 from striatal.sim import kernel
 from striatal.sim.learned import LearnedPlant
-from striatal.sim.noise import row_parts, run_parts
+from striatal.sim.noise import row_parts, run_parts, standard_normals
 from striatal.sim.rollout import (
     TrialOutcome,
     TrialRequest,
@@ -51,6 +52,7 @@ from striatal.sim.rollout import (
 __all__ = [
     "BATCH_ENGINES",
     "LANES",
+    "SWITCH_INTERVAL",
     "Calls",
     "KernelCall",
     "Lockstep",
@@ -75,6 +77,11 @@ BATCH_ENGINES: tuple[str, ...] = ("batch", "simd")
 CHUNK = 2
 #: From this many normals in one round, generators fill their rows on threads.
 PARALLEL_NORMALS = 50_000
+#: Python's switch interval while :class:`Lockstep` runs [s] (its default is 5 ms): a lane's
+#: worker takes the GIL back after each call that releases it (each request's draw, the
+#: kernel, Numba's thread settings), and while the main thread runs the runs' Python it
+#: waited up to the interval for it each time (benchmarks/gil_wait.py).
+SWITCH_INTERVAL = 1e-4
 #: The groups of generators :class:`Lockstep` runs in turn (one group's trials on the
 #: kernel while the main thread advances the others).
 LANES = 2
@@ -174,6 +181,7 @@ class Calls:
         for call in self.calls:
             args, critic = call.args, call.critic
             sim = self.requests[call.members[0]].sim
+            values = args.outs.tolist()
             for j, i in enumerate(call.members):
                 r = self.requests[i]
                 r.trace[:] = args.learning.trace[j]
@@ -187,7 +195,7 @@ class Calls:
                         (o.gains_end, critic.gains_end),
                     ):
                         mine[:] = rows[j]
-                outcomes[i] = TrialOutcome.from_row(args.outs[j], sim)
+                outcomes[i] = TrialOutcome.from_values(values[j], sim)
         return [outcomes[i] for i in range(len(self.requests))]
 
 
@@ -205,11 +213,7 @@ def prepare(
     runs alone (then here, in request order, as it draws)."""
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
-    keys = [r.batch_key() for r in requests]
-    groups: dict[tuple[object, ...], list[int]] = {}
-    for i, key in enumerate(keys):
-        if key is not None:
-            groups.setdefault(key, []).append(i)
+    keys, groups = _groups(requests)
     rows: dict[int, np.ndarray] = {}
     blocks: list[np.ndarray | None] = []
     for members in groups.values():
@@ -228,7 +232,8 @@ def prepare(
             if key is None:
                 done[i] = r.run()
             elif i in rows:
-                r.rng.standard_normal(out=rows[i])  # type: ignore[union-attr]
+                assert r.rng is not None
+                standard_normals(r.rng, rows[i])
     elif rows:
         draw = functools.partial(_draw_noise, requests, rows)
     calls = []
@@ -237,6 +242,32 @@ def prepare(
         critic = None if group[0].online is None else _critics(group)
         calls.append(KernelCall(members, batch_args(group, block), critic))
     return Calls(requests, engine, calls, done, draw)
+
+
+def _groups(
+    requests: Sequence[TrialRequest],
+) -> tuple[list[tuple[object, ...] | None], dict[tuple[object, ...], list[int]]]:
+    """Each request's :meth:`TrialRequest.batch_key`, and the indices of the requests
+    that share a key, by key, in request order.
+
+    Requests that hold the same objects (a run's plant, readings, simulation, protocol,
+    hardware: the same for all its trials) share a key, so it is made and hashed once for
+    them (each key hashes those frozen dataclasses, a few microseconds a request)."""
+    by_objects: dict[tuple[object, ...], list[int]] = {}
+    for i, r in enumerate(requests):
+        by_objects.setdefault(r.batch_objects(), []).append(i)
+    keys: list[tuple[object, ...] | None] = [None] * len(requests)
+    groups: dict[tuple[object, ...], list[int]] = {}
+    for members in by_objects.values():
+        key = requests[members[0]].batch_key()
+        for i in members:
+            keys[i] = key
+        if key is not None:
+            groups.setdefault(key, []).extend(members)
+    if len(groups) < len(by_objects):
+        for members in groups.values():
+            members.sort()
+    return keys, groups
 
 
 def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
@@ -265,7 +296,9 @@ def _draw_noise(requests: Sequence[TrialRequest], rows: dict[int, np.ndarray]) -
         def fill() -> None:
             for c in chain_ids:
                 for i in chains[c]:
-                    requests[i].rng.standard_normal(out=rows[i])  # type: ignore[union-attr]
+                    rng = requests[i].rng
+                    assert rng is not None
+                    standard_normals(rng, rows[i])
 
         return fill
 
@@ -291,6 +324,10 @@ class Lockstep:
     instead of taking turns. A generator is
     always in the same group, so its trials, and the order in which its generator draws
     their noise, are what they would be alone.
+
+    While it runs, Python's switch interval is :data:`SWITCH_INTERVAL` (restored after),
+    so that a worker waiting for the GIL behind the main thread's Python gets it within
+    0.1 ms rather than 5.
 
     :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value
     (the lanes are served as their calls finish, so the order of two lanes' values can
@@ -339,6 +376,14 @@ class Lockstep:
         return out
 
     def run(self) -> Generator[tuple[int, Any], None, None]:
+        switch = sys.getswitchinterval()
+        sys.setswitchinterval(min(switch, SWITCH_INTERVAL))
+        try:
+            yield from self._run()
+        finally:
+            sys.setswitchinterval(switch)
+
+    def _run(self) -> Generator[tuple[int, Any], None, None]:
         lanes: list[dict[int, list[TrialRequest]]] = [{} for _ in range(LANES)]
         for i in range(len(self.steps)):
             try:

@@ -27,6 +27,7 @@ from striatal.params import (
 )
 from striatal.sim import kernel
 from striatal.sim.learned import LearnedPlant
+from striatal.sim.noise import standard_normals
 
 __all__ = [
     "NO_PROTOCOL",
@@ -141,7 +142,14 @@ class TrialOutcome:
         cls, out: np.ndarray, sim: Simulation, rows: np.ndarray | None = None
     ) -> TrialOutcome:
         """Decode a kernel summary row (layout kernel.OUT_*), with the trial's ``rows``."""
-        v = out.tolist()
+        return cls.from_values(out.tolist(), sim, rows)
+
+    @classmethod
+    def from_values(
+        cls, v: list[float], sim: Simulation, rows: np.ndarray | None = None
+    ) -> TrialOutcome:
+        """:meth:`from_row` of a summary row given as a list (``row.tolist()``: a batch's
+        rows decoded with one ``outs.tolist()``)."""
         final = (v[kernel.OUT_X], v[kernel.OUT_X_DOT], v[kernel.OUT_THETA], v[kernel.OUT_THETA_DOT])
         fault = bool(v[kernel.OUT_FAULT])
         early = bool(v[kernel.OUT_EARLY])
@@ -212,13 +220,15 @@ def noise_arrays(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(action normals, sensor normals) of one trial, drawn from ``rng`` in that order:
     one normal per action step unless the mean policy runs, (n_steps, 2) with sensor noise."""
-    n_draws = action_draws(sim, action_every)
-    draws_actions = rng is not None and not mean_policy
-    noise = rng.standard_normal(n_draws) if draws_actions and rng is not None else np.empty(0)
+    noise = np.empty(0)
+    if rng is not None and not mean_policy:
+        noise = np.empty(action_draws(sim, action_every))
+        standard_normals(rng, noise)
     if sensor.active:
         if rng is None:
             raise ParameterError("sensor noise needs a random generator (give a seed)")
-        sensor_noise = rng.standard_normal((sim.n_steps, 2))
+        sensor_noise = np.empty((sim.n_steps, 2))
+        standard_normals(rng, sensor_noise)
     else:
         sensor_noise = np.empty((0, 2))
     return noise, sensor_noise
@@ -466,6 +476,30 @@ class TrialRequest:
         kernel runs it)."""
         learned = isinstance(self.plant, LearnedPlant)
         return self.sensor.active or self.record or (learned and self.online is not None)
+
+    def batch_objects(self) -> tuple[object, ...]:
+        """What :meth:`batch_key` is made of, the objects by identity (``id``), the
+        readings by value: requests
+        with equal ``batch_objects`` have equal keys, found without hashing the objects.
+        Only for grouping requests that are all alive (an ``id`` can be reused later)."""
+        c = self.controller
+        return (
+            id(self.plant),
+            c.balance_sign,
+            c.switch,
+            c.inhibition,
+            id(self.sim),
+            id(self.protocol),
+            self.action_every,
+            self.chapter_eligibility,
+            self.gamma,
+            id(self.model),
+            id(self.hardware),
+            self.draws_actions,
+            id(self.online),
+            self.sensor.active,
+            self.record,
+        )
 
     def batch_key(self) -> tuple[object, ...] | None:
         """What a batched kernel call shares with this trial; None if it
