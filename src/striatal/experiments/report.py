@@ -77,6 +77,15 @@ def arm_statistics(
             "imagined_seconds_total": float(
                 sum(float(r.get("imagined_seconds", 0.0)) for r in rows)
             ),
+            "margin_reached_total": int(
+                sum(r.get("margin_reached", math.nan) == 1.0 for r in rows)
+            ),
+            "seconds_after_first_success_total": float(
+                sum(float(r["simulated_seconds"]) - _first_seconds(r) for r in rows if r["success"])
+            ),
+            "first_success_seconds_median": _quantile(
+                [_first_seconds(r) for r in rows if r["success"]], 0.5
+            ),
             "pass_rate_W0_mean": _finite_mean(r["pass_rate_W0"] for r in rows),
             "pass_rate_mean": _finite_mean(r["pass_rate"] for r in rows),
             "wall_seconds_total": float(sum(wall)),
@@ -99,6 +108,12 @@ def arm_statistics(
     if out["trials_median"] is None:
         out["trials_median"] = math.nan
     return out
+
+
+def _first_seconds(row: dict[str, Any]) -> float:
+    """Simulated seconds to a solved run's first success (its total for a row without
+    the column: every such run stopped at its success)."""
+    return float(row.get("first_success_seconds", row["simulated_seconds"]))
 
 
 def _control_of(a: dict[str, Any], arms: Sequence[dict[str, Any]]) -> dict[str, Any] | None:
