@@ -78,7 +78,10 @@ def main(args: list[str]) -> None:
     after = np.array(
         [anytime[s]["simulated_seconds"] - anytime[s]["first_success_seconds"] for s in solved]
     )
-    print(f"real s after success, robust runs: median {np.median(after):,.0f}, mean {after.mean():,.0f}")
+    print(
+        f"real s after success, robust runs: median {np.median(after):,.0f}, "
+        f"mean {after.mean():,.0f}"
+    )
     spent = {
         name: np.array([rows[s]["simulated_seconds"] for s in seeds])
         for name, rows in (("plain", plain), ("anytime", anytime), ("random", random))
