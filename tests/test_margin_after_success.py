@@ -159,12 +159,13 @@ def test_runs_csv_carries_the_first_success_and_the_margin(tmp_path: Any) -> Non
         seeds=2,
         init="random",
         robust=True,
-        max_trials=40,
+        max_trials=100,
         eval_draws=0,
         control=False,
     )
     plain = striatal.sweep(out=tmp_path / "plain", **kw)
     after = striatal.sweep(out=tmp_path / "after", stop_margin=0.1, margin_after_success=True, **kw)
+    assert sum(r["success"] for r in plain.runs) == 2  # root 0's first two seeds: 93, 55
     for p, a in zip(plain.runs, after.runs, strict=True):
         assert p["seed"] == a["seed"] and p["success"] == a["success"]
         assert math.isnan(p["margin_reached"]) and a["margin_reached"] in (0.0, 1.0)
@@ -177,6 +178,12 @@ def test_runs_csv_carries_the_first_success_and_the_margin(tmp_path: Any) -> Non
         assert a["simulated_seconds"] > a["first_success_seconds"]  # the corners, at least
         assert a["trials"] >= a["first_success_trials"]
     assert plain.summary["arms"] != after.summary["arms"]
+    reached = sum(r["margin_reached"] == 1.0 for r in after.runs if r["arm"] == "learner")
+    learner = next(a for a in after.summary["arms"] if a["arm"] == "learner")
+    assert learner["margin_reached_total"] == reached
+    assert learner["seconds_after_first_success_total"] > 0.0
+    assert f"learner {reached}" in after.summary["notes"][-1]
+    assert not any("margin_after_success" in n for n in plain.summary["notes"])
     header = ",".join(runs_csv.RUN_COLUMNS)
     old = (tmp_path / "plain" / "runs.csv").read_text().splitlines()
     cut = [",".join(line.split(",")[:-4]) for line in old[1:]]
@@ -184,6 +191,9 @@ def test_runs_csv_carries_the_first_success_and_the_margin(tmp_path: Any) -> Non
     older.write_text("\n".join([",".join(runs_csv.COLUMNS_BEFORE_FIRST_SUCCESS), *cut]) + "\n")
     rows, text = runs_csv.read_runs(older)
     assert text.splitlines()[0] == header
-    for row, p in zip(rows, runs_csv.sort_rows(plain.runs), strict=True):
-        if p["success"]:
-            assert row["first_success_seconds"] == pytest.approx(p["simulated_seconds"])
+    assert len(rows) == len(plain.runs)
+    for row in rows:
+        assert math.isnan(row["margin_reached"])
+        if row["success"]:
+            assert row["first_success_seconds"] == pytest.approx(row["simulated_seconds"])
+            assert row["first_success_trials"] == row["trials"]
