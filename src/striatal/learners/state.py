@@ -87,14 +87,16 @@ class LearnerState:
         return dict(self.memory).get(name, ())
 
     def to_dict(self) -> dict[str, Any]:
-        """The fields in their order, W as a list and the memory as name -> list."""
-        first = self.first_success
-        return {
-            **asdict(self),
-            "W": list(self.W),
-            "memory": {k: list(v) for k, v in self.memory},
-            "first_success": None if first is None else {**asdict(first), "W": list(first.W)},
-        }
+        """The fields in their order, W as a list and the memory as name -> list;
+        ``first_success`` and ``margin_reached`` only when a run has them (so a run
+        without ``margin_after_success`` writes what it wrote before)."""
+        out = {**asdict(self), "W": list(self.W), "memory": {k: list(v) for k, v in self.memory}}
+        first = out.pop("first_success")
+        if self.first_success is not None:
+            out["first_success"] = {**first, "W": list(self.first_success.W)}
+        if not self.margin_reached:
+            del out["margin_reached"]
+        return out
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> LearnerState:
