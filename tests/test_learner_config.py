@@ -50,6 +50,7 @@ def test_a_field_beyond_schema_2_is_stored_only_when_it_differs_from_its_default
         "imagine_duration",
         "forward_model",
         "stop_margin",
+        "margin_after_success",
         "imagine_margin",
     }
     plain = LearnerConfig().to_dict()

@@ -77,6 +77,15 @@ def arm_statistics(
             "imagined_seconds_total": float(
                 sum(float(r.get("imagined_seconds", 0.0)) for r in rows)
             ),
+            "margin_reached_total": int(
+                sum(r.get("margin_reached", math.nan) == 1.0 for r in rows)
+            ),
+            "seconds_after_first_success_total": float(
+                sum(float(r["simulated_seconds"]) - _first_seconds(r) for r in rows if r["success"])
+            ),
+            "first_success_seconds_median": _quantile(
+                [_first_seconds(r) for r in rows if r["success"]], 0.5
+            ),
             "pass_rate_W0_mean": _finite_mean(r["pass_rate_W0"] for r in rows),
             "pass_rate_mean": _finite_mean(r["pass_rate"] for r in rows),
             "wall_seconds_total": float(sum(wall)),
@@ -99,6 +108,23 @@ def arm_statistics(
     if out["trials_median"] is None:
         out["trials_median"] = math.nan
     return out
+
+
+#: The note of a sweep whose learner learned on after its success (margin_after_success).
+NOTE_MARGIN_AFTER_SUCCESS = (
+    "margin_after_success: success is the first robust controller, as without the "
+    "margin (runs.csv first_success_trials, first_success_simulations, "
+    "first_success_seconds; summary first_success_seconds_median); trials, simulations "
+    "and simulated seconds count every run to the delivered controller (the margin one, "
+    "else the first robust one; seconds_after_first_success_total); margin reached "
+    "(margin_reached_total): "
+)
+
+
+def _first_seconds(row: dict[str, Any]) -> float:
+    """Simulated seconds to a solved run's first success (its total for a row without
+    the column: every such run stopped at its success)."""
+    return float(row.get("first_success_seconds", row["simulated_seconds"]))
 
 
 def _control_of(a: dict[str, Any], arms: Sequence[dict[str, Any]]) -> dict[str, Any] | None:
@@ -186,11 +212,22 @@ def summarise(
         if b["role"] == "baseline" and b["init"] == a["init"]
     ]
     learners = sorted({a["learner"] for a in arms} - {"-"})
+    margin = [
+        f"{a['arm']} {a['margin_reached_total']}"
+        for a in arms
+        if any(
+            math.isfinite(r.get("margin_reached", math.nan)) for r in groups[a["arm"], a["init"]]
+        )
+    ]
     return {
         "arms": arms,
         "learner_vs_control": side_by_side,
         "learner_vs_baselines": against_baselines,
-        "notes": [*(control_note(x) for x in learners), NOTE_BUDGET],
+        "notes": [
+            *(control_note(x) for x in learners),
+            NOTE_BUDGET,
+            *([NOTE_MARGIN_AFTER_SUCCESS + ", ".join(margin)] if margin else []),
+        ],
         "settings": settings,
     }
 

@@ -41,6 +41,7 @@ from typing import Any
 from striatal.errors import ParameterError
 from striatal.experiments import baselines
 from striatal.experiments.evaluate import DRAWS_AT_ONCE, PassProbability, pass_probability_steps
+from striatal.experiments.runs_csv import first_success_columns
 from striatal.experiments.spec import RunSpec, initial_gains
 from striatal.learners import LearnerConfig, check_config, rule_of
 from striatal.learners.common import initial_state
@@ -137,6 +138,8 @@ def learning_run_steps(
         "simulations": state.simulations,
         "simulated_seconds": state.simulated_seconds,
         "imagined": rule_of(config).imagined(state),
+        "first_success": state.first_success,
+        "margin_reached": state.margin_reached if config.margin_after_success else None,
     }
 
 
@@ -291,4 +294,5 @@ def run_steps(
     row["wall_seconds"] = time.perf_counter() - t0
     imagined = out.get("imagined", (0, 0.0))  # baselines imagine nothing
     row["imagined_simulations"], row["imagined_seconds"] = int(imagined[0]), float(imagined[1])
+    row.update(first_success_columns(row, out.get("first_success"), out.get("margin_reached")))
     return row

@@ -19,6 +19,7 @@ from typing import Any
 from striatal.errors import DataFileError
 from striatal.io import schema
 from striatal.io.files import csv_text, lines_marking_last, read_lines
+from striatal.learners.state import FirstSuccess
 from striatal.params import N_GAINS
 
 RUN_COLUMNS: tuple[str, ...] = (
@@ -47,12 +48,20 @@ RUN_COLUMNS: tuple[str, ...] = (
     "imagined_simulations",
     "imagined_seconds",
     "settings_id",
+    "first_success_trials",
+    "first_success_simulations",
+    "first_success_seconds",
+    "margin_reached",
 )
 #: The columns a runs.csv had before each row carried the id of its settings: read with
 #: an empty ``settings_id`` (a sweep checks such rows against its sweep.json alone).
-COLUMNS_BEFORE_SETTINGS_ID = RUN_COLUMNS[:-1]
+COLUMNS_BEFORE_SETTINGS_ID = RUN_COLUMNS[:-5]
 #: The columns a runs.csv had before imagined trials were recorded: read as 0 imagined.
-COLUMNS_BEFORE_IMAGINED = RUN_COLUMNS[:-3]
+COLUMNS_BEFORE_IMAGINED = RUN_COLUMNS[:-7]
+#: The columns a runs.csv had before the first-success columns: read with the run's
+#: totals as its first success (every run then stopped at it) and no margin test.
+COLUMNS_BEFORE_FIRST_SUCCESS = RUN_COLUMNS[:-4]
+FIRST_SUCCESS_COLUMNS = RUN_COLUMNS[-4:]
 _INT_COLUMNS = ("seed", "trials", "simulations", "eval_simulations", "imagined_simulations")
 
 
@@ -60,6 +69,27 @@ _BOOL_COLUMNS = ("success", "mean_policy_success")
 
 
 _STR_COLUMNS = ("arm", "role", "method", "learner", "init")
+
+
+def first_success_columns(
+    row: dict[str, Any], first: FirstSuccess | None, margin_reached: bool | None
+) -> dict[str, Any]:
+    """runs.csv's first-success columns of a run whose ``row`` holds its totals: the
+    trials, simulations and simulated seconds to its first success (a run that learned on
+    after it, ``margin_after_success``: ``first``; any other: its totals if it succeeded;
+    nan if it did not) and ``margin_reached`` (1/0 with margin_after_success, else nan)."""
+    if first is not None:
+        to_first = (float(first.trials), float(first.simulations), first.simulated_seconds)
+    elif row["success"]:
+        to_first = (float(row["trials"]), float(row["simulations"]), row["simulated_seconds"])
+    else:
+        to_first = (math.nan, math.nan, math.nan)
+    return {
+        "first_success_trials": to_first[0],
+        "first_success_simulations": to_first[1],
+        "first_success_seconds": float(to_first[2]),
+        "margin_reached": math.nan if margin_reached is None else float(margin_reached),
+    }
 
 
 def row_text(row: dict[str, Any]) -> str:
@@ -95,6 +125,8 @@ def _parse_row(cells: list[str], columns: tuple[str, ...] = RUN_COLUMNS) -> dict
             row[name] = cell == "1"
         else:
             row[name] = float(cell) if cell else math.nan
+    if "margin_reached" not in columns:  # an older file: every run stopped at its success
+        row.update(first_success_columns(row, None, None))
     return row
 
 
@@ -122,7 +154,12 @@ def _read_runs(
     head = next(lines, "")
     if not head.endswith("\n"):
         return [], csv_text(RUN_COLUMNS, [])
-    known = (RUN_COLUMNS, COLUMNS_BEFORE_SETTINGS_ID, COLUMNS_BEFORE_IMAGINED)
+    known = (
+        RUN_COLUMNS,
+        COLUMNS_BEFORE_FIRST_SUCCESS,
+        COLUMNS_BEFORE_SETTINGS_ID,
+        COLUMNS_BEFORE_IMAGINED,
+    )
     columns = {",".join(c): c for c in known}.get(head.strip())
     if columns is None:
         if head.startswith("arm,"):

@@ -193,6 +193,14 @@ class LearnerConfig:
         "a sweep's baselines keep theirs. 0: none",
         bounds="[0, 0.5]",
     )
+    margin_after_success: bool = option(
+        False,
+        "with --stop-margin M: the run succeeds (trials, simulations, seconds to success "
+        "recorded) at the first controller that passes the robust stop rule without the "
+        "margin, as without --stop-margin; it then learns on, every trial and check "
+        "counted, until a controller also passes the wider corners or the budget ends, and "
+        "delivers that one, else the first robust one",
+    )
     critic_rate: float = option(
         0.01, "ac: rate beta of the critic's weights, v += beta delta z", bounds="[0, 1]"
     )

@@ -16,7 +16,11 @@ controller that passes the success test must also pass the robustness set
 (:func:`striatal.sim.robust.stop_check`, each of its runs counted; the nominal case is
 not rerun when the success test's noise-free nominal run already was it); with
 ``config.stop_margin`` it must first pass the four plant corners of a wider box too
-(:func:`striatal.sim.robust.corners_check_steps`, counted the same way). With a
+(:func:`striatal.sim.robust.corners_check_steps`, counted the same way); with
+``config.margin_after_success`` as well, the run succeeds at the first controller that
+passes the test without the margin (:class:`striatal.learners.state.FirstSuccess`), its
+wider corners then run (counted), and the run learns on, the margin in its test, until
+one passes it or the budget ends (:func:`finished`, :func:`delivered`). With a
 jittered plant, a rule judged on its noise-free candidate is first filtered by its
 own trial on that plant (no nominal rerun); the set then decides. ac's online trial
 (``striatal.sim.online``) runs with u held even then; its success checks and the set
@@ -44,7 +48,7 @@ from striatal.learners.config import LearnerConfig
 from striatal.learners.pgpe import PGPE
 from striatal.learners.rpe import RPE
 from striatal.learners.rule import Judging, Rule, Trial, TrialContext, Update
-from striatal.learners.state import LearnerState, TrialRecord
+from striatal.learners.state import FirstSuccess, LearnerState, TrialRecord
 from striatal.params import Controller, Plant, Simulation
 from striatal.sim.batch import Steps, drive, driven
 from striatal.sim.robust import (
@@ -60,6 +64,8 @@ __all__ = [
     "check_config",
     "control_config",
     "default_config",
+    "delivered",
+    "finished",
     "learn",
     "learn_steps",
     "learning_step",
@@ -268,7 +274,10 @@ def learning_steps(
         W, theta_c = np.array(state.W, dtype=float), state.theta_c
     success = True
     checks: tuple[tuple[tuple[float, float], np.ndarray], ...] = ()
-    for check in success_checks(config):
+    # margin_after_success: the margin's corners join the test only after the first success
+    first_test = config.margin_after_success and not state.success
+    tested = replace(config, stop_margin=0.0) if first_test else config
+    for check in success_checks(tested):
         if not success:
             break
         if check == "trial":
@@ -327,6 +336,30 @@ def learning_steps(
             simulations += 1
             seconds += rerun.ended_at
             success = rerun.success
+    first_success, margin_reached = state.first_success, state.margin_reached
+    if first_test and success:
+        # the run's success, exactly as without the margin; then the wider corners on
+        # the same controller, counted after it
+        first_success = FirstSuccess(
+            trials=state.trials_done + 1,
+            simulations=state.simulations + simulations,
+            simulated_seconds=state.simulated_seconds + seconds,
+            W=tuple(float(w) for w in W),
+            theta_c=float(theta_c),
+        )
+        verdict = yield from corners_check_steps(
+            replace(template, theta_c=theta_c),
+            plant,
+            sim.dt,
+            ROBUST_BOX + config.stop_margin,
+            gains=W,
+            hardware=context.hardware,
+        )
+        simulations += verdict.simulations
+        seconds += verdict.simulated_seconds
+        margin_reached = verdict.robust
+    elif config.margin_after_success and success:
+        margin_reached = True
     trial = Trial(plan, outcome, reward, success, checks)
     update = yield from rule.update_steps(state, config, trial, context)
     update = _finite(update, state)
@@ -347,11 +380,13 @@ def learning_steps(
         W=update.W,
         theta_c=update.theta_c,
         rng_state=dict(rng.bit_generator.state),
-        success=success,
+        success=success or state.success,
         n_positive=state.n_positive + int(outcome.reward > 0),
         memory=update.memory,
         simulations=state.simulations + simulations,
         simulated_seconds=state.simulated_seconds + seconds,
+        first_success=first_success,
+        margin_reached=margin_reached,
     )
     return new_state, record
 
@@ -413,7 +448,7 @@ def learn_steps(
     rng = np.random.Generator(np.random.PCG64(_BLANK))
     context = run_context(plant, template, sim, protocol, config)
     first = True
-    while not state.success and state.trials_done < config.max_trials:
+    while not finished(state, config) and state.trials_done < config.max_trials:
         # after the first step the generator is where the step left it: state.rng_state
         state, record = yield from learning_steps(
             state,
@@ -429,4 +464,22 @@ def learn_steps(
         first = False
         if on_trial is not None:
             on_trial(state, record)
-    return state
+    return delivered(state)
+
+
+def finished(state: LearnerState, config: LearnerConfig) -> bool:
+    """Whether a run in ``state`` has ended before its budget: at its success, or with
+    ``config.margin_after_success`` at the first success that also passes the margin."""
+    if config.margin_after_success:
+        return state.margin_reached
+    return state.success
+
+
+def delivered(state: LearnerState) -> LearnerState:
+    """``state`` holding the controller its run delivers: its own W and theta_c, or, for
+    a run that learned on after its first success (``margin_after_success``) and did not
+    reach the margin, the first success's. Its counts stay the run's totals."""
+    first = state.first_success
+    if first is None or state.margin_reached:
+        return state
+    return replace(state, W=first.W, theta_c=first.theta_c)

@@ -50,6 +50,7 @@ LOOP_OPTIONS = (
     "action_every",
     "robust",
     "stop_margin",
+    "margin_after_success",
     "max_force",
     "track",
 )
@@ -235,6 +236,11 @@ class Rule:
             raise ParameterError(
                 "stop_margin widens the robust stop rule: it needs --robust "
                 f"(got stop_margin {config.stop_margin!r} without it)"
+            )
+        if config.margin_after_success and config.stop_margin == 0.0:
+            raise ParameterError(
+                "margin_after_success keeps learning until the stop margin is reached: it "
+                "needs --robust --stop-margin M > 0"
             )
         if self.judging.mean_policy_only and config.success_on != "mean":
             raise ParameterError(

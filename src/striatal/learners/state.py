@@ -21,6 +21,7 @@ from striatal.params import N_GAINS, check_theta_c
 __all__ = [
     "BASE_COLUMNS",
     "FLAG_COLUMNS",
+    "FirstSuccess",
     "History",
     "LearnerState",
     "TrialRecord",
@@ -43,6 +44,19 @@ Memory = tuple[tuple[str, tuple[float, ...]], ...]
 
 
 @dataclass(frozen=True)
+class FirstSuccess:
+    """Where a run that learns on after its success (``margin_after_success``) first
+    succeeded: its trials, simulations and simulated seconds [s] up to and with that
+    success's checks, and the controller that passed them (W, theta_c)."""
+
+    trials: int
+    simulations: int
+    simulated_seconds: float
+    W: tuple[float, ...]
+    theta_c: float
+
+
+@dataclass(frozen=True)
 class LearnerState:
     """Everything a run needs to continue: JSON-serialisable via :meth:`to_dict`.
 
@@ -51,6 +65,9 @@ class LearnerState:
     ``simulations``: every simulated trial so far, the learning trials and every
     success check that needed a trial of its own (a mean-policy rerun, the jitter
     corners); ``simulated_seconds``: their total simulated time [s].
+    ``first_success``: with ``margin_after_success``, the first success (None before it
+    and without the option); ``margin_reached``: a controller then also passed the stop
+    margin's wider corners (the run's end).
     """
 
     trials_done: int
@@ -62,14 +79,24 @@ class LearnerState:
     memory: Memory = ()
     simulations: int = 0
     simulated_seconds: float = 0.0
+    first_success: FirstSuccess | None = None
+    margin_reached: bool = False
 
     def get(self, name: str) -> tuple[float, ...]:
         """The memory entry ``name`` (empty if the rule has not set it yet)."""
         return dict(self.memory).get(name, ())
 
     def to_dict(self) -> dict[str, Any]:
-        """The fields in their order, W as a list and the memory as name -> list."""
-        return {**asdict(self), "W": list(self.W), "memory": {k: list(v) for k, v in self.memory}}
+        """The fields in their order, W as a list and the memory as name -> list;
+        ``first_success`` and ``margin_reached`` only when a run has them (so a run
+        without ``margin_after_success`` writes what it wrote before)."""
+        out = {**asdict(self), "W": list(self.W), "memory": {k: list(v) for k, v in self.memory}}
+        first = out.pop("first_success")
+        if self.first_success is not None:
+            out["first_success"] = {**first, "W": list(self.first_success.W)}
+        if not self.margin_reached:
+            del out["margin_reached"]
+        return out
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> LearnerState:
@@ -89,6 +116,8 @@ class LearnerState:
                 memory=memory,
                 simulations=int(d.get("simulations", 0)),
                 simulated_seconds=float(d.get("simulated_seconds", 0.0)),
+                first_success=_first_success(d.get("first_success")),
+                margin_reached=bool(d.get("margin_reached", False)),
             )
         except ParameterError:
             raise
@@ -102,11 +131,39 @@ class LearnerState:
             or not state.simulated_seconds >= 0.0
         ):
             raise ParameterError("learner state has the wrong number of gains or trials")
-        numbers = (*W, state.theta_c, *(x for _, v in memory for x in v))
+        first = state.first_success
+        if first is not None and (
+            len(first.W) != N_GAINS
+            or not 0 < first.trials <= state.trials_done
+            or not first.trials <= first.simulations <= state.simulations
+            or not 0.0 <= first.simulated_seconds <= state.simulated_seconds
+        ):
+            raise ParameterError("learner state's first success does not fit its run")
+        numbers = (
+            *W,
+            state.theta_c,
+            *(x for _, v in memory for x in v),
+            *(() if first is None else (*first.W, first.theta_c, first.simulated_seconds)),
+        )
         if not all(math.isfinite(v) for v in numbers):
             raise ParameterError("learner state holds a non-finite number")
         check_theta_c(state.theta_c)
         return state
+
+
+def _first_success(d: Any) -> FirstSuccess | None:
+    """:class:`FirstSuccess` from its :meth:`LearnerState.to_dict` form (None: none)."""
+    if d is None:
+        return None
+    first = FirstSuccess(
+        trials=int(d["trials"]),
+        simulations=int(d["simulations"]),
+        simulated_seconds=float(d["simulated_seconds"]),
+        W=tuple(float(w) for w in d["W"]),
+        theta_c=float(d["theta_c"]),
+    )
+    check_theta_c(first.theta_c)
+    return first
 
 
 def checked_rng_state(value: object) -> dict[str, Any]:

@@ -34,7 +34,10 @@ from striatal.io.schema.common import (
 class RunRow(BaseModel):
     """One row of runs.csv: one learning run (or baseline run) of a sweep.
 
-    Units: simulated_seconds, imagined_seconds, wall_seconds [s]; theta_c [rad].
+    Units: simulated_seconds, imagined_seconds, first_success_seconds, wall_seconds [s];
+    theta_c [rad]. The first_success columns: trials, simulations and simulated seconds
+    to the run's first success (empty if none), its totals unless it learned on after it
+    (margin_after_success); margin_reached: 1/0 with margin_after_success, else empty.
     """
 
     model_config = _ROW
@@ -73,12 +76,21 @@ class RunRow(BaseModel):
     imagined_simulations: CsvCount = 0
     imagined_seconds: CsvNonNegative = 0.0
     settings_id: Annotated[str, Field(max_length=64, pattern=r"^[0-9a-zA-Z]*$")] = ""
+    first_success_trials: CsvNonNegative = None
+    first_success_simulations: CsvNonNegative = None
+    first_success_seconds: CsvNonNegative = None
+    margin_reached: CsvRate = None
 
     @model_validator(mode="after")
     def _counts(self) -> RunRow:
         if self.simulations < self.trials:
             raise ValueError(
                 f"simulations ({self.simulations}) are fewer than trials ({self.trials})"
+            )
+        first = self.first_success_trials
+        if first is not None and (not self.success or first > self.trials):
+            raise ValueError(
+                f"first_success_trials {first} without success or beyond trials {self.trials}"
             )
         if self.success and self.trials == 0:
             raise ValueError("success with 0 trials")
