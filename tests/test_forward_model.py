@@ -364,5 +364,7 @@ def test_bad_readout_settings_are_refused() -> None:
         fit_generic(data, rng, readout="lasso")  # type: ignore[arg-type]
     with pytest.raises(ParameterError, match=r"terms must be in \[1, 56\], got 0"):
         fit_generic(data, rng, readout="sparse", terms=0)
+    with pytest.raises(ParameterError, match="force_term must be one of chosen, linear, any"):
+        fit_generic(data, rng, readout="sparse", force_term="cubic")  # type: ignore[arg-type]
     with pytest.raises(ParameterError, match="not conditioned"):
         fit_generic(data, rng, readout="sparse", conditioned=True)
