@@ -48,6 +48,7 @@ __all__ = [
     "FORCE_TERMS",
     "GENERIC_INPUTS",
     "GENERIC_OUTPUTS",
+    "NARROW_SPAN",
     "READOUTS",
     "RIDGE",
     "SPARSE_TERMS",
@@ -333,6 +334,10 @@ SPARSE_TERMS = 4
 #: force f itself; "any", the monomial holding f that best matches the output.
 ForceTerm = Literal["chosen", "linear", "any"]
 FORCE_TERMS: tuple[str, ...] = ("chosen", "linear", "any")
+#: The angle span [rad] below which data are narrow (``fit_generic``'s ``narrow_terms``):
+#: a trial that barely left hanging (root 0's W(0) trials that barely move span 0.03-0.3
+#: rad, those that swing 5-40; set before the loop comparison, not tuned).
+NARROW_SPAN = 1.0
 
 
 def generic_powers(degree: int, conditioned: bool) -> np.ndarray:
@@ -370,6 +375,7 @@ def fit_generic(
     readout: Readout = "ridge",
     terms: int = SPARSE_TERMS,
     force_term: ForceTerm = "chosen",
+    narrow_terms: int | None = None,
 ) -> GenericModel:
     """A bootstrap ensemble of ``members`` regressors: scikit-learn's ``StandardScaler``
     and ``PolynomialFeatures`` (every monomial of degree <= ``degree`` of the standardised
@@ -394,7 +400,9 @@ def fit_generic(
     from a swing to upright where the dense ridge does not (docs/results.md, round 6).
     ``force_term`` (sparse only, :data:`FORCE_TERMS`): a monomial holding the force put in
     each output's support before the pursuit picks the other ``terms`` - 1 ("chosen":
-    none, the pursuit alone). Needs scikit-learn (the ``model`` extra)."""
+    none, the pursuit alone). ``narrow_terms`` (sparse only; None: ``terms`` always): the
+    terms per output when the data's angle spans less than :data:`NARROW_SPAN`, data
+    too narrow to tell more terms apart. Needs scikit-learn (the ``model`` extra)."""
     try:
         from sklearn.linear_model import Ridge
         from sklearn.preprocessing import StandardScaler
@@ -413,6 +421,13 @@ def fit_generic(
             raise ParameterError(
                 "the sparse readout takes the plain generic model, not conditioned"
             )
+        if narrow_terms is not None:
+            if not 1 <= narrow_terms <= terms:
+                raise ParameterError(
+                    f"narrow_terms must be in [1, terms = {terms}], got {narrow_terms}"
+                )
+            if np.ptp(data.states[:, 2]) < NARROW_SPAN:
+                terms = narrow_terms
         return _fit_sparse(
             data, rng, members=members, degree=degree, terms=terms, force_term=force_term
         )
