@@ -416,6 +416,8 @@ def fit_generic(
         raise ParameterError(f"degree must be in [1, 6], got {degree}")
     if readout not in READOUTS:
         raise ParameterError(f"readout must be 'ridge' or 'sparse', got {readout!r}")
+    if readout != "sparse" and (force_term != "chosen" or narrow_terms is not None):
+        raise ParameterError("force_term and narrow_terms take the sparse readout")
     if readout == "sparse":
         if conditioned:
             raise ParameterError(
