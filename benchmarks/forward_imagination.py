@@ -98,7 +98,7 @@ def main() -> None:
         "--imagine-margin",
         type=float,
         default=None,
-        help="none: the model's robust preset (structured, generic-gains and sparse-gains: 0.1)",
+        help="none: the model's robust preset (structured, generic-gains, the sparse models: 0.1)",
     )
     parser.add_argument("--json", default=None, help="write each run's record here")
     args = parser.parse_args()

@@ -11,6 +11,7 @@ from striatal.learners.forward.model import (
     FAMILY_FLOOR,
     GENERIC_INPUTS,
     GENERIC_OUTPUTS,
+    NARROW_SPAN,
     Transitions,
     fit_generic,
     fit_structured,
@@ -345,6 +346,78 @@ def test_from_one_swing_the_sparse_readout_predicts_upright_better_than_the_ridg
     assert errors["sparse"] < errors["ridge"] / 20
 
 
+def faint(scale: float) -> Transitions:
+    """One real trial of the chapter's W(0) with every gain times ``scale``: a first
+    trial that barely leaves hanging, as some random W(0) give."""
+    gains = tuple(scale * w for w in CHAPTER_INITIAL_W)
+    return recorded(Plant(), Controller(gains=gains, theta_c=CHAPTER_INITIAL_THETA_C))
+
+
+def force_response(model: object, theta: float) -> np.ndarray:
+    """(members,) d theta_ddot / d f at rest at angle ``theta`` [rad/s^2 per N]."""
+    states = np.array([[0.0, 0.0, theta, 0.0]] * 2)
+    acc = model.accelerations(states, np.array([-0.5, 0.5]))  # type: ignore[attr-defined]
+    return acc[:, 1, 1] - acc[:, 0, 1]
+
+
+def test_on_a_faint_trial_the_force_term_keeps_the_force_acting_on_the_pole() -> None:
+    """A first trial that spans 0.7 rad: the pursuit alone fits the pole without the force
+    (its response to f is 0), with the force's monomial in each support (``force_term``
+    "linear") every member's response at hanging is within 10 % of the plant's,
+    1 / (l (M + m sin^2 theta)) = 1 rad/s^2 per N."""
+    pytest.importorskip("sklearn")
+    data = faint(0.3)
+    assert 0.5 < np.ptp(data.states[:, 2]) < NARROW_SPAN
+    alone = fit_generic(data, np.random.default_rng(0), readout="sparse")
+    assert np.abs(force_response(alone, np.pi)).max() < 1e-9
+    forced = fit_generic(data, np.random.default_rng(0), readout="sparse", force_term="linear")
+    p = Plant()
+    truth = 1.0 / (p.length * p.cart_mass)
+    assert force_response(forced, np.pi) == pytest.approx(np.full(5, truth), rel=0.1)
+
+
+@pytest.mark.parametrize("scale", [0.2, 0.1, 0.05])
+def test_on_a_faint_trial_fewer_terms_extrapolate_to_a_swing_better(scale: float) -> None:
+    """Fitted on a first trial that barely moves (angle span < NARROW_SPAN), the sparse
+    readout with the force's monomial and 2 terms an output (``narrow_terms``, sparse-affine)
+    predicts the angular acceleration of the chapter's W(0) swing (5.9 rad, never seen)
+    better than with 4 terms, with or without the force's monomial, and within a third of
+    its spread."""
+    pytest.importorskip("sklearn")
+    data, swing = faint(scale), recorded(Plant(), INITIAL)
+    assert np.ptp(data.states[:, 2]) < NARROW_SPAN < np.ptp(swing.states[:, 2])
+    truth = (swing.next_states[:, 3] - swing.states[:, 3]) / swing.dt
+    errors = {}
+    for name, options in {
+        "alone": {},
+        "forced": {"force_term": "linear"},
+        "narrow": {"force_term": "linear", "narrow_terms": 2},
+    }.items():
+        model = fit_generic(data, np.random.default_rng(0), readout="sparse", **options)  # type: ignore[arg-type]
+        pred = model.accelerations(swing.states, swing.forces).mean(axis=0)[:, 1]
+        errors[name] = float(np.sqrt(np.mean((pred - truth) ** 2)))
+    assert errors["narrow"] < min(errors["alone"], errors["forced"])
+    assert errors["narrow"] < truth.std() / 3
+
+
+def test_narrow_terms_leave_wide_data_alone() -> None:
+    """On a swing (angle span > NARROW_SPAN) ``narrow_terms`` changes nothing; on a faint
+    trial each member keeps at most 2 monomials an output, so 3 in all (f in both)."""
+    pytest.importorskip("sklearn")
+    swing = recorded(Plant(), INITIAL)
+    wide = [
+        fit_generic(swing, np.random.default_rng(0), readout="sparse", force_term="linear", **kw)
+        for kw in ({}, {"narrow_terms": 2})
+    ]
+    assert np.array_equal(wide[0].args.coef, wide[1].args.coef)
+    narrow = fit_generic(
+        faint(0.1), np.random.default_rng(0), readout="sparse", force_term="linear", narrow_terms=2
+    )
+    assert ((narrow.args.coef != 0).sum(axis=2) <= 3).all()
+    force = [tuple(p) for p in narrow.args.powers].index((0, 0, 0, 0, 1))
+    assert (narrow.args.coef[:, :, force] != 0).all()
+
+
 def test_the_sparse_readout_is_deterministic_under_a_seed() -> None:
     pytest.importorskip("sklearn")
     data = recorded(Plant(), INITIAL)
@@ -364,5 +437,13 @@ def test_bad_readout_settings_are_refused() -> None:
         fit_generic(data, rng, readout="lasso")  # type: ignore[arg-type]
     with pytest.raises(ParameterError, match=r"terms must be in \[1, 56\], got 0"):
         fit_generic(data, rng, readout="sparse", terms=0)
+    with pytest.raises(ParameterError, match="force_term must be one of chosen, linear, any"):
+        fit_generic(data, rng, readout="sparse", force_term="cubic")  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"narrow_terms must be in \[1, terms = 4\], got 5"):
+        fit_generic(data, rng, readout="sparse", narrow_terms=5)
+    with pytest.raises(ParameterError, match=r"narrow_terms must be in \[1, terms = 4\], got 0"):
+        fit_generic(data, rng, readout="sparse", narrow_terms=0)
+    with pytest.raises(ParameterError, match="take the sparse readout"):
+        fit_generic(data, rng, force_term="linear")
     with pytest.raises(ParameterError, match="not conditioned"):
         fit_generic(data, rng, readout="sparse", conditioned=True)

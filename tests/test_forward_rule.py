@@ -290,12 +290,18 @@ def test_generic_gains_checks_candidates_on_the_mean_with_the_pole_answering_slo
 
 
 @pytest.mark.parametrize(
-    ("model", "readout"), [("generic-gains", "ridge"), ("sparse-gains", "sparse")]
+    ("model", "readout"),
+    [
+        ("generic-gains", "ridge"),
+        ("sparse-gains", "sparse"),
+        ("sparse-affine", "sparse linear 2"),
+    ],
 )
 def test_sparse_gains_is_generic_gains_with_the_sparse_readout(
     monkeypatch: pytest.MonkeyPatch, model: str, readout: str
 ) -> None:
-    """--forward-model sparse-gains fits the sparse readout, and is otherwise
+    """--forward-model sparse-gains fits the sparse readout, sparse-affine the same with
+    the force's monomial and 2 terms on narrow data, and both are otherwise
     generic-gains: the two response gains checked, the margin of the robust preset;
     generic-gains keeps the ridge (its runs unchanged)."""
     pytest.importorskip("sklearn")
@@ -304,7 +310,10 @@ def test_sparse_gains_is_generic_gains_with_the_sparse_readout(
 
     def fitting(*args: Any, **kwargs: Any) -> Any:
         fitted = fit(*args, **kwargs)
-        seen.append((kwargs["readout"], len(fitted.args.powers), -1))
+        options = [kwargs.get("readout", "ridge"), kwargs.get("force_term")]
+        options.append(kwargs.get("narrow_terms"))
+        name = " ".join(str(o) for o in options if o is not None)
+        seen.append((name, len(fitted.args.powers), -1))
         return fitted
 
     def gained(m: Any, believed: Plant, gains: tuple[float, ...] = ()) -> Any:
@@ -319,7 +328,7 @@ def test_sparse_gains_is_generic_gains_with_the_sparse_readout(
     assert config.imagine_margin == 0.1
     result = learn(Plant(), start(101), config, 101)
     assert seen and {(r, g) for r, _, g in seen} == {(readout, 2)}
-    if readout == "sparse":  # a few of the 56 monomials
+    if readout != "ridge":  # a few of the 56 monomials
         assert all(n < 56 for _, n, _ in seen)
     assert result.get("imagined")[0] > 0
 
@@ -342,8 +351,8 @@ def test_the_generic_model_without_scikit_learn_is_refused_before_any_trial(
     with pytest.raises(
         ParameterError,
         match=(
-            "forward_model must be 'structured', 'generic', 'generic-gains', 'sparse-gains' or "
-            "'conditioned', got 'neural'"
+            "forward_model must be 'structured', 'generic', 'generic-gains', 'sparse-gains', "
+            "'sparse-affine' or 'conditioned', got 'neural'"
         ),
     ):
         default_config("forward", forward_model="neural")

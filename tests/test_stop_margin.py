@@ -175,7 +175,9 @@ def test_the_defaults_change_no_run_and_no_run_id() -> None:
     assert margin.run_id != plain.run_id
 
 
-@pytest.mark.parametrize("model", [None, "structured", "generic-gains"])
+@pytest.mark.parametrize(
+    "model", [None, "structured", "generic-gains", "sparse-gains", "sparse-affine"]
+)
 def test_the_margin_models_robust_preset_carries_the_margin_and_an_explicit_option_overrides_it(
     model: str | None,
 ) -> None:

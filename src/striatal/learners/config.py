@@ -46,7 +46,9 @@ Eq21Rule = Literal["swingup", "trial", "clamped", "fixed"]
 ThetaCRule = Literal[Eq21Rule, "learned"]
 Eligibility = Literal["score", "chapter"]
 RewardKind = Literal["sparse", "shaped"]
-ForwardModel = Literal["structured", "generic", "generic-gains", "sparse-gains", "conditioned"]
+ForwardModel = Literal[
+    "structured", "generic", "generic-gains", "sparse-gains", "sparse-affine", "conditioned"
+]
 
 #: The largest value of a count field: 2**31 - 1, what the compiled kernel's int32 holds.
 MAX_COUNT = 2**31 - 1
@@ -245,20 +247,22 @@ class LearnerConfig:
         "'generic-gains' (the same, a candidate also checked on its mean with the pole's "
         "angular acceleration scaled by 1/1.2 and 1/0.8), 'sparse-gains' (generic-gains "
         "with a sparse readout: a few monomials of the raw inputs per output, chosen by "
-        "orthogonal matching pursuit, as in SINDy) or "
+        "orthogonal matching pursuit, as in SINDy), 'sparse-affine' (sparse-gains with the "
+        "force f in each output's terms, and 2 terms an output while the data's angle spans "
+        "less than 1 rad) or "
         "'conditioned' (the generic ensemble with the plant's pole mass and length factors "
         "as inputs, learned from the real trials and the real robust checks, rehearsing "
         "the corners it has seen)",
     )
     imagine_margin: float = option(
         0.0,
-        "forward, with --robust and the structured, generic-gains or sparse-gains model: "
+        "forward, with --robust and the structured, generic-gains or a sparse model: "
         "imagination asks "
         "for the plant corners at pole mass and length x(1 +- (0.2 + M)) instead of the "
         "robustness set's (structured: the inner pgpe's jittered plants and each family "
-        "plant's checks; generic-gains and sparse-gains: the angular-acceleration gains "
+        "plant's checks; generic-gains and the sparse models: the angular-acceleration gains "
         "1/(1 +- (0.2 + M))); "
-        "the real checks are unchanged. 0: the set's box (with --robust, both models: 0.1 "
+        "the real checks are unchanged. 0: the set's box (with --robust, these models: 0.1 "
         "unless given, their robust preset)",
         bounds="[0, 0.5]",
     )

@@ -45,11 +45,14 @@ from striatal.sim.rollout import Trajectory
 
 __all__ = [
     "DEGREE",
+    "FORCE_TERMS",
     "GENERIC_INPUTS",
     "GENERIC_OUTPUTS",
+    "NARROW_SPAN",
     "READOUTS",
     "RIDGE",
     "SPARSE_TERMS",
+    "ForceTerm",
     "GenericModel",
     "Readout",
     "StructuredFit",
@@ -326,6 +329,15 @@ READOUTS: tuple[str, ...] = ("ridge", "sparse")
 #: The monomials the sparse readout chooses per output and member (root 0: 2-8 compared
 #: offline, 3, 4 and 6 in the loop; docs/results.md, "The generic forward model, round 6").
 SPARSE_TERMS = 4
+#: Which monomial holding the force the sparse readout puts in each output's support
+#: before its pursuit picks the rest: "chosen", none (the pursuit alone); "linear", the
+#: force f itself; "any", the monomial holding f that best matches the output.
+ForceTerm = Literal["chosen", "linear", "any"]
+FORCE_TERMS: tuple[str, ...] = ("chosen", "linear", "any")
+#: The angle span [rad] below which data are narrow (``fit_generic``'s ``narrow_terms``):
+#: a trial that barely left hanging (root 0's W(0) trials that barely move span 0.03-0.3
+#: rad, those that swing 5-40; set before the loop comparison, not tuned).
+NARROW_SPAN = 1.0
 
 
 def generic_powers(degree: int, conditioned: bool) -> np.ndarray:
@@ -362,6 +374,8 @@ def fit_generic(
     conditioned: bool = False,
     readout: Readout = "ridge",
     terms: int = SPARSE_TERMS,
+    force_term: ForceTerm = "chosen",
+    narrow_terms: int | None = None,
 ) -> GenericModel:
     """A bootstrap ensemble of ``members`` regressors: scikit-learn's ``StandardScaler``
     and ``PolynomialFeatures`` (every monomial of degree <= ``degree`` of the standardised
@@ -384,7 +398,11 @@ def fit_generic(
     generic one; its low-degree monomials contain the cart-pole's leading terms (sin
     theta, cos theta times the force), which is why a sparse choice can extrapolate
     from a swing to upright where the dense ridge does not (docs/results.md, round 6).
-    Needs scikit-learn (the ``model`` extra)."""
+    ``force_term`` (sparse only, :data:`FORCE_TERMS`): a monomial holding the force put in
+    each output's support before the pursuit picks the other ``terms`` - 1 ("chosen":
+    none, the pursuit alone). ``narrow_terms`` (sparse only; None: ``terms`` always): the
+    terms per output when the data's angle spans less than :data:`NARROW_SPAN`, data
+    too narrow to tell more terms apart. Needs scikit-learn (the ``model`` extra)."""
     try:
         from sklearn.linear_model import Ridge
         from sklearn.preprocessing import StandardScaler
@@ -398,12 +416,23 @@ def fit_generic(
         raise ParameterError(f"degree must be in [1, 6], got {degree}")
     if readout not in READOUTS:
         raise ParameterError(f"readout must be 'ridge' or 'sparse', got {readout!r}")
+    if readout != "sparse" and (force_term != "chosen" or narrow_terms is not None):
+        raise ParameterError("force_term and narrow_terms take the sparse readout")
     if readout == "sparse":
         if conditioned:
             raise ParameterError(
                 "the sparse readout takes the plain generic model, not conditioned"
             )
-        return _fit_sparse(data, rng, members=members, degree=degree, terms=terms)
+        if narrow_terms is not None:
+            if not 1 <= narrow_terms <= terms:
+                raise ParameterError(
+                    f"narrow_terms must be in [1, terms = {terms}], got {narrow_terms}"
+                )
+            if np.ptp(data.states[:, 2]) < NARROW_SPAN:
+                terms = narrow_terms
+        return _fit_sparse(
+            data, rng, members=members, degree=degree, terms=terms, force_term=force_term
+        )
     X = _features(data.states, data.forces, data.factors if conditioned else None)
     y = (data.next_states[:, [1, 3]] - data.states[:, [1, 3]]) / data.dt
     scaler = StandardScaler().fit(X)
@@ -430,15 +459,64 @@ def fit_generic(
     return GenericModel(args, data.dt, conditioned, plants)
 
 
-def _fit_sparse(
-    data: Transitions, rng: np.random.Generator, *, members: int, degree: int, terms: int
-) -> GenericModel:
-    """:func:`fit_generic`'s sparse readout (its docstring)."""
+def _pursue(
+    unit: np.ndarray, y: np.ndarray, terms: int, candidates: np.ndarray | None
+) -> np.ndarray:
+    """(2, F) whether each unit-norm monomial column of ``unit`` (n, F) is chosen for each
+    output of ``y`` (n, 2) by orthogonal matching pursuit, at most ``terms`` each; with
+    ``candidates`` (indices) one of them is chosen first (the one that best matches the
+    output) and the pursuit picks the other ``terms`` - 1 on what it leaves."""
     from sklearn.linear_model import OrthogonalMatchingPursuit
 
+    chosen = np.zeros((y.shape[1], unit.shape[1]), dtype=bool)
+    for out in range(y.shape[1]):
+        target, columns, rest = y[:, out], unit, terms
+        if candidates is not None:
+            first = candidates[np.argmax(np.abs(unit[:, candidates].T @ target))]
+            chosen[out, first] = True
+            # the pursuit's own step: the output and every column less their part along it
+            along = unit[:, first]
+            target = target - along * (along @ target)
+            columns = unit - np.outer(along, along @ unit)
+            norms = np.linalg.norm(columns, axis=0)
+            columns = np.where(
+                norms > 1e-9 * max(1.0, norms.max()), columns / np.where(norms > 0, norms, 1.0), 0.0
+            )
+            rest = terms - 1
+        if rest == 0 or not np.any(target):
+            continue
+        with warnings.catch_warnings():
+            # fewer independent monomials than terms on a narrow trial: it stops early
+            warnings.simplefilter("ignore", RuntimeWarning)
+            pursuit = OrthogonalMatchingPursuit(n_nonzero_coefs=rest, fit_intercept=False)
+            pursuit.fit(columns, target)
+        chosen[out] |= pursuit.coef_ != 0
+    return chosen
+
+
+def _fit_sparse(
+    data: Transitions,
+    rng: np.random.Generator,
+    *,
+    members: int,
+    degree: int,
+    terms: int,
+    force_term: ForceTerm,
+) -> GenericModel:
+    """:func:`fit_generic`'s sparse readout (its docstring)."""
     powers = generic_powers(degree, False)
     if not 1 <= terms <= len(powers):
         raise ParameterError(f"terms must be in [1, {len(powers)}], got {terms}")
+    if force_term not in FORCE_TERMS:
+        raise ParameterError(
+            f"force_term must be one of {', '.join(FORCE_TERMS)}, got {force_term!r}"
+        )
+    force = N_FEATURES - 1
+    candidates = {
+        "chosen": None,
+        "linear": np.flatnonzero((powers[:, force] == 1) & (powers.sum(axis=1) == 1)),
+        "any": np.flatnonzero(powers[:, force] > 0),
+    }[force_term]
     Phi = _monomials(_features(data.states, data.forces), powers)
     y = (data.next_states[:, [1, 3]] - data.states[:, [1, 3]]) / data.dt
     coef = []
@@ -446,13 +524,8 @@ def _fit_sparse(
         rows = rng.integers(0, len(data), len(data))
         norms = np.linalg.norm(Phi[rows], axis=0)
         norms = np.where(norms > 0, norms, 1.0)
-        with warnings.catch_warnings():
-            # fewer independent monomials than terms on a narrow trial: it stops early
-            warnings.simplefilter("ignore", RuntimeWarning)
-            pursuit = OrthogonalMatchingPursuit(n_nonzero_coefs=terms, fit_intercept=False)
-            pursuit.fit(Phi[rows] / norms, y[rows])
         # both outputs read the monomials either chose: least squares on their union
-        support = (np.atleast_2d(pursuit.coef_) != 0).any(axis=0)
+        support = np.any(_pursue(Phi[rows] / norms, y[rows], terms, candidates), axis=0)
         support[0] |= not support.any()  # the constant, when nothing moved
         unit = Phi[rows][:, support] / norms[support]
         chosen = np.zeros((2, len(powers)))

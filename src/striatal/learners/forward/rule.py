@@ -17,7 +17,9 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    ensemble of polynomial ridge regressions, run as a
    :class:`~striatal.sim.learned.LearnedPlant`); "sparse-gains" is "generic-gains"
    with the sparse readout (a few monomials of the raw inputs per output,
-   :data:`~striatal.learners.forward.model.SPARSE_TERMS`).
+   :data:`~striatal.learners.forward.model.SPARSE_TERMS`); "sparse-affine" is
+   "sparse-gains" with the force's own monomial in each output's support and fewer
+   terms on narrow data (:data:`FIT_OF`).
 3. **imagined learning** (the basal ganglia, reinforcement): pgpe, the project's rule
    (:mod:`striatal.learners.pgpe`, its own code through :func:`striatal.learners.loop.learn`),
    learns from W on the model's :class:`World` for at most ``imagine_trials`` trials, with
@@ -27,14 +29,14 @@ body by supervised learning, the basal ganglia learn by reinforcement. Here:
    Generic: on the ensemble's mean, with ``robust`` pgpe's plain preset (a learned plant
    has no pole mass to jitter); a candidate must also pass every start of the robustness
    set on each member (:func:`striatal.sim.robust.family_check`), and with
-   "generic-gains" and "sparse-gains" on the mean with its angular acceleration times
-   each of :data:`RESPONSE_GAINS`, each check spent from the budget. Else imagination goes on,
-   unless the round found no solution within ``imagine_round`` trials (generic:
-   :data:`GENERIC_ROUND` by default): then the next real trial's data refit the model
-   first. The candidate, found or not, is the next real trial's controller. With
-   ``imagine_margin`` M the plant corners imagination asks for are those at
+   "generic-gains", "sparse-gains" and "sparse-affine" on the mean with its angular
+   acceleration times each of :data:`RESPONSE_GAINS`, each check spent from the budget.
+   Else imagination goes on, unless the round found no solution within
+   ``imagine_round`` trials (generic: :data:`GENERIC_ROUND` by default): then the next
+   real trial's data refit the model first. The candidate, found or not, is the next real
+   trial's controller. With ``imagine_margin`` M the plant corners imagination asks for are those at
    x(1 +- (0.2 + M)) (structured: the inner pgpe's jitter and each family plant's set;
-   generic-gains and sparse-gains: :func:`response_gains`), a margin beyond the real
+   generic-gains and the sparse models: :func:`response_gains`), a margin beyond the real
    checks' +-20 %; the robust preset of these models sets M = 0.1 (:data:`MARGIN_ROBUST`).
 
 Imagined trials run on the model only: they are counted apart (memory "imagined":
@@ -65,7 +67,6 @@ from striatal.learners.common import initial_state
 from striatal.learners.config import ForwardModel, LearnerConfig, pick
 from striatal.learners.forward.model import (
     GenericModel,
-    Readout,
     StructuredFit,
     Transitions,
     fit_generic,
@@ -81,6 +82,7 @@ from striatal.sim.robust import ROBUST_BOX, family_check_steps
 from striatal.sim.rollout import Protocol
 
 __all__ = [
+    "FIT_OF",
     "FORWARD",
     "GAINED_MODELS",
     "GENERIC_DURATION",
@@ -88,7 +90,6 @@ __all__ = [
     "MARGIN_MODELS",
     "MARGIN_ROBUST",
     "MAX_TRANSITIONS",
-    "READOUT_OF",
     "RESPONSE_GAINS",
     "ForwardConfig",
     "ForwardRule",
@@ -127,11 +128,23 @@ GENERIC_ROUND = 500
 #: explicit ``imagine_margin`` (0 included) overrides it.
 MARGIN_ROBUST = MappingProxyType({"imagine_margin": 0.1})
 #: The forward models whose imagination can ask for wider corners than the checks'.
-MARGIN_MODELS: tuple[str, ...] = ("structured", "generic-gains", "sparse-gains")
+MARGIN_MODELS: tuple[str, ...] = ("structured", "generic-gains", "sparse-gains", "sparse-affine")
 #: The generic models checked on their mean with the :data:`RESPONSE_GAINS`.
-GAINED_MODELS: tuple[str, ...] = ("generic-gains", "sparse-gains")
-#: The generic models' readouts (:func:`~striatal.learners.forward.model.fit_generic`).
-READOUT_OF: Mapping[str, Readout] = MappingProxyType({"sparse-gains": "sparse"})
+GAINED_MODELS: tuple[str, ...] = ("generic-gains", "sparse-gains", "sparse-affine")
+#: The generic models' fits beyond the ridge readout
+#: (:func:`~striatal.learners.forward.model.fit_generic`'s options): "sparse-affine" is
+#: "sparse-gains" with the force's own monomial in each output's support (a
+#: control-affine prior: the motor command acts on the accelerations) and 2 terms an
+#: output on narrow data (chosen on root 0: docs/results.md, "The generic forward model,
+#: round 7").
+FIT_OF: Mapping[str, Mapping[str, Any]] = MappingProxyType(
+    {
+        "sparse-gains": MappingProxyType({"readout": "sparse"}),
+        "sparse-affine": MappingProxyType(
+            {"readout": "sparse", "force_term": "linear", "narrow_terms": 2}
+        ),
+    }
+)
 #: The generic worlds' own imagined-trial duration [s] (``imagine_duration`` none;
 #: None: the real trial's), chosen with :data:`GENERIC_ROUND`.
 GENERIC_DURATION: float | None = None
@@ -421,7 +434,7 @@ class ForwardRule(Rule):
         ):
             raise ParameterError(
                 "imagine_margin widens the plant corners imagination checks: it needs --robust "
-                "and --forward-model structured, generic-gains or sparse-gains"
+                "and --forward-model structured, generic-gains, sparse-gains or sparse-affine"
             )
         if config.forward_model != "structured" and importlib.util.find_spec("sklearn") is None:
             raise ParameterError(
@@ -477,7 +490,7 @@ class ForwardRule(Rule):
                     transitions,
                     np.random.default_rng(seed),
                     conditioned=c.forward_model == "conditioned",
-                    readout=READOUT_OF.get(c.forward_model, "ridge"),
+                    **FIT_OF.get(c.forward_model, {}),
                 )
                 box = ROBUST_BOX + c.imagine_margin
                 gains = response_gains(box) if c.forward_model in GAINED_MODELS else ()
