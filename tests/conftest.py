@@ -92,18 +92,23 @@ def cli(capsys: pytest.CaptureFixture[str]) -> Cli:
     return Cli(capsys)
 
 
-@pytest.fixture(scope="session")
-def neural_learn_bench() -> Any:
-    """benchmarks/neural_learn.py as a module (the spiking learner's runs and tables)."""
+def benchmark_module(name: str) -> Any:
+    """benchmarks/``name``.py loaded as a module (benchmarks are scripts, not a package)."""
     import importlib.util
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "neural_learn.py"
-    spec = importlib.util.spec_from_file_location("neural_learn_bench", path)
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"{name}_bench", path)
     assert spec is not None and spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    return bench
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="session")
+def neural_learn_bench() -> Any:
+    """benchmarks/neural_learn.py as a module (the spiking learner's runs and tables)."""
+    return benchmark_module("neural_learn")
 
 
 class Ran(NamedTuple):

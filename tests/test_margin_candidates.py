@@ -3,21 +3,15 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
 from typing import Any
 
 import pytest
+from conftest import benchmark_module
 
 
 @pytest.fixture(scope="module")
 def bench() -> Any:
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "margin_candidates.py"
-    spec = importlib.util.spec_from_file_location("margin_candidates_bench", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return benchmark_module("margin_candidates")
 
 
 def test_each_names_control_and_cmaes_have_their_own_row_and_random_search_one(bench: Any) -> None:

@@ -53,6 +53,7 @@ from striatal.params import Controller, Plant, Simulation
 from striatal.sim.batch import Steps, drive, driven
 from striatal.sim.robust import (
     ROBUST_BOX,
+    StopCheck,
     corners_check_steps,
     nominal_is_the_case,
     stop_check_steps,
@@ -274,6 +275,18 @@ def learning_steps(
         W, theta_c = np.array(state.W, dtype=float), state.theta_c
     success = True
     checks: tuple[tuple[tuple[float, float], np.ndarray], ...] = ()
+
+    def margin_corners() -> Steps[StopCheck]:
+        """The judged controller on the corners of the box widened by the stop margin."""
+        return corners_check_steps(
+            replace(template, theta_c=theta_c),
+            plant,
+            sim.dt,
+            ROBUST_BOX + config.stop_margin,
+            gains=W,
+            hardware=context.hardware,
+        )
+
     # margin_after_success: the margin's corners join the test only after the first success
     first_test = config.margin_after_success and not state.success
     tested = replace(config, stop_margin=0.0) if first_test else config
@@ -300,14 +313,7 @@ def learning_steps(
             success = verdict.robust
             continue
         if check == "margin corners":
-            verdict = yield from corners_check_steps(
-                replace(template, theta_c=theta_c),
-                plant,
-                sim.dt,
-                ROBUST_BOX + config.stop_margin,
-                gains=W,
-                hardware=context.hardware,
-            )
+            verdict = yield from margin_corners()
             simulations += verdict.simulations
             seconds += verdict.simulated_seconds
             success = verdict.robust
@@ -347,14 +353,7 @@ def learning_steps(
             W=tuple(float(w) for w in W),
             theta_c=float(theta_c),
         )
-        verdict = yield from corners_check_steps(
-            replace(template, theta_c=theta_c),
-            plant,
-            sim.dt,
-            ROBUST_BOX + config.stop_margin,
-            gains=W,
-            hardware=context.hardware,
-        )
+        verdict = yield from margin_corners()
         simulations += verdict.simulations
         seconds += verdict.simulated_seconds
         margin_reached = verdict.robust
