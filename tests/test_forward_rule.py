@@ -344,10 +344,13 @@ def test_the_generic_model_without_scikit_learn_is_refused_before_any_trial(
         "find_spec",
         lambda name, *a: None if name == "sklearn" else find_spec(name, *a),
     )
-    with pytest.raises(
-        ParameterError, match=r"needs scikit-learn: pip install 'striatal\[model\]'"
-    ):
-        default_config("forward", forward_model="generic")
+    for model in ("generic", "generic-gains", "sparse-gains", "sparse-affine", "conditioned"):
+        with pytest.raises(
+            ParameterError,
+            match=rf"^--forward-model {model} needs scikit-learn: pip install 'striatal\[model\]'$",
+        ):
+            default_config("forward", forward_model=model)
+    default_config("forward", forward_model="structured")  # needs no scikit-learn
     with pytest.raises(
         ParameterError,
         match=(

@@ -438,7 +438,8 @@ class ForwardRule(Rule):
             )
         if config.forward_model != "structured" and importlib.util.find_spec("sklearn") is None:
             raise ParameterError(
-                "--forward-model generic needs scikit-learn: pip install 'striatal[model]'"
+                f"--forward-model {config.forward_model} needs scikit-learn: "
+                "pip install 'striatal[model]'"
             )
 
     def plan(
