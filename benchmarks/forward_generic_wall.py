@@ -10,9 +10,9 @@ real trials, real simulated seconds, imagined simulations, wall seconds and CPU
 seconds of this process (``time.process_time``), then their medians and the load
 average before and after. The CPU seconds hold up on a shared machine, the wall
 seconds do not. The same script runs on an older checkout (it uses only
-``striatal.train``, ``spawn_seeds`` and the forward rule's ``imagined``), so the two
-can be compared in one session, side by side. The first run includes the
-compilation cache's loading and scikit-learn's import.
+``striatal.train`` and ``spawn_seeds``, through ``forward_runs`` beside it, and the
+forward rule's ``imagined``), so the two can be compared in one session, side by side.
+The first run includes the compilation cache's loading and scikit-learn's import.
 """
 
 from __future__ import annotations
@@ -22,33 +22,26 @@ import os
 import statistics
 import time
 
-import striatal
-from striatal.experiments.spec import spawn_seeds
+from forward_runs import (  # beside this script (benchmarks/ is its sys.path[0])
+    add_run_options,
+    run_seeds,
+    train_forward,
+)
+
 from striatal.learners.forward.rule import FORWARD
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--root", type=int, default=0)
-    parser.add_argument("--first", type=int, default=0)
-    parser.add_argument("--seeds", type=int, default=8)
+    add_run_options(parser, seeds=8, forward_model="generic")
     parser.add_argument("--imagine-trials", type=int, default=2000)
-    parser.add_argument("--forward-model", default="generic")
     args = parser.parse_args()
     print(f"load average before: {os.getloadavg()}")
-    seeds = spawn_seeds(args.root, args.first + args.seeds)[args.first :]
+    seeds = run_seeds(args)
     rows = []
     for i, seed in enumerate(seeds, start=args.first):
         wall, cpu = time.perf_counter(), time.process_time()
-        run = striatal.train(
-            "forward",
-            init="random",
-            seed=seed,
-            robust=True,
-            forward_model=args.forward_model,
-            max_trials=300,
-            imagine_trials=args.imagine_trials,
-        )
+        run = train_forward(seed, args.forward_model, imagine_trials=args.imagine_trials)
         wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
         imagined = FORWARD.imagined(run.state)[0]
         rows.append((run.success, run.trials, run.state.simulated_seconds, imagined, wall, cpu))

@@ -28,8 +28,14 @@ import statistics
 import time
 from typing import Any
 
-import striatal
-from striatal.experiments.spec import spawn_seeds
+from forward_runs import (  # beside this script (benchmarks/ is its sys.path[0])
+    add_margin_option,
+    add_run_options,
+    margin_options,
+    run_seeds,
+    train_forward,
+)
+
 from striatal.learners.forward import rule as forward
 
 ENDINGS = ("exhausted", "refused", "solved")
@@ -87,38 +93,26 @@ class Recorder:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--root", type=int, default=0)
-    parser.add_argument("--first", type=int, default=0)
-    parser.add_argument("--seeds", type=int, default=15)
-    parser.add_argument("--forward-model", default="generic-gains")
+    add_run_options(parser, seeds=15, forward_model="generic-gains")
     parser.add_argument("--imagine-trials", type=int, default=2000)
     parser.add_argument("--imagine-round", type=int, default=None)
     parser.add_argument("--imagine-duration", type=float, default=None)
-    parser.add_argument(
-        "--imagine-margin",
-        type=float,
-        default=None,
-        help="none: the model's robust preset (structured, generic-gains, the sparse models: 0.1)",
-    )
+    add_margin_option(parser)
     parser.add_argument("--json", default=None, help="write each run's record here")
     args = parser.parse_args()
     print(f"load average before: {os.getloadavg()}")
     recorder = Recorder()
     runs = []
-    for i, seed in enumerate(spawn_seeds(args.root, args.first + args.seeds)[args.first :]):
+    for i, seed in enumerate(run_seeds(args)):
         recorder.calls.clear()
         cpu = time.process_time()
-        run = striatal.train(
-            "forward",
-            init="random",
-            seed=seed,
-            robust=True,
-            forward_model=args.forward_model,
-            max_trials=300,
+        run = train_forward(
+            seed,
+            args.forward_model,
             imagine_trials=args.imagine_trials,
             imagine_round=args.imagine_round,
             imagine_duration=args.imagine_duration,
-            **({} if args.imagine_margin is None else {"imagine_margin": args.imagine_margin}),
+            **margin_options(args),
         )
         cpu = time.process_time() - cpu
         endings = recorder.endings()

@@ -36,9 +36,14 @@ import time
 from typing import Any
 
 import numpy as np
+from forward_runs import (  # beside this script (benchmarks/ is its sys.path[0])
+    add_margin_option,
+    add_run_options,
+    margin_options,
+    run_seeds,
+    train_forward,
+)
 
-import striatal
-from striatal.experiments.spec import spawn_seeds
 from striatal.learners.forward import rule as forward
 from striatal.sim.batch import TrialRequest
 from striatal.sim.robust import ROBUST_CASES, STOP_ORDER
@@ -134,22 +139,14 @@ class Recorder:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--root", type=int, default=0)
-    parser.add_argument("--first", type=int, default=0)
-    parser.add_argument("--seeds", type=int, default=15)
-    parser.add_argument("--forward-model", default="generic-gains")
-    parser.add_argument(
-        "--imagine-margin",
-        type=float,
-        default=None,
-        help="none: the model's robust preset (structured, generic-gains, the sparse models: 0.1)",
-    )
+    add_run_options(parser, seeds=15, forward_model="generic-gains")
+    add_margin_option(parser)
     parser.add_argument("--json", default=None, help="write each run's record here")
     args = parser.parse_args()
     print(f"load average before: {os.getloadavg()}")
     recorder = Recorder()
     runs = []
-    for i, seed in enumerate(spawn_seeds(args.root, args.first + args.seeds)[args.first :]):
+    for i, seed in enumerate(run_seeds(args)):
         recorder.reset()
         trials: list[dict[str, Any]] = []
         last = {"simulations": 0, "seconds": 0.0}
@@ -177,16 +174,7 @@ def main() -> None:
             )
 
         cpu = time.process_time()
-        run = striatal.train(
-            "forward",
-            init="random",
-            seed=seed,
-            robust=True,
-            forward_model=args.forward_model,
-            max_trials=300,
-            on_trial=on_trial,
-            **({} if args.imagine_margin is None else {"imagine_margin": args.imagine_margin}),
-        )
+        run = train_forward(seed, args.forward_model, on_trial=on_trial, **margin_options(args))
         cpu = time.process_time() - cpu
         by_kind = collections.Counter()
         for t in trials:
