@@ -13,6 +13,12 @@ the runs' generators; ``prepare``: grouping and arguments of a lane's calls, wit
 noise before; ``outcomes``) overlaps them. Also runs on a tree without
 ``prepare`` (the functions it lacks are left out), so two trees can be compared with
 ``PYTHONPATH=OLD/src``.
+
+``--every SECONDS`` (Linux) also prints a utilisation timeline: every SECONDS of wall
+time, the cores' worth of CPU the process used, by thread (``main``, the lanes'
+``lockstep`` workers, the ``normals`` pool, and ``other``: Numba's own threads), read
+from ``/proc/self/task``; and the runs not yet finished (rows written so far), so that
+start-up, the first rounds and the tail when few runs are left can be told apart.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import collections
 import functools
 import os
 import shutil
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -51,11 +58,57 @@ def timed(owner: Any, name: str, label: str) -> None:
     setattr(owner, name, wrapper)
 
 
+def _thread_cpu() -> dict[str, float]:
+    """CPU seconds so far of each of this process's threads, summed by kind (Linux)."""
+    names = {t.native_id: t.name for t in threading.enumerate()}
+    tick = os.sysconf("SC_CLK_TCK")
+    found: dict[str, float] = collections.defaultdict(float)
+    for task in os.listdir("/proc/self/task"):
+        try:
+            with open(f"/proc/self/task/{task}/stat", encoding="ascii") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:  # the thread ended
+            continue
+        name = names.get(int(task), "")
+        kind = "main" if name == "MainThread" else name.split("_")[0] or "other"
+        kind = kind if kind in ("main", "lockstep", "normals") else "other"
+        found[kind] += (int(fields[11]) + int(fields[12])) / tick
+    return found
+
+
+def sample(every: float, stop: threading.Event, rows: Path) -> list[str]:
+    """Lines of the utilisation timeline, one per ``every`` seconds until ``stop``."""
+    lines = []
+    t_last, last = time.perf_counter(), _thread_cpu()
+    kinds = ("main", "lockstep", "normals", "other")
+    lines.append(f"{'t [s]':>6s} {'cores':>5s} " + " ".join(f"{k:>8s}" for k in kinds) + "  rows")
+    while not stop.wait(every):
+        t, now = time.perf_counter(), _thread_cpu()
+        dt = t - t_last
+        used = {k: max(0.0, now[k] - last.get(k, 0.0)) / dt for k in kinds}
+        try:
+            with open(rows / "runs.csv", encoding="utf-8") as f:
+                written = sum(1 for _ in f) - 1
+        except OSError:
+            written = 0
+        lines.append(
+            f"{t - START:6.1f} {sum(used.values()):5.2f} "
+            + " ".join(f"{used[k]:8.2f}" for k in kinds)
+            + f"  {written}"
+        )
+        t_last, last = t, now
+    return lines
+
+
+START = time.perf_counter()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=30)
     parser.add_argument("--engine", choices=("batch", "simd"), default="batch")
     parser.add_argument("--out", type=Path, default=Path("sweep-timeline"))
+    parser.add_argument("--every", type=float, default=0.0, help="timeline step [s]; 0: none")
     args = parser.parse_args()
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # as the CLI sets it
     from striatal.cli import main as striatal
@@ -74,11 +127,23 @@ def main() -> None:
     command = ["sweep", "--seeds", str(args.seeds), "--init", "chapter", "--max-trials", "1000"]
     command += ["--no-progress", "--engine", args.engine, "--out", str(args.out)]
     load = os.getloadavg()[0]
+    stop = threading.Event()
+    timeline: list[str] = []
+    sampler = threading.Thread(
+        target=lambda: timeline.extend(sample(args.every, stop, args.out)), name="sampler"
+    )
+    if args.every > 0:
+        sampler.start()
     t0, c0 = time.perf_counter(), time.process_time()
     striatal(command)
     wall = time.perf_counter() - t0
     cpu = time.process_time() - c0
+    stop.set()
+    if args.every > 0:
+        sampler.join()
     print(f"wall {wall:.1f} s, cpu {cpu:.1f} s, load {load:.1f} -> {os.getloadavg()[0]:.1f}")
+    print(f"(the sweep started {t0 - START:.1f} s after this script's imports)")
+    print("\n".join(timeline))
     for label, seconds in sorted(TOTAL.items()):
         print(f"  {label:32s} {seconds:7.1f} s  {seconds / wall:5.2f}  cpu {CPU[label]:6.2f} s")
 

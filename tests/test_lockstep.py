@@ -138,11 +138,8 @@ def test_lockstep_single_trial() -> None:
     _compare(Controller(), B=1)
 
 
-def test_packed_lanes_give_each_trial_its_result_alone() -> None:
-    """Trials that end at the eq-24 check or on a fault are written out and the running
-    ones packed into the first lanes: each trial's row and trace equal, bit for bit, the
-    same trial run alone (a block of one, where nothing is packed)."""
-    B = 70
+def _packing_requests(B: int) -> tuple[list[TrialRequest], np.ndarray]:
+    """B noisy requests that end at the eq-24 check, on a fault and at 35 s; their noise."""
     states0, W, theta_c = _rows(B, 99)
     noise = np.random.default_rng(5).standard_normal((B, SIM.n_steps))
     requests = [
@@ -158,6 +155,15 @@ def test_packed_lanes_give_each_trial_its_result_alone() -> None:
         )
         for b in range(B)
     ]
+    return requests, noise
+
+
+def test_packed_lanes_give_each_trial_its_result_alone() -> None:
+    """Trials that end at the eq-24 check or on a fault are written out and the running
+    ones packed into the first lanes: each trial's row and trace equal, bit for bit, the
+    same trial run alone (a block of one, where nothing is packed)."""
+    B = 70
+    requests, noise = _packing_requests(B)
     args = batch_args(requests, noise)
     kernel.run_trials_lockstep(*args)
     outs, traces = args[-1], args[-2].trace
@@ -168,3 +174,22 @@ def test_packed_lanes_give_each_trial_its_result_alone() -> None:
         kernel.run_trials_lockstep(*one)
         np.testing.assert_array_equal(outs[b], one[-1][0], err_msg=f"row {b}")
         np.testing.assert_array_equal(traces[b], one[-2].trace[0], err_msg=f"row {b}")
+
+
+@pytest.mark.parametrize("block", [1, 3, 4, 7, 12, 20, 64])
+def test_block_size_does_not_change_a_trial(block: int) -> None:
+    """Blocks of any size (rounded up to whole vectors of VECTOR lanes, the idle lanes
+    inactive) give every trial the same row and trace, bit for bit, as blocks of 64:
+    a lane's arithmetic does not depend on its place, its block, or how many lanes
+    its vector loop steps."""
+    B = 21
+    requests, noise = _packing_requests(B)
+    want = batch_args(requests, noise)
+    kernel.run_trials_lockstep(*want, 64)
+    got = batch_args([replace(r, trace=np.zeros(6)) for r in requests], noise)
+    kernel.run_trials_lockstep(*got, block)
+    np.testing.assert_array_equal(got[-1], want[-1])
+    np.testing.assert_array_equal(got[-2].trace, want[-2].trace)
+    ended = want[-1][:, kernel.OUT_END_STEP] < SIM.n_steps
+    assert ended.any() and not ended.all()  # packing happened
+    assert kernel.lockstep.VECTOR % 4 == 0

@@ -41,11 +41,25 @@ from striatal.sim.kernel.trials import (
 
 __all__ = [
     "LOCKSTEP_BLOCK",
+    "VECTOR",
     "run_trials_lockstep",
 ]
 
 #: Trials per lockstep block (one block per thread at a time).
 LOCKSTEP_BLOCK = 64
+
+
+#: Lanes a block steps at a time: LLVM vectorises the loops over lanes 8 doubles wide
+#: where the CPU has AVX-512 (two AVX2 vectors elsewhere). A block steps its trials
+#: rounded up to whole vectors: lanes left over would run one by one in the loops'
+#: scalar remainder, each about as slow as a whole vector (benchmarks/lockstep_lanes.py).
+VECTOR = 8
+
+
+@njit(cache=True, inline="always")
+def _lanes(n: int) -> int:
+    """n lanes rounded up to whole vectors."""
+    return (n + VECTOR - 1) // VECTOR * VECTOR
 
 
 @njit(cache=True, inline="always")
@@ -76,18 +90,18 @@ def _lockstep_block(
 
     The state array always has LOCKSTEP_BLOCK lanes (a compile-time row stride, so the
     loops over lanes vectorise without run-time alias checks); the loops step the
-    trials rounded up to a multiple of 4, the extra lanes idle copies of the first
-    trial, inactive from the start. When trials end (at the eq-24 check, on a fault)
-    and the running ones fit in fewer vectors of 4, the ended ones are written out and
+    trials rounded up to whole vectors (:data:`VECTOR`), the extra lanes idle copies of
+    the first trial, inactive from the start. When trials end (at the eq-24 check, on a
+    fault) and the running ones fit in fewer vectors, the ended ones are written out and
     the running ones packed into the first lanes (:func:`_pack`), so the loops step
     fewer lanes; a lane's arithmetic does not depend on its place, so the results
     are the same.
     """
     states0, gains, plant, control, protocol, noise, learning = args
     n = hi - lo
-    # lanes actually stepped: the trials rounded up to a multiple of 4 (one AVX2
-    # vector); the array keeps LOCKSTEP_BLOCK lanes so its row stride is a constant
-    L = min(LOCKSTEP_BLOCK, (n + 3) // 4 * 4)
+    # lanes actually stepped: the trials rounded up to whole vectors; the array keeps
+    # LOCKSTEP_BLOCK lanes so its row stride is a constant
+    L = min(LOCKSTEP_BLOCK, _lanes(n))
     # lane j holds trial lo + trial[j], for j < live (the lanes not yet written out)
     trial = np.arange(LOCKSTEP_BLOCK)
     live = n
@@ -252,11 +266,11 @@ def _lockstep_block(
                         n_active -= 1
                     if st != STATUS_FAULT and abs(S[_F_X, j]) > S[_F_MAXX, j]:
                         S[_F_MAXX, j] = abs(S[_F_X, j])
-            if k < n_steps and (n_active + 3) // 4 * 4 < L:
+            if k < n_steps and _lanes(n_active) < L:
                 live = _pack(
                     S, live, lo, trial, status, reward, end_step, outs, learning, stochastic
                 )
-                L = (live + 3) // 4 * 4
+                L = _lanes(live)
         else:
             for j in range(L):
                 ax = abs(S[_F_X, j])
@@ -305,7 +319,7 @@ def _pack(
 ) -> int:
     """Write out the ended trials of lanes 0..m-1 and move the running ones, in order, to
     the first lanes (state, outcome so far, ``trial``); the number of running lanes.
-    The lanes after them up to the next multiple of 4 are left inactive."""
+    The lanes after them up to the next whole vector are left inactive."""
     p = 0
     for j in range(m):
         if S[_F_ACTIVE, j] > 0.0:
@@ -319,7 +333,7 @@ def _pack(
             p += 1
         else:
             _write_lane(S, j, lo + trial[j], status, reward, end_step, outs, learning, stochastic)
-    for j in range(p, (p + 3) // 4 * 4):
+    for j in range(p, _lanes(p)):
         S[_F_ACTIVE, j] = 0.0
     return p
 
@@ -347,8 +361,8 @@ def run_trials_lockstep(
     the chaotic swing-up can amplify over a trial (tests/test_lockstep.py states the
     tolerance). It refuses (ValueError) the force hold, a force limit and a track:
     run those with :func:`run_trials_batch`. ``block``: trials per block (rounded up to
-    a multiple of 4, at most :data:`LOCKSTEP_BLOCK`): a caller with few trials gives
-    a smaller one, so that every thread gets a block.
+    whole vectors of :data:`VECTOR` lanes, at most :data:`LOCKSTEP_BLOCK`): a caller
+    with few trials gives a smaller one, so that every thread gets a block.
     """
     if plant.hold_force or plant.max_force < math.inf or protocol.track < math.inf:
         raise ValueError(
@@ -356,9 +370,9 @@ def run_trials_lockstep(
             "use run_trials_batch for hold force, max_force or track"
         )
     B = states0.shape[0]
-    # blocks of ``block`` trials (4 to LOCKSTEP_BLOCK, a multiple of 4: one AVX2 vector);
-    # a lane's result does not depend on its block
-    size = min(LOCKSTEP_BLOCK, max(4, -(-block // 4) * 4))
+    # blocks of ``block`` trials (VECTOR to LOCKSTEP_BLOCK, whole vectors); a lane's
+    # result does not depend on its block
+    size = min(LOCKSTEP_BLOCK, max(VECTOR, _lanes(block)))
     n_blocks = (B + size - 1) // size
     for i in prange(n_blocks):
         lo = i * size
