@@ -17,7 +17,9 @@ noise before; ``outcomes``) overlaps them. Also runs on a tree without
 ``--every SECONDS`` (Linux) also prints a utilisation timeline: every SECONDS of wall
 time, the cores' worth of CPU the process used, by thread (``main``, the lanes'
 ``lockstep`` workers, the ``normals`` pool, and ``other``: Numba's own threads), read
-from ``/proc/self/task``; and the runs not yet finished (rows written so far), so that
+from ``/proc/self/task``; the mean number of them ready to run (running or waiting for
+a core, sampled every 2 ms; ``ready``: at most the cores counted), which on a shared
+machine says what a quiet one would keep busy; and the rows written so far, so that
 start-up, the first rounds and the tail when few runs are left can be told apart.
 """
 
@@ -58,11 +60,16 @@ def timed(owner: Any, name: str, label: str) -> None:
     setattr(owner, name, wrapper)
 
 
-def _thread_cpu() -> dict[str, float]:
-    """CPU seconds so far of each of this process's threads, summed by kind (Linux)."""
+KINDS = ("main", "lockstep", "normals", "other")
+
+
+def _threads() -> dict[str, tuple[float, int]]:
+    """Of this process's threads (Linux; the sampler left out), by kind: their CPU
+    seconds so far, and how many are running or waiting for a core (state R)."""
     names = {t.native_id: t.name for t in threading.enumerate()}
     tick = os.sysconf("SC_CLK_TCK")
-    found: dict[str, float] = collections.defaultdict(float)
+    cpu: dict[str, float] = collections.defaultdict(float)
+    runnable: dict[str, int] = collections.defaultdict(int)
     for task in os.listdir("/proc/self/task"):
         try:
             with open(f"/proc/self/task/{task}/stat", encoding="ascii") as f:
@@ -70,22 +77,41 @@ def _thread_cpu() -> dict[str, float]:
         except OSError:  # the thread ended
             continue
         name = names.get(int(task), "")
-        kind = "main" if name == "MainThread" else name.split("_")[0] or "other"
-        kind = kind if kind in ("main", "lockstep", "normals") else "other"
-        found[kind] += (int(fields[11]) + int(fields[12])) / tick
-    return found
+        if name == "sampler":
+            continue
+        kind = "main" if name == "MainThread" else name.split("_")[0]
+        kind = kind if kind in KINDS else "other"
+        cpu[kind] += (int(fields[11]) + int(fields[12])) / tick
+        runnable[kind] += fields[0] == "R"
+    return {k: (cpu[k], runnable[k]) for k in KINDS}
 
 
 def sample(every: float, stop: threading.Event, rows: Path) -> list[str]:
-    """Lines of the utilisation timeline, one per ``every`` seconds until ``stop``."""
+    """Lines of the utilisation timeline, one per ``every`` seconds until ``stop``: the
+    cores' worth of CPU each kind of thread used, and the mean number of threads that
+    were running or waiting for a core (read every 2 ms; at most the machine's cores
+    counted: what a quiet machine would keep busy, the threads' waits for each other
+    as they were here)."""
+    cores = os.cpu_count() or 1
     lines = []
-    t_last, last = time.perf_counter(), _thread_cpu()
-    kinds = ("main", "lockstep", "normals", "other")
-    lines.append(f"{'t [s]':>6s} {'cores':>5s} " + " ".join(f"{k:>8s}" for k in kinds) + "  rows")
-    while not stop.wait(every):
-        t, now = time.perf_counter(), _thread_cpu()
+    header = " ".join(f"{k:>8s}" for k in KINDS)
+    lines.append(f"{'t [s]':>6s} {'cpu':>5s} {header} | {'ready':>5s} {header}  rows")
+    t_last, last = time.perf_counter(), _threads()
+    ready: dict[str, float] = collections.defaultdict(float)
+    busy, n = 0.0, 0
+    t_next = t_last + every
+    while not stop.wait(0.002):
+        now = _threads()
+        ready_now = {k: now[k][1] for k in KINDS}
+        for k in KINDS:
+            ready[k] += ready_now[k]
+        busy += min(cores, sum(ready_now.values()))
+        n += 1
+        t = time.perf_counter()
+        if t < t_next:
+            continue
         dt = t - t_last
-        used = {k: max(0.0, now[k] - last.get(k, 0.0)) / dt for k in kinds}
+        used = {k: max(0.0, now[k][0] - last[k][0]) / dt for k in KINDS}
         try:
             with open(rows / "runs.csv", encoding="utf-8") as f:
                 written = sum(1 for _ in f) - 1
@@ -93,10 +119,14 @@ def sample(every: float, stop: threading.Event, rows: Path) -> list[str]:
             written = 0
         lines.append(
             f"{t - START:6.1f} {sum(used.values()):5.2f} "
-            + " ".join(f"{used[k]:8.2f}" for k in kinds)
+            + " ".join(f"{used[k]:8.2f}" for k in KINDS)
+            + f" | {busy / n:5.2f} "
+            + " ".join(f"{ready[k] / n:8.2f}" for k in KINDS)
             + f"  {written}"
         )
-        t_last, last = t, now
+        t_last, last, t_next = t, now, t + every
+        ready.clear()
+        busy, n = 0.0, 0
     return lines
 
 

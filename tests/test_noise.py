@@ -112,3 +112,48 @@ def test_compiled_normals_take_rows_of_a_block_in_place() -> None:
     noise.standard_normals(np.random.default_rng(4), block[1])
     assert np.array_equal(block[1], np.random.default_rng(4).standard_normal(500))
     assert not block[0].any() and not block[2].any()
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_rows_of_many_generators_are_each_generator_s_stream(threads: int) -> None:
+    """standard_normal_rows fills each row from its generator, a generator's rows in
+    their order wherever they lie in the buffer, as NumPy would draw them one after
+    another: the numbers, and each generator's state after; for each of NumPy's bit
+    generators, with rows long enough to reach the ziggurat's tail (|z| > 3.44, where
+    it also draws doubles), empty rows, and on Numba's threads."""
+    kinds = (np.random.PCG64, np.random.MT19937, np.random.Philox, np.random.SFC64)
+    mine = [np.random.Generator(kind(seed)) for seed, kind in enumerate(kinds)]
+    theirs = [np.random.Generator(kind(seed)) for seed, kind in enumerate(kinds)]
+    # (generator, size) of each row in request order; the rows lie in the buffer in
+    # another order than the requests', a generator's rows spread among the others'
+    requests = [(0, 6000), (1, 100), (0, 0), (2, 50_000), (3, 7), (1, 6000), (0, 25)]
+    requests += [(3, 60_000), (2, 1)]
+    sizes = [size for _, size in requests]
+    starts = np.cumsum([0, *sizes[::-1]])[:-1][::-1].tolist()  # the last row first
+    out = np.full(sum(sizes), np.nan)
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    try:
+        noise.standard_normal_rows(
+            [mine[g] for g, _ in requests], out, starts, sizes, threads=threads
+        )
+    finally:
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    for (g, size), start in zip(requests, starts, strict=True):
+        want = theirs[g].standard_normal(size)
+        assert np.array_equal(out[start : start + size], want)
+    assert not np.isnan(out).any()
+    assert (np.abs(out) > 3.4426).sum() > 20
+    for a, b in zip(mine, theirs, strict=True):
+        assert np.array_equal(a.bit_generator.random_raw(4), b.bit_generator.random_raw(4))
+        assert a.standard_normal() == b.standard_normal()
+
+
+def test_rows_need_not_fill_the_buffer_and_none_is_a_no_op() -> None:
+    """Only the rows given are written; no rows draws nothing."""
+    rng = np.random.default_rng(9)
+    out = np.zeros(30)
+    noise.standard_normal_rows([rng], out, [10], [5])
+    assert np.array_equal(out[10:15], np.random.default_rng(9).standard_normal(5))
+    assert not out[:10].any() and not out[15:].any()
+    noise.standard_normal_rows([], out, [], [])
+    assert rng.standard_normal() == np.random.default_rng(9).standard_normal(6)[5]

@@ -41,7 +41,7 @@ from striatal.errors import ParameterError
 from striatal.params import CHAPTER_HARDWARE
 from striatal.sim import kernel
 from striatal.sim.learned import LearnedPlant
-from striatal.sim.noise import row_parts, run_parts, standard_normals
+from striatal.sim.noise import standard_normal_rows, standard_normals
 from striatal.sim.rollout import (
     TrialOutcome,
     TrialRequest,
@@ -145,18 +145,19 @@ class Calls:
     engine: Literal["batch", "simd"]
     calls: list[KernelCall]
     done: dict[int, TrialOutcome]
-    #: Draws the calls' action normals into their blocks (None: drawn already).
-    draw: Callable[[], None] | None = None
+    #: Draws the calls' action normals into their blocks, on as many of Numba's threads
+    #: as it is given (None: drawn already).
+    draw: Callable[[int], None] | None = None
 
     def run(self) -> None:
-        """Draw the calls' noise (:attr:`draw`) and make the kernel calls: NumPy's draws
-        and the kernels release the GIL, so this can run on a thread of its own while
+        """Draw the calls' noise (:attr:`draw`) and make the kernel calls: the draws and
+        the kernels release the GIL, so this can run on a thread of its own while
         Python runs elsewhere."""
-        if self.draw is not None:
-            self.draw()
         old = numba.set_parallel_chunksize(CHUNK)
         threads = numba.get_num_threads()
         try:
+            if self.draw is not None:
+                self.draw(threads)
             for call in self.calls:
                 args, critic = call.args, call.critic
                 first = self.requests[call.members[0]]
@@ -214,16 +215,20 @@ def prepare(
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
     keys, groups = _groups(requests)
-    rows: dict[int, np.ndarray] = {}
+    # the round's normals in one buffer: each group's (B, n) block a part of it, request
+    # i's row at rows[i] = (start, size)
+    draws = [_draws(requests[members[0]]) for members in groups.values()]
+    normals = np.empty(sum(len(m) * n for m, n in zip(groups.values(), draws, strict=True)))
+    rows: dict[int, tuple[int, int]] = {}
     blocks: list[np.ndarray | None] = []
-    for members in groups.values():
-        first = requests[members[0]]
-        if not first.draws_actions:
+    at = 0
+    for members, n in zip(groups.values(), draws, strict=True):
+        if not n:
             blocks.append(None)
             continue
-        normals = np.empty((len(members), action_draws(first.sim, first.action_every)))
-        rows.update(zip(members, normals, strict=True))
-        blocks.append(normals)
+        blocks.append(normals[at : at + len(members) * n].reshape(len(members), n))
+        rows.update((i, (at + j * n, n)) for j, i in enumerate(members))
+        at += len(members) * n
     done: dict[int, TrialOutcome] = {}
     draw = None
     if any(key is None for key in keys):
@@ -233,9 +238,10 @@ def prepare(
                 done[i] = r.run()
             elif i in rows:
                 assert r.rng is not None
-                standard_normals(r.rng, rows[i])
+                start, size = rows[i]
+                standard_normals(r.rng, normals[start : start + size])
     elif rows:
-        draw = functools.partial(_draw_noise, requests, rows)
+        draw = functools.partial(_draw_noise, requests, rows, normals)
     calls = []
     for members, block in zip(groups.values(), blocks, strict=True):
         group = [requests[i] for i in members]
@@ -283,30 +289,33 @@ def _critics(group: Sequence[TrialRequest]) -> kernel.CriticArgs:
     )
 
 
-def _draw_noise(requests: Sequence[TrialRequest], rows: dict[int, np.ndarray]) -> None:
-    """Fill ``rows[i]`` with the action normals of request i: each generator's requests
-    in their order (what run_trial draws), different generators on threads
-    (:func:`striatal.sim.noise.run_parts`) once there are enough normals to pay."""
-    by_rng: dict[int, list[int]] = {}
-    for i in sorted(rows):
-        by_rng.setdefault(id(requests[i].rng), []).append(i)
-    chains = list(by_rng.values())
+def _draws(request: TrialRequest) -> int:
+    """The action normals ``request``'s trial draws (0: none, the mean policy)."""
+    return action_draws(request.sim, request.action_every) if request.draws_actions else 0
 
-    def part(chain_ids: range) -> Callable[[], None]:
-        def fill() -> None:
-            for c in chain_ids:
-                for i in chains[c]:
-                    rng = requests[i].rng
-                    assert rng is not None
-                    standard_normals(rng, rows[i])
 
-        return fill
-
-    if sum(row.size for row in rows.values()) < PARALLEL_NORMALS:
-        part(range(len(chains)))()
-    else:
-        threads = numba.get_num_threads()
-        run_parts([part(ids) for ids in row_parts(len(chains), threads)], threads)
+def _draw_noise(
+    requests: Sequence[TrialRequest],
+    rows: dict[int, tuple[int, int]],
+    normals: np.ndarray,
+    threads: int = 1,
+) -> None:
+    """Fill request i's row, ``normals[start:start + size]`` for ``rows[i]`` = (start,
+    size), with its action normals: each generator's requests in their order (what
+    run_trial draws), in one compiled call with the GIL released
+    (:func:`striatal.sim.noise.standard_normal_rows`), different generators on
+    ``threads`` of Numba's once there are enough normals to pay."""
+    order = sorted(rows)
+    rngs = [requests[i].rng for i in order]
+    assert all(rng is not None for rng in rngs)
+    spans = [rows[i] for i in order]
+    standard_normal_rows(
+        rngs,  # type: ignore[arg-type]
+        normals,
+        [start for start, _ in spans],
+        [size for _, size in spans],
+        threads if normals.size >= PARALLEL_NORMALS else 1,
+    )
 
 
 class Lockstep:
