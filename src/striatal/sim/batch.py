@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import functools
 import sys
+import threading
 import time
 from collections.abc import Callable, Generator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
@@ -149,31 +150,44 @@ class Calls:
     #: as it is given (None: drawn already).
     draw: Callable[[int], None] | None = None
 
-    def run(self) -> None:
+    def run(self, threads: int | None = None) -> None:
         """Draw the calls' noise (:attr:`draw`) and make the kernel calls: the draws and
         the kernels release the GIL, so this can run on a thread of its own while
-        Python runs elsewhere."""
+        Python runs elsewhere.
+
+        ``threads``: run on that many of Numba's threads, on a thread that runs only such
+        calls (:class:`Lockstep`'s workers): Numba's thread count and chunk size are then
+        set for the thread only when they change (each setting is a call through ctypes
+        that hands the GIL back, and taking it back can wait for the main thread's
+        Python), and left set. None: the calling thread's thread count, its chunk size
+        restored after."""
+        if threads is not None:
+            _thread_settings(threads)
+            self._run(threads)
+            return
         old = numba.set_parallel_chunksize(CHUNK)
-        threads = numba.get_num_threads()
         try:
-            if self.draw is not None:
-                self.draw(threads)
-            for call in self.calls:
-                args, critic = call.args, call.critic
-                first = self.requests[call.members[0]]
-                if critic is not None:
-                    kernel.run_online_trials_batch(*args[:7], critic, args.outs)
-                elif isinstance(first.plant, LearnedPlant):
-                    assert first.plant.dynamics is not None
-                    kernel.run_learned_trials_batch(first.plant.dynamics.args, *args)
-                elif self.engine == "simd" and first.hardware == CHAPTER_HARDWARE:
-                    # a block per thread when the trials are few
-                    block = -(-len(call.members) // threads)
-                    kernel.run_trials_lockstep(*args, block)
-                else:
-                    kernel.run_trials_batch(*args)
+            self._run(numba.get_num_threads())
         finally:
             numba.set_parallel_chunksize(old)
+
+    def _run(self, threads: int) -> None:
+        if self.draw is not None:
+            self.draw(threads)
+        for call in self.calls:
+            args, critic = call.args, call.critic
+            first = self.requests[call.members[0]]
+            if critic is not None:
+                kernel.run_online_trials_batch(*args[:7], critic, args.outs)
+            elif isinstance(first.plant, LearnedPlant):
+                assert first.plant.dynamics is not None
+                kernel.run_learned_trials_batch(first.plant.dynamics.args, *args)
+            elif self.engine == "simd" and first.hardware == CHAPTER_HARDWARE:
+                # a block per thread when the trials are few
+                block = -(-len(call.members) // threads)
+                kernel.run_trials_lockstep(*args, block)
+            else:
+                kernel.run_trials_batch(*args)
 
     def outcomes(self) -> list[TrialOutcome]:
         """The outcomes in the requests' order, after :meth:`run`; the traces (and an
@@ -450,9 +464,23 @@ def _timed(calls: Calls, threads: int) -> float:
     """Run ``calls``' noise and kernels on the worker thread with ``threads`` of Numba's
     threads: the wall time they took [s]."""
     t0 = time.perf_counter()
-    numba.set_num_threads(threads)
-    calls.run()
+    calls.run(threads)
     return time.perf_counter() - t0
+
+
+#: Numba's settings of this thread as :func:`_thread_settings` last made them.
+_SETTINGS = threading.local()
+
+
+def _thread_settings(threads: int) -> None:
+    """Numba's thread count ``threads`` and chunk size :data:`CHUNK` on this thread,
+    each set only when it differs from what this function last set here."""
+    if getattr(_SETTINGS, "threads", None) != threads:
+        numba.set_num_threads(threads)
+        _SETTINGS.threads = threads
+    if getattr(_SETTINGS, "chunk", None) != CHUNK:
+        numba.set_parallel_chunksize(CHUNK)
+        _SETTINGS.chunk = CHUNK
 
 
 #: A lane's prepared round: its generators in order, their request counts, the kernel
