@@ -5,13 +5,25 @@ settings made once."""
 from __future__ import annotations
 
 import threading
+from collections.abc import Iterable
 from dataclasses import replace
 
 import numba
 import numpy as np
 import pytest
 
-from striatal.params import CHAPTER_FINAL_W, Controller, Plant, Simulation
+from striatal.experiments import runs_csv, sweeps
+from striatal.experiments.lockstep_sweep import execute_batch
+from striatal.experiments.spec import RunSpec, spawn_seeds
+from striatal.learners import LearnerConfig, default_config
+from striatal.params import (
+    CHAPTER_FINAL_W,
+    CHAPTER_INITIAL_THETA_C,
+    CHAPTER_INITIAL_W,
+    Controller,
+    Plant,
+    Simulation,
+)
 from striatal.sim import batch
 from striatal.sim.rollout import Protocol, SensorNoise, TrialRequest
 
@@ -122,3 +134,40 @@ def test_a_worker_sets_numba_s_threads_once_and_runs_the_same(
     assert counts == {"threads": 1 + (numba.config.NUMBA_NUM_THREADS > 1), "chunk": 1}
     for calls in got:
         assert calls.outcomes() == want.outcomes()
+
+
+def test_simd_sweep_rows_do_not_depend_on_the_workers_or_the_blocks(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The simd engine's rows, every column but wall_seconds, are the same in two runs,
+    with a worker per lane (each call on its share of Numba's threads) and with one
+    worker whose calls take every thread (so a call's trials are cut into other blocks
+    of whole vectors)."""
+    specs = _specs(default_config("chapter", max_trials=6), seeds=spawn_seeds(0, 3))
+    first = _rows(execute_batch(specs, engine="simd"))
+    assert first == _rows(execute_batch(specs, engine="simd"))
+    monkeypatch.setattr(batch, "lane_threads", lambda: (1, numba.get_num_threads()))
+    assert first == _rows(execute_batch(specs, engine="simd"))
+    assert len({r["W1"] for r in first}) > 3  # the runs differ among themselves
+
+
+def _specs(config: LearnerConfig, seeds: tuple[int, ...]) -> list[RunSpec]:
+    specs, _ = sweeps.build_specs(
+        config=config,
+        template=Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C),
+        plant=Plant(),
+        sim=SIM,
+        seeds=seeds,
+        inits=("chapter", "random"),
+        methods=(),
+        eval_draws=2,
+    )
+    return specs
+
+
+def _rows(rows: Iterable[dict[str, object]]) -> list[dict[str, object]]:
+    """The rows in order, without their wall times."""
+    return [
+        {k: v for k, v in r.items() if not k.startswith("wall_seconds")}
+        for r in runs_csv.sort_rows(list(rows))
+    ]
