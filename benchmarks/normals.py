@@ -1,5 +1,6 @@
 """A trial's action normals: NumPy's ``Generator.standard_normal`` against
-``striatal.sim.noise.standard_normals`` (Numba's compiled Generator), the same numbers.
+``striatal.sim.noise.standard_normals`` (Numba's compiled ziggurat on the generator's own
+C functions), the same numbers.
 
     python benchmarks/normals.py [--draws 6000] [--calls 3000] [--repeats 3]
 
