@@ -157,3 +157,13 @@ def test_rows_need_not_fill_the_buffer_and_none_is_a_no_op() -> None:
     assert not out[:10].any() and not out[15:].any()
     noise.standard_normal_rows([], out, [], [])
     assert rng.standard_normal() == np.random.default_rng(9).standard_normal(6)[5]
+
+
+@pytest.mark.parametrize(("start", "size"), [(-1, 3), (8, 3), (0, 11)])
+def test_a_row_outside_the_buffer_is_refused_before_any_draw(start: int, size: int) -> None:
+    rng = np.random.default_rng(2)
+    out = np.zeros(10)
+    with pytest.raises(ValueError, match="outside"):
+        noise.standard_normal_rows([rng, rng], out, [0, start], [2, size])
+    assert not out.any()
+    assert rng.standard_normal() == np.random.default_rng(2).standard_normal()

@@ -165,7 +165,10 @@ def standard_normal_rows(
     would (the numbers, and each generator's state after). With ``threads`` > 1,
     different generators are drawn on Numba's threads (as many as the caller's
     :func:`numba.get_num_threads`). No other thread may draw from these generators
-    meanwhile."""
+    meanwhile. ``out``: 1-D, C-contiguous float64; a row outside it is refused
+    (ValueError) before anything is drawn."""
+    if any(start < 0 or start + size > out.size for start, size in zip(starts, sizes, strict=True)):
+        raise ValueError("standard_normal_rows: a row lies outside out")
     chains: dict[int, list[int]] = {}
     for r, rng in enumerate(rngs):
         chains.setdefault(id(rng), []).append(r)
