@@ -89,9 +89,10 @@ WORKERS = 2
 #: The groups of generators :class:`Lockstep` runs side by side, by engine: more lanes than
 #: workers, so that a worker whose call ends takes up another lane's call, prepared while
 #: it ran, instead of waiting for the main thread to read its outcomes, advance its runs
-#: and prepare their next calls. The SIMD kernel keeps a lane per worker (its blocks want
-#: many trials a call).
-LANES: dict[str, int] = {"batch": 4, "simd": 2}
+#: and prepare their next calls (one more lane than workers: each further lane's calls
+#: cost more CPU than they saved in waits, docs/performance.md). The SIMD kernel keeps a
+#: lane per worker (its blocks want many trials a call).
+LANES: dict[str, int] = {"batch": 3, "simd": 2}
 
 
 def driven(steps: Callable[P, Steps[T]]) -> Callable[P, T]:
