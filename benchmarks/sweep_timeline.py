@@ -21,6 +21,15 @@ from ``/proc/self/task``; the mean number of them ready to run (running or waiti
 a core, sampled every 2 ms; ``ready``: at most the cores counted), which on a shared
 machine says what a quiet one would keep busy; and the rows written so far, so that
 start-up, the first rounds and the tail when few runs are left can be told apart.
+
+Then where the two cores could idle: each worker thread's calls, their busy time and
+the time it waited between them (for the main thread to read its lane's outcomes,
+advance its runs and prepare the next calls, or for another lane's call), and the
+**lost core-seconds**: the time during the lockstep rounds with fewer than two
+threads' worth of work under way (a worker's call counts its Numba threads, at most
+its trials; the main thread's ``advance``, ``prepare`` and ``outcomes`` count one), as
+core-seconds and as a fraction of two cores. On a loaded machine a thread that waits
+for a core counts as under way, so the loss is then a lower bound.
 """
 
 from __future__ import annotations
@@ -28,6 +37,7 @@ from __future__ import annotations
 import argparse
 import collections
 import functools
+import itertools
 import os
 import shutil
 import threading
@@ -40,10 +50,14 @@ TOTAL: dict[str, float] = collections.defaultdict(float)
 #: The CPU time of the calling thread in each wrapped function (``time.thread_time``:
 #: steadier than wall time on a shared machine; a kernel's other threads not counted).
 CPU: dict[str, float] = collections.defaultdict(float)
+#: (start, end, threads' worth of work, thread) of each worker call and main-thread span.
+SPANS: list[tuple[float, float, int, str]] = []
 
 
-def timed(owner: Any, name: str, label: str) -> None:
-    """Replace ``owner.name`` by a wrapper that adds its wall time to ``TOTAL[label]``."""
+def timed(owner: Any, name: str, label: str, span: Callable[..., int] | None = None) -> None:
+    """Replace ``owner.name`` by a wrapper that adds its wall time to ``TOTAL[label]``;
+    with ``span``, each call is also a span in :data:`SPANS`, worth ``span(*args)``
+    threads."""
     if not hasattr(owner, name):
         return
     f: Callable[..., Any] = getattr(owner, name)
@@ -54,8 +68,13 @@ def timed(owner: Any, name: str, label: str) -> None:
         try:
             return f(*args, **kwargs)
         finally:
-            TOTAL[label] += time.perf_counter() - t0
+            t1 = time.perf_counter()
+            TOTAL[label] += t1 - t0
             CPU[label] += time.thread_time() - c0
+            if span is not None:
+                me = threading.current_thread()
+                who = "main" if me is threading.main_thread() else me.name
+                SPANS.append((t0, t1, span(*args), who))
 
     setattr(owner, name, wrapper)
 
@@ -133,6 +152,41 @@ def sample(every: float, stop: threading.Event, rows: Path) -> list[str]:
 START = time.perf_counter()
 
 
+def worker_threads(calls: Any, threads: int) -> int:
+    """The threads' worth of work of a worker's call: its Numba threads, at most its trials."""
+    return min(threads, len(calls.requests))
+
+
+def one(*_: Any) -> int:
+    return 1
+
+
+def idle() -> None:
+    """Print each worker thread's busy and waiting time and the lost core-seconds."""
+    workers = sorted({who for *_, who in SPANS if who != "main"})
+    for who in workers:
+        mine = sorted((a, b) for a, b, _, w in SPANS if w == who)
+        busy = sum(b - a for a, b in mine)
+        waits = sum(c - b for (_, b), (c, _) in itertools.pairwise(mine))
+        print(f"  worker {who}: {len(mine)} calls, busy {busy:.1f} s, waiting {waits:.1f} s")
+    edges = [(a, w, who == "main") for a, _, w, who in SPANS]
+    edges += [(b, -w, who == "main") for _, b, w, who in SPANS]
+    edges.sort(key=lambda e: e[0])
+    work, main_busy, last = 0, 0, None
+    lost = span = 0.0
+    for t, d, on_main in edges:
+        if last is not None:
+            under_way = min(work + (1 if main_busy else 0), 2)
+            lost += (2 - under_way) * (t - last)
+            span += t - last
+        if on_main:
+            main_busy += 1 if d > 0 else -1
+        else:
+            work += d
+        last = t
+    print(f"  lockstep rounds {span:.1f} s, lost core-seconds {lost:.1f} ({lost / (2 * span):.1%})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=30)
@@ -148,11 +202,11 @@ def main() -> None:
     timed(batch.kernel, "run_trials_lockstep", "kernel (worker)")
     timed(batch, "_draw_noise", "noise (prepare, or worker after)")
     timed(batch, "run_requests", "run_requests (worker, before)")
-    timed(batch, "_timed", "kernel calls (worker)")
-    timed(batch, "prepare", "prepare (main)")
-    timed(batch.Lockstep, "_advance", "advance (main)")
+    timed(batch, "_timed", "kernel calls (worker)", worker_threads)
+    timed(batch, "prepare", "prepare (main)", one)
+    timed(batch.Lockstep, "_advance", "advance (main)", one)
     if hasattr(batch, "Calls"):
-        timed(batch.Calls, "outcomes", "outcomes (main)")
+        timed(batch.Calls, "outcomes", "outcomes (main)", one)
     shutil.rmtree(args.out, ignore_errors=True)
     command = ["sweep", "--seeds", str(args.seeds), "--init", "chapter", "--max-trials", "1000"]
     command += ["--no-progress", "--engine", args.engine, "--out", str(args.out)]
@@ -176,6 +230,7 @@ def main() -> None:
     print("\n".join(timeline))
     for label, seconds in sorted(TOTAL.items()):
         print(f"  {label:32s} {seconds:7.1f} s  {seconds / wall:5.2f}  cpu {CPU[label]:6.2f} s")
+    idle()
 
 
 if __name__ == "__main__":

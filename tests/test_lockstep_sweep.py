@@ -9,6 +9,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from conftest import KernelCounter
 
@@ -26,7 +27,7 @@ from striatal.params import (
     Simulation,
 )
 from striatal.sim import kernel
-from striatal.sim.batch import LANES, drive
+from striatal.sim.batch import LANES, WORKERS, Lockstep, Steps, drive
 
 SHORT = Simulation(duration=20.0)
 SEEDS = spawn_seeds(0, 4)
@@ -112,9 +113,9 @@ def test_rows_come_as_runs_finish_and_share_the_wall_time() -> None:
     assert [r["trials"] for r in rows[1:]] == [15] * (len(rows) - 1)
     wall = sum(r["wall_seconds"] for r in rows)
     assert all(r["wall_seconds"] > 0 for r in rows)
-    # the runs' Python and the lanes' kernel calls overlap (a worker per lane): each is
-    # counted once, so the sum lies between half the wall time and 1 + LANES times it
-    assert 0.5 * elapsed < wall <= (1 + LANES) * elapsed
+    # the runs' Python and the workers' kernel calls overlap: each is counted once, so the
+    # sum lies between half the wall time and 1 + WORKERS times it
+    assert 0.5 * elapsed < wall <= (1 + WORKERS) * elapsed
 
 
 def test_the_batch_sweep_resumes_a_cut_sweep_of_either_engine(tmp_path: Path) -> None:
@@ -180,7 +181,8 @@ def test_trials_of_different_runs_share_kernel_calls(monkeypatch: pytest.MonkeyP
     # policy and 3 draws) once for a learner and its control of one init and seed
     shared = len({(r["init"], r["seed"]) for r in rows}) * (1 + 3)
     assert sum(sizes) == trials - shared
-    assert max(sizes) >= len(specs)  # trial k of every run in one call
+    # trial k of every run of a lane in one call
+    assert max(sizes) >= len(specs) // LANES["batch"]
     assert len(sizes) < trials / 4
 
 
@@ -379,7 +381,7 @@ def test_lockstep_runs_at_its_switch_interval_and_restores_python_s() -> None:
     after, whatever it was, also when a run raises."""
     import sys
 
-    from striatal.sim.batch import SWITCH_INTERVAL, Lockstep, Steps
+    from striatal.sim.batch import SWITCH_INTERVAL
 
     seen: list[float] = []
 
@@ -397,3 +399,77 @@ def test_lockstep_runs_at_its_switch_interval_and_restores_python_s() -> None:
     with pytest.raises(RuntimeError, match="a run failed"):
         list(Lockstep([steps(True)]).run())
     assert sys.getswitchinterval() == before
+
+
+def _rounds(n: int, seed: int) -> Steps[tuple[float, ...]]:
+    """``n`` rounds of one noisy 2-s trial each, every round's gains from the last one's
+    end state: a run whose values depend on every outcome and every draw in order."""
+    from striatal.sim.rollout import Protocol, TrialRequest
+
+    rng = np.random.default_rng(seed)
+    sim, W, seen = Simulation(duration=2.0), np.array(CHAPTER_INITIAL_W), []
+    template = Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C)
+    for _ in range(n):
+        (out,) = yield [TrialRequest(Plant(), template, sim, Protocol(), rng=rng, gains=W)]
+        seen.append(out.final_state[2])
+        W = W + 0.01 * out.final_state[2]
+    return (*seen, *W.tolist())
+
+
+@pytest.mark.parametrize("lanes", [1, 2, 3, 5])
+def test_any_number_of_lanes_gives_each_run_its_values_alone(lanes: int) -> None:
+    """More lanes than workers (their calls wait in the workers' queue) or fewer: every
+    run's values are what it gives alone on the scalar kernel, bit for bit."""
+    alone = [drive(_rounds(n, seed)) for seed, n in enumerate((1, 4, 2, 6, 3, 5))]
+    steps = [_rounds(n, seed) for seed, n in enumerate((1, 4, 2, 6, 3, 5))]
+    together = dict(Lockstep(steps, "batch", lanes=lanes).run())
+    assert [together[i] for i in range(len(alone))] == alone
+    assert len({v[0] for v in alone}) > 2  # the runs differ among themselves
+
+
+def test_the_engines_lanes_and_a_bad_lane_count() -> None:
+    assert Lockstep([], "batch").lanes == LANES["batch"] > WORKERS  # calls queue for workers
+    assert Lockstep([], "simd").lanes == LANES["simd"]
+    with pytest.raises(ParameterError, match="lanes must be at least 1"):
+        Lockstep([], "batch", lanes=0)
+
+
+def test_a_lane_takes_every_thread_only_when_it_is_alone(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each call gets its worker's share of Numba's threads while another lane still has
+    runs (also in the first round, before the other lanes' calls are submitted), and
+    every thread once its lane is the only one left."""
+    import numba
+
+    from striatal.sim import batch
+
+    live = [3]  # the runs not finished (one a lane)
+    asked: list[tuple[object, int]] = []  # each request, and the runs live when it was asked
+    given: list[tuple[int, int]] = []  # (runs live, threads) of each call
+
+    def run(n: int, seed: int) -> Steps[tuple[float, ...]]:
+        steps = _rounds(n, seed)
+        outcomes = None
+        try:
+            while True:
+                requests = next(steps) if outcomes is None else steps.send(outcomes)
+                asked.append((requests[0], live[0]))
+                outcomes = yield requests
+        except StopIteration as stop:
+            live[0] -= 1
+            return stop.value  # type: ignore[no-any-return]
+
+    real = batch._timed
+
+    def timed(calls: batch.Calls, threads: int) -> float:
+        (alive,) = [n for r, n in asked if r is calls.requests[0]]
+        given.append((alive, threads))
+        return real(calls, threads)
+
+    monkeypatch.setattr(batch, "_timed", timed)
+    _, each = batch.lane_threads()
+    every = numba.get_num_threads()
+    dict(Lockstep([run(n, seed) for seed, n in enumerate((1, 1, 8))], lanes=3).run())
+    assert len(given) == 1 + 1 + 8
+    assert all(threads == (every if alive == 1 else each) for alive, threads in given)
+    assert given[:3] == [(3, each)] * 3  # the first round: every lane live
+    assert given[-1] == (1, every)  # the long run's last round: its lane alone

@@ -30,7 +30,7 @@ from striatal.params import (
     Simulation,
 )
 from striatal.sim import kernel
-from striatal.sim.batch import LANES, Steps
+from striatal.sim.batch import LANES, WORKERS, Steps
 
 SHORT = Simulation(duration=20.0)
 SEEDS = spawn_seeds(0, 3)
@@ -182,7 +182,7 @@ def test_rules_with_their_own_simulations_give_the_process_rows_under_batch(
     assert any(r["W1"] != r["W0_1"] for r in batch if r["arm"] == "learner")
     if config.learner == "ac":
         # the online trials of several runs in one call
-        assert max(calls.sizes["run_online_trials_batch"]) >= len(specs) // (2 * LANES)
+        assert max(calls.sizes["run_online_trials_batch"]) >= len(specs) // (2 * LANES["batch"])
     elif config.forward_model == "generic":
         # imagined trials on learned plants, counted apart: the rows (their simulations
         # included) are the process engine's, and the physical batch kernel ran no more
@@ -212,8 +212,8 @@ def test_a_rule_that_yields_its_own_simulations_runs_on_every_engine(
     assert all(r["imagined_simulations"] == 2 * (r["trials"] - r["success"]) for r in learner)
     assert any(r["W2"] != r["W0_2"] for r in learner)
     # the look-ahead pairs of the runs of a lane went to the kernels together
-    assert max(calls.sizes["run_trials_batch"]) >= len(specs) // LANES
-    assert max(calls.sizes["run_trials_lockstep"]) >= len(specs) // LANES
+    assert max(calls.sizes["run_trials_batch"]) >= len(specs) // LANES["batch"]
+    assert max(calls.sizes["run_trials_lockstep"]) >= len(specs) // LANES["simd"]
     # simd: the same experiment, each run's trials counted the same way
     assert len(simd) == len(serial)
     for a, s in zip(serial, simd, strict=True):
@@ -223,17 +223,17 @@ def test_a_rule_that_yields_its_own_simulations_runs_on_every_engine(
 
 
 def test_lane_threads_share_numbas_threads_out() -> None:
-    """Each lane's worker gets its share of Numba's threads (never more in all), one
-    worker with every thread under the workqueue layer, which takes no concurrent calls."""
+    """Each worker gets its share of Numba's threads (never more in all), one worker with
+    every thread under the workqueue layer, which takes no concurrent calls."""
     import numba
 
     from striatal.sim.batch import lane_threads
 
     workers, each = lane_threads()
     threads = numba.get_num_threads()
-    assert workers in (1, LANES) and each >= 1
+    assert workers in (1, WORKERS) and each >= 1
     assert workers * each <= max(threads, 1)
-    if numba.threading_layer() == "workqueue" or threads < LANES:
+    if numba.threading_layer() == "workqueue" or threads < WORKERS:
         assert (workers, each) == (1, threads)
     else:
-        assert (workers, each) == (LANES, threads // LANES)
+        assert (workers, each) == (WORKERS, threads // WORKERS)

@@ -54,6 +54,7 @@ __all__ = [
     "BATCH_ENGINES",
     "LANES",
     "SWITCH_INTERVAL",
+    "WORKERS",
     "Calls",
     "KernelCall",
     "Lockstep",
@@ -83,9 +84,16 @@ PARALLEL_NORMALS = 50_000
 #: kernel, Numba's thread settings), and while the main thread runs the runs' Python it
 #: waited up to the interval for it each time (benchmarks/gil_wait.py).
 SWITCH_INTERVAL = 1e-4
-#: The groups of generators :class:`Lockstep` runs in turn (one group's trials on the
-#: kernel while the main thread advances the others).
-LANES = 2
+#: The worker threads :class:`Lockstep` runs its lanes' calls on, at most, each with its
+#: share of Numba's threads (:func:`lane_threads`).
+WORKERS = 2
+#: The groups of generators :class:`Lockstep` runs side by side, by engine: more lanes than
+#: workers, so that a worker whose call ends takes up another lane's call, prepared while
+#: it ran, instead of waiting for the main thread to read its outcomes, advance its runs
+#: and prepare their next calls (one more lane than workers: each further lane's calls
+#: cost more CPU than they saved in waits, docs/performance.md). The SIMD kernel keeps a
+#: lane per worker (its blocks want many trials a call).
+LANES: dict[str, int] = {"batch": 3, "simd": 2}
 
 
 def driven(steps: Callable[P, Steps[T]]) -> Callable[P, T]:
@@ -336,15 +344,17 @@ class Lockstep:
     """Many :data:`Steps` advanced together: each round, the requests of every unfinished
     one run in batched kernel calls (:func:`run_requests`).
 
-    The generators are split into :data:`LANES` groups: while a group's noise and kernel
-    calls run on a worker thread (:meth:`Calls.run`, NumPy's draws and the kernels
-    releasing the GIL), the main thread advances another group's generators with the
-    outcomes of its last calls (their Python: the rules' plans and updates, the success
-    tests) and prepares their next calls (:func:`prepare`: grouping, arguments). Each
-    lane has a worker of its own with its share of Numba's threads (:func:`lane_threads`),
-    so the lanes' calls also overlap each other: when few runs are left, each lane's few
-    trials still have a core. The kernels, the noise and the runs' Python then overlap
-    instead of taking turns. A generator is
+    The generators are split into ``lanes`` groups (:data:`LANES` of the engine): while a
+    group's noise and kernel calls run on a worker thread (:meth:`Calls.run`, NumPy's
+    draws and the kernels releasing the GIL), the main thread advances another group's
+    generators with the outcomes of its last calls (their Python: the rules' plans and
+    updates, the success tests) and prepares their next calls (:func:`prepare`: grouping,
+    arguments). There are :data:`WORKERS` workers, each with its share of Numba's threads
+    (:func:`lane_threads`), so the lanes' calls also overlap each other: when few runs are
+    left, each lane's few trials still have a core. With more lanes than workers, a
+    lane's prepared calls wait in the workers' queue, and a worker whose call ends takes
+    them up at once, while the main thread reads the ended call's outcomes. The kernels,
+    the noise and the runs' Python then overlap instead of taking turns. A generator is
     always in the same group, so its trials, and the order in which its generator draws
     their noise, are what they would be alone.
 
@@ -356,16 +366,22 @@ class Lockstep:
     (the lanes are served as their calls finish, so the order of two lanes' values can
     vary from run to run, as the process engine's rows do; the values cannot).
     ``seconds[i]``: the wall time spent on generator i, its own Python plus an even
-    share of each kernel call it was in (the Python and each lane's calls overlap, so
-    the sum over the generators can exceed the wall time of :meth:`run`, at most
-    1 + :data:`LANES` times).
+    share of each kernel call it was in, from the call's start on its worker (the Python
+    and the workers' calls overlap, so the sum over the generators can exceed the wall
+    time of :meth:`run`, at most 1 + :data:`WORKERS` times).
     """
 
     def __init__(
-        self, steps: Sequence[Steps[T]], engine: Literal["batch", "simd"] = "batch"
+        self,
+        steps: Sequence[Steps[T]],
+        engine: Literal["batch", "simd"] = "batch",
+        lanes: int | None = None,
     ) -> None:
         self.steps = list(steps)
         self.engine = engine
+        self.lanes = LANES[engine] if lanes is None else lanes
+        if self.lanes < 1:
+            raise ParameterError(f"lanes must be at least 1, got {self.lanes}")
         self.seconds = np.zeros(len(self.steps))
 
     def _advance(self, i: int, outcomes: list[TrialOutcome] | None) -> list[TrialRequest]:
@@ -407,21 +423,23 @@ class Lockstep:
             sys.setswitchinterval(switch)
 
     def _run(self) -> Generator[tuple[int, Any], None, None]:
-        lanes: list[dict[int, list[TrialRequest]]] = [{} for _ in range(LANES)]
+        lanes: list[dict[int, list[TrialRequest]]] = [{} for _ in range(self.lanes)]
         for i in range(len(self.steps)):
             try:
-                lanes[i % LANES][i] = self._advance(i, None)
+                lanes[i % self.lanes][i] = self._advance(i, None)
             except StopIteration as stop:
                 yield i, stop.value
         workers, each = lane_threads()
         every = numba.get_num_threads()
         worker = ThreadPoolExecutor(workers, thread_name_prefix="lockstep")
-        calls: list[tuple[_Lane, Future[float]] | None] = [None] * LANES
+        calls: list[tuple[_Lane, Future[float]] | None] = [None] * self.lanes
+        # the lanes whose runs are not all finished
+        live = {g for g, lane in enumerate(lanes) if lane}
 
         def submit(g: int, prepared: _Lane) -> None:
             # a lane alone (the others finished) takes every thread
-            alone = all(call is None for h, call in enumerate(calls) if h != g)
-            calls[g] = prepared, worker.submit(_timed, prepared[2], every if alone else each)
+            threads = every if live == {g} else each
+            calls[g] = prepared, worker.submit(_timed, prepared[2], threads)
 
         try:
             for g, lane in enumerate(lanes):
@@ -444,20 +462,22 @@ class Lockstep:
                     calls[g] = None
                     if pending:
                         submit(g, self._prepare(pending))
+                    else:
+                        live.discard(g)
         finally:
             worker.shutdown(wait=True, cancel_futures=True)
 
 
 def lane_threads() -> tuple[int, int]:
-    """(worker threads of :class:`Lockstep`, Numba threads each): a worker per lane, each
-    with its share of Numba's threads, so that the lanes' kernel calls run at once and
-    a lane with few trials left does not hold a core it cannot use (a lane left alone
-    takes every thread); one worker with all of Numba's threads under the workqueue
-    layer (it takes no concurrent calls) or with fewer threads than lanes."""
+    """(worker threads of :class:`Lockstep`, Numba threads each): :data:`WORKERS` workers,
+    each with its share of Numba's threads, so that two lanes' kernel calls run at once
+    and a lane with few trials left does not hold a core it cannot use (a lane left
+    alone takes every thread); one worker with all of Numba's threads under the
+    workqueue layer (it takes no concurrent calls) or with fewer threads than workers."""
     threads = numba.get_num_threads()  # launches Numba's threading layer
-    if threads < LANES or numba.threading_layer() == "workqueue":
+    if threads < WORKERS or numba.threading_layer() == "workqueue":
         return 1, threads
-    return LANES, threads // LANES
+    return WORKERS, threads // WORKERS
 
 
 def _timed(calls: Calls, threads: int) -> float:
