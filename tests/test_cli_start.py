@@ -64,6 +64,30 @@ def test_command_help_loads_no_heavy_library(name: str) -> None:
     assert _loaded_after([name, "--help"]) == []
 
 
+def test_train_help_loads_no_scipy_subpackage() -> None:
+    """The learners' registry (forward's model included) loads none of SciPy's
+    subpackages: forward's fit reaches scipy.optimize only when it runs."""
+    code = textwrap.dedent(
+        """
+        import json, sys
+        from striatal.cli import main
+        try:
+            main(["train", "--help"])
+        except SystemExit:
+            pass
+        import striatal.learners.forward.model
+        print(json.dumps(sorted(m for m in sys.modules if m.startswith("scipy."))))
+        """
+    )
+    env = {**os.environ, "PYTHONPATH": SRC}
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
+    )
+    loaded = json.loads(done.stdout.strip().splitlines()[-1])
+    # Numba imports the bare package (its version check); nothing public below it
+    assert [m for m in loaded if not m.split(".")[1].startswith("_")] == ["scipy.version"]
+
+
 PROBE = """
 from numba import njit
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from scipy.optimize import least_squares
+import scipy
 
 from striatal.errors import ParameterError
 from striatal.params import Plant
@@ -196,7 +196,9 @@ def fit_structured(data: Transitions, prior: Plant = NOMINAL) -> StructuredFit:
 
     x0 = np.array([prior.cart_mass, prior.pole_mass, prior.length, 0.0])
     lower = np.array([1e-3 * prior.cart_mass, 1e-3 * prior.pole_mass, 1e-3 * prior.length, -np.inf])
-    sol = least_squares(residual, x0, bounds=(lower, np.inf), x_scale="jac", xtol=1e-14, ftol=1e-14)
+    sol = scipy.optimize.least_squares(
+        residual, x0, bounds=(lower, np.inf), x_scale="jac", xtol=1e-14, ftol=1e-14
+    )
     n, k = sol.fun.size, sol.x.size
     sigma2 = float(sol.fun @ sol.fun) / max(n - k, 1)
     JTJ = sol.jac.T @ sol.jac
