@@ -14,6 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import cli_process
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from striatal.errors import ParameterError
 from striatal.learners import (
@@ -108,6 +111,36 @@ def test_w1_floor_and_update_bound() -> None:
     )
     assert new[0] == cfg.w1_floor
     assert new[1] == pytest.approx(0.5)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    W=arrays(np.float64, 6, elements=st.floats(-1e3, 1e3)),
+    trace=arrays(np.float64, 6, elements=st.floats(-1e6, 1e6)),
+    reward=st.floats(-10.0, 10.0),
+    alpha=st.floats(0.0, 1e3),
+    max_step=st.floats(1e-3, 1e3) | st.just(math.inf),
+)
+def test_gain_update_equals_numpy_reference(W, trace, reward, alpha, max_step) -> None:
+    """Eqs 3-4 on Python's floats give NumPy's elementwise result bit for bit."""
+    gamma, baseline, floor = 0.999, 0.25, 1e-3
+    step = np.minimum(
+        np.maximum(alpha * (1.0 - gamma) * (reward - baseline) * trace, -max_step), max_step
+    )
+    expected = W + step
+    expected[0] = max(expected[0], floor)
+    new = gain_update(
+        W,
+        trace,
+        reward,
+        alpha=alpha,
+        gamma=gamma,
+        baseline=baseline,
+        max_step=max_step,
+        w1_floor=floor,
+    )
+    np.testing.assert_array_equal(new, expected)
+    assert new.dtype == np.float64 and new.shape == (6,)
 
 
 def test_non_finite_trace_never_reaches_w() -> None:

@@ -279,14 +279,13 @@ class SuccessTest:
 
     def passed(self, state: np.ndarray | Sequence[float]) -> bool:
         """True if ``state`` = [x, x_dot, theta, theta_dot] (theta wrapped) passes every bound."""
-        s = [float(v) for v in state]
-        if not all(math.isfinite(v) for v in s):
-            return False
-        return bool(
-            abs(s[2]) < self.theta
-            and abs(s[0]) < self.x
-            and abs(s[3]) < self.theta_dot
-            and abs(s[1]) < self.x_dot
+        # a non-finite value fails its comparison (NaN compares false), so fails the test
+        x, x_dot, theta, theta_dot = (float(v) for v in state)
+        return (
+            abs(theta) < self.theta
+            and abs(x) < self.x
+            and abs(theta_dot) < self.theta_dot
+            and abs(x_dot) < self.x_dot
         )
 
 
