@@ -532,6 +532,7 @@ class Lockstep:
                         submit(g, pending)
                     else:
                         live.discard(g)
+                        lane.noise = NoiseBuffer()  # its memory back while others run
         finally:
             worker.shutdown(wait=True, cancel_futures=True)
 
