@@ -427,6 +427,72 @@ def test_any_number_of_lanes_gives_each_run_its_values_alone(lanes: int) -> None
     assert len({v[0] for v in alone}) > 2  # the runs differ among themselves
 
 
+def _changing_rounds(seed: int) -> Steps[tuple[float, ...]]:
+    """Six rounds: 3 trials of 2 s, 1 of 3 s, 1 of the mean policy (no normals), 5 of
+    2 s, 2 of 1 s, 4 of 3 s, each round's gains from the last one's outcomes: a lane's
+    rounds need fewer normals, none, more than any before, fewer, and more again."""
+    from striatal.sim.rollout import Protocol, TrialRequest
+
+    rng = np.random.default_rng(seed)
+    W = np.array(CHAPTER_INITIAL_W)
+    template = Controller(CHAPTER_INITIAL_W, CHAPTER_INITIAL_THETA_C)
+    seen: list[float] = []
+    plan = [(3, 2.0, False), (1, 3.0, False), (1, 1.0, True), (5, 2.0, False), (2, 1.0, False)]
+    plan += [(4, 3.0, False)]
+    for n, duration, mean in plan:
+        sim = Simulation(duration=duration)
+        outs = yield [
+            TrialRequest(Plant(), template, sim, Protocol(), rng=rng, gains=W, mean_policy=mean)
+            for _ in range(n)
+        ]
+        seen += [out.final_state[2] for out in outs]
+        W = W + 0.01 * seen[-1]
+    return (*seen, *W.tolist())
+
+
+@pytest.mark.parametrize("engine", ["batch", "simd"])
+def test_lanes_reusing_their_noise_buffers_give_each_run_its_values(
+    monkeypatch: pytest.MonkeyPatch, engine: str
+) -> None:
+    """Each lane's rounds, larger and smaller, draw into the lane's one buffer (grown
+    only when a round needs more), and every run's values are those of fresh buffers
+    (run_requests round by round): on the exact engine, the scalar kernel's (drive)."""
+    from striatal.sim import batch
+
+    def fresh(steps: Steps[tuple[float, ...]]) -> tuple[float, ...]:
+        try:
+            requests = next(steps)
+            while True:
+                requests = steps.send(batch.run_requests(requests, engine))  # type: ignore[arg-type]
+        except StopIteration as stop:
+            return stop.value  # type: ignore[no-any-return]
+
+    takes: list[tuple[int, int, bool]] = []  # (buffer, normals, grown) of each round
+    take = batch.NoiseBuffer.take
+
+    def counted(self: batch.NoiseBuffer, size: int) -> np.ndarray:
+        before = self._data
+        normals = take(self, size)
+        takes.append((id(self), size, self._data is not before))
+        return normals
+
+    monkeypatch.setattr(batch.NoiseBuffer, "take", counted)
+    seeds = range(5)
+    want = [fresh(_changing_rounds(seed)) for seed in seeds]
+    if engine == "batch":
+        assert want == [drive(_changing_rounds(seed)) for seed in seeds]
+    assert not takes  # run_requests: a fresh buffer each round
+    together = dict(Lockstep([_changing_rounds(seed) for seed in seeds], engine, 2).run())  # type: ignore[arg-type]
+    assert [together[i] for i in seeds] == want
+    assert len(takes) == 2 * 6 and len({lane for lane, _, _ in takes}) == 2
+    for lane in {lane for lane, _, _ in takes}:
+        sizes = [size for mine, size, _ in takes if mine == lane]
+        grown = [g for mine, _, g in takes if mine == lane]
+        assert sizes[2] == 0 and sizes[4] < sizes[1] < sizes[0] < sizes[3] < sizes[5]
+        # grown only for a round that needs more than any before it
+        assert grown == [True, False, False, True, False, True]
+
+
 def test_the_engines_lanes_and_a_bad_lane_count() -> None:
     assert Lockstep([], "batch").lanes == LANES["batch"] > WORKERS  # calls queue for workers
     assert Lockstep([], "simd").lanes == LANES["simd"]

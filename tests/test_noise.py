@@ -1,8 +1,7 @@
-"""Noise drawn on threads (striatal.sim.noise, bench.batch_normals): the same numbers as alone."""
+"""Noise drawn compiled and on threads (striatal.sim.noise, bench.batch_normals): NumPy's
+numbers, the same as drawn alone."""
 
 from __future__ import annotations
-
-from functools import partial
 
 import numba
 import numpy as np
@@ -11,78 +10,28 @@ import pytest
 from striatal.sim import bench, noise
 
 
-def test_parts_on_threads_draw_what_each_generator_draws_alone(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    want = np.array([np.random.default_rng(s).standard_normal(1000) for s in range(6)])
-    for idle in (True, False):  # on the pool, and one after another
-        monkeypatch.setattr(noise, "idle_kernel_threads", lambda idle=idle: idle)
-        out = np.empty((6, 1000))
-        gens = [np.random.default_rng(s) for s in range(6)]
-        noise.run_parts([partial(_fill, gens[j], out[j]) for j in range(6)])
-        assert np.array_equal(out, want)
-
-
-def _fill(gen: np.random.Generator, row: np.ndarray) -> None:
-    gen.standard_normal(out=row)
-
-
-def test_the_first_failing_part_raises(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(noise, "idle_kernel_threads", lambda: True)
-    ran: list[int] = []
-
-    def bad() -> None:
-        raise ValueError("part failed")
-
-    with pytest.raises(ValueError, match="part failed"):
-        noise.run_parts([lambda: ran.append(1), bad, lambda: ran.append(3)])
-    assert 1 in ran
-
-
-def test_idle_kernel_threads_follows_the_wait_policy(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("OMP_WAIT_POLICY", "passive")
-    assert noise.idle_kernel_threads()
-    monkeypatch.delenv("OMP_WAIT_POLICY")
-    monkeypatch.setattr(noise.numba, "threading_layer", lambda: "omp")
-    assert not noise.idle_kernel_threads()  # libgomp's default: its threads spin
-    monkeypatch.setattr(noise.numba, "threading_layer", lambda: "workqueue")
-    assert noise.idle_kernel_threads()
-
-    def unchosen() -> str:
-        raise ValueError("no threading layer chosen")
-
-    monkeypatch.setattr(noise.numba, "threading_layer", unchosen)
-    assert not noise.idle_kernel_threads()
-
-
+@pytest.mark.parametrize("threads", [1, 2, 3])
 @pytest.mark.parametrize("rows", [0, 1, 2, 5, 256])
-def test_batch_normals_are_the_children_of_the_generator(rows: int) -> None:
-    """One contiguous part per thread, each from its own rng.spawn child: reproducible
-    from the seed, standard normal, whatever the timing of the threads."""
-    a = bench.batch_normals(np.random.default_rng(7), rows, 300)
-    b = bench.batch_normals(np.random.default_rng(7), rows, 300)
+def test_batch_normals_are_the_children_of_the_generator(threads: int, rows: int) -> None:
+    """One contiguous part per Numba thread (fewer when the rows are few), each what its
+    own rng.spawn child gives in NumPy (drawn on the threads at once): reproducible from
+    the seed, standard normal, whatever the timing of the threads."""
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    try:
+        threads = numba.get_num_threads()
+        a = bench.batch_normals(np.random.default_rng(7), rows, 300)
+        b = bench.batch_normals(np.random.default_rng(7), rows, 300)
+    finally:
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
     assert a.shape == (rows, 300)
     assert np.array_equal(a, b)
-    parts = max(1, min(numba.get_num_threads(), rows))
+    parts = max(1, min(threads, rows))
     step = -(-rows // parts)
     children = np.random.default_rng(7).spawn(parts)
-    want = np.concatenate(
-        [c.standard_normal((min(step, rows - i * step), 300)) for i, c in enumerate(children)]
-    )
-    assert np.array_equal(a, want)
+    want = [c.standard_normal((min(step, rows - i * step), 300)) for i, c in enumerate(children)]
+    assert np.array_equal(a, np.concatenate(want))
     if rows == 256:
         assert abs(a.mean()) < 0.01 and abs(a.std() - 1.0) < 0.01
-
-
-@pytest.mark.parametrize("threads", [1, 2, 3, 4])
-def test_row_parts_cover_the_rows_once_in_order(
-    monkeypatch: pytest.MonkeyPatch, threads: int
-) -> None:
-    monkeypatch.setattr(noise.numba, "get_num_threads", lambda: threads)
-    for rows in (0, 1, 2, 5, 7, 256):
-        parts = noise.row_parts(rows)
-        assert [j for p in parts for j in p] == list(range(rows))
-        assert len(parts) <= max(1, min(threads, rows)) and all(len(p) > 0 for p in parts)
 
 
 @pytest.mark.parametrize("shape", [(0,), (1,), (6000,), (3000, 2), (200_000,)])

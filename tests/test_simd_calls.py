@@ -12,6 +12,7 @@ import numba
 import numpy as np
 import pytest
 
+from striatal.errors import ParameterError
 from striatal.experiments import runs_csv, sweeps
 from striatal.experiments.lockstep_sweep import execute_batch
 from striatal.experiments.spec import RunSpec, spawn_seeds
@@ -25,7 +26,7 @@ from striatal.params import (
     Simulation,
 )
 from striatal.sim import batch
-from striatal.sim.rollout import Protocol, SensorNoise, TrialRequest
+from striatal.sim.rollout import OnlineLearning, Protocol, SensorNoise, TrialRequest
 
 SIM = Simulation(duration=12.0)
 
@@ -134,6 +135,87 @@ def test_a_worker_sets_numba_s_threads_once_and_runs_the_same(
     assert counts == {"threads": 1 + (numba.config.NUMBA_NUM_THREADS > 1), "chunk": 1}
     for calls in got:
         assert calls.outcomes() == want.outcomes()
+
+
+def _lane_rounds() -> list[list[TrialRequest]]:
+    """A lane's rounds: the nine requests of :func:`_requests`, then fewer normals (three
+    of them), then more than the first (twelve: the buffer grows), then none (the
+    mean-policy trial alone), then one; the generators carry over from round to round,
+    as a run's do."""
+    first = _requests()
+    again = [replace(r, gains=r.W + 0.02) for r in first]
+    return [first, first[:3], first + again[:3], [first[6]], again[4:5]]
+
+
+@pytest.mark.parametrize("engine", ["batch", "simd"])
+def test_a_lane_s_buffer_reused_over_rounds_gives_fresh_buffers_outcomes(engine: str) -> None:
+    """Rounds through one NoiseBuffer, smaller and larger, give the outcomes, traces and
+    generator states of rounds with fresh buffers (run_requests), and on the exact
+    engine of the scalar kernel; the buffer grows only for the larger round, and a
+    smaller round's blocks lie in the memory it already has."""
+    noise = batch.NoiseBuffer()
+    mine, fresh, scalar = _lane_rounds(), _lane_rounds(), _lane_rounds()
+    held: list[np.ndarray] = []
+    for k, (requests, theirs, alone) in enumerate(zip(mine, fresh, scalar, strict=True)):
+        calls = batch.prepare(requests, engine, noise)  # type: ignore[arg-type]
+        calls.run()
+        got = calls.outcomes()
+        assert got == batch.run_requests(theirs, engine), f"round {k}"  # type: ignore[arg-type]
+        if engine == "batch":
+            assert got == [r.run() for r in alone], f"round {k}"
+        for a, b in zip(requests, theirs, strict=True):
+            assert np.array_equal(a.trace, b.trace)
+        held.append(calls.normals)
+    sizes = [normals.size for normals in held]
+    assert sizes[1] < sizes[0] < sizes[2] and sizes[3] == 0 < sizes[4] < sizes[1]
+    # one buffer for the first two rounds, a larger one from the third on
+    assert np.shares_memory(held[0], held[1]) and np.shares_memory(held[2], held[4])
+    assert not np.shares_memory(held[0], held[2])
+    for a, b in zip(mine[2], fresh[2], strict=True):  # each generator left where it was
+        if a.rng is not None:
+            assert b.rng is not None
+            assert a.rng.standard_normal() == b.rng.standard_normal()
+
+
+def test_a_lane_s_buffer_serves_one_round_at_a_time() -> None:
+    """A round takes the buffer until its outcomes are read: the next round cannot take
+    it before, and a round whose outcomes were read cannot run again into the buffer the
+    next round took; a round whose preparing fails gives it back."""
+    noise = batch.NoiseBuffer()
+    calls = batch.prepare(_requests(), "batch", noise)
+    with pytest.raises(RuntimeError, match="not yet read"):
+        batch.prepare(_requests(), "batch", noise)
+    calls.run()
+    want = calls.outcomes()
+    following = batch.prepare(_requests(), "batch", noise)
+    with pytest.raises(RuntimeError, match="outcomes were read"):
+        calls.run()
+    following.run()
+    assert following.outcomes() == want
+    assert calls.outcomes() == want  # reading again: the values, not the buffer
+    broken = _requests()
+    broken[2] = replace(broken[2], record=True, online=_online())
+    with pytest.raises(ParameterError, match="online trial"):
+        batch.prepare(broken, "batch", noise)
+    batch.prepare(_requests(), "batch", noise).run()
+
+
+def _online() -> OnlineLearning:
+    from striatal.sim import kernel
+
+    return OnlineLearning(
+        alpha=0.1,
+        beta=0.1,
+        discount=0.9,
+        critic_decay=0.5,
+        max_step=1.0,
+        w1_floor=0.0,
+        normalise=False,
+        square_rate=0.01,
+        critic=np.zeros(kernel.N_FEATURES),
+        critic_trace=np.zeros(kernel.N_FEATURES),
+        square=np.ones(1),
+    )
 
 
 def test_simd_sweep_rows_do_not_depend_on_the_workers_or_the_blocks(

@@ -23,7 +23,7 @@ import numpy as np
 
 from striatal.bench.timing import BenchConfig, Comparison, compare, linear_fit
 from striatal.errors import ParameterError
-from striatal.sim import kernel, noise
+from striatal.sim import kernel
 from striatal.sim.bench import (
     TrialSetup,
     cache_misses,
@@ -132,9 +132,8 @@ def batch_vs_gymnasium_vector(config: BenchConfig, rng: np.random.Generator) -> 
         notes=(
             "steps = env-steps summed over the batch; the kernel does 4 derivative "
             "evaluations per step (RK4), the reference 1 (Euler); kernel noise generation "
-            "timed (bench.batch_normals: one child generator per Numba thread, on threads "
-            f"when Numba's sleep: {noise.idle_kernel_threads()}); kernel blocks of 64 "
-            "trials parallel over "
+            "timed (bench.batch_normals: one child generator per Numba thread, drawn on "
+            "Numba's threads in one compiled call); kernel blocks of 64 trials parallel over "
             f"{numba.get_num_threads()} Numba threads"
         ),
         extra={

@@ -32,7 +32,7 @@ import threading
 import time
 from collections.abc import Callable, Generator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal, ParamSpec, TypeVar
 
 import numba
@@ -58,6 +58,7 @@ __all__ = [
     "Calls",
     "KernelCall",
     "Lockstep",
+    "NoiseBuffer",
     "Steps",
     "TrialRequest",
     "drive",
@@ -135,6 +136,43 @@ def run_requests(
     return calls.outcomes()
 
 
+class NoiseBuffer:
+    """The action normals of a lane's rounds (:class:`Lockstep`): one buffer, reused
+    round after round, grown when a round needs more.
+
+    A round's blocks (:func:`prepare`) are views of the buffer's first values; the
+    lane's worker draws into them and its kernels read them (:meth:`Calls.run`);
+    :meth:`Calls.outcomes` copies out what the round returns (the summary rows' values,
+    the traces) and gives the buffer back. The next round takes it only then:
+    :meth:`take` refuses a buffer whose last round has not been read, and
+    :meth:`Calls.run` refuses to run a round that gave it back. A fresh buffer each
+    round (megabytes: tens of trials x 6000 normals) is mapped anew by the C library,
+    and each of its pages faults when first written; a lane's own buffer faults once.
+    """
+
+    def __init__(self) -> None:
+        self._data = np.empty(0)
+        self._lent: np.ndarray | None = None
+
+    def take(self, size: int) -> np.ndarray:
+        """The buffer's first ``size`` values for one round, until :meth:`give_back`."""
+        if self._lent is not None:
+            raise RuntimeError("a lane's noise buffer is still held by a round not yet read")
+        if size > self._data.size:
+            self._data = np.empty(size)
+        self._lent = self._data[:size]
+        return self._lent
+
+    def lends(self, normals: np.ndarray) -> bool:
+        """Whether ``normals`` (from :meth:`take`) is still the round's that holds it."""
+        return self._lent is normals
+
+    def give_back(self, normals: np.ndarray) -> None:
+        """End the round that took ``normals`` (nothing if it ended already)."""
+        if self._lent is normals:
+            self._lent = None
+
+
 @dataclass(frozen=True)
 class KernelCall:
     """One batched kernel call: the indices of its requests, its arguments, and the
@@ -157,6 +195,10 @@ class Calls:
     #: Draws the calls' action normals into their blocks, on as many of Numba's threads
     #: as it is given (None: drawn already).
     draw: Callable[[int], None] | None = None
+    #: The lane's buffer whose first values, ``normals``, hold the calls' blocks until
+    #: :meth:`outcomes` (None: ``normals`` is the calls' own).
+    noise: NoiseBuffer | None = None
+    normals: np.ndarray = field(default_factory=lambda: np.empty(0))
 
     def run(self, threads: int | None = None) -> None:
         """Draw the calls' noise (:attr:`draw`) and make the kernel calls: the draws and
@@ -180,6 +222,8 @@ class Calls:
             numba.set_parallel_chunksize(old)
 
     def _run(self, threads: int) -> None:
+        if self.noise is not None and not self.noise.lends(self.normals):
+            raise RuntimeError("these calls' outcomes were read: their noise buffer is not theirs")
         if self.draw is not None:
             self.draw(threads)
         for call in self.calls:
@@ -199,7 +243,8 @@ class Calls:
 
     def outcomes(self) -> list[TrialOutcome]:
         """The outcomes in the requests' order, after :meth:`run`; the traces (and an
-        online trial's critic) written back to each request's arrays."""
+        online trial's critic) written back to each request's arrays. The lane's noise
+        buffer is given back: nothing returned refers to it."""
         outcomes = dict(self.done)
         for call in self.calls:
             args, critic = call.args, call.critic
@@ -219,12 +264,15 @@ class Calls:
                     ):
                         mine[:] = rows[j]
                 outcomes[i] = TrialOutcome.from_values(values[j], sim)
+        if self.noise is not None:
+            self.noise.give_back(self.normals)
         return [outcomes[i] for i in range(len(self.requests))]
 
 
 def prepare(
     requests: Sequence[TrialRequest],
     engine: Literal["batch", "simd"] = "batch",
+    noise: NoiseBuffer | None = None,
 ) -> Calls:
     """The batched kernel calls of ``requests`` (:func:`run_requests`): grouped by
     :meth:`TrialRequest.batch_key`, their arguments built. A request that
@@ -233,43 +281,50 @@ def prepare(
     A group's action normals go straight into the rows of its (B, n) block, the kernel's
     argument: each request's row from its own generator, in request order. They are
     drawn by :meth:`Calls.run`, on the thread that runs the kernels, unless a request
-    runs alone (then here, in request order, as it draws)."""
+    runs alone (then here, in request order, as it draws). The blocks lie in ``noise``,
+    a lane's buffer held until :meth:`Calls.outcomes` (None: a fresh array)."""
     if engine not in BATCH_ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(BATCH_ENGINES)}, got {engine!r}")
     keys, groups = _groups(requests)
     # the round's normals in one buffer: each group's (B, n) block a part of it, request
     # i's row at rows[i] = (start, size)
     draws = [_draws(requests[members[0]]) for members in groups.values()]
-    normals = np.empty(sum(len(m) * n for m, n in zip(groups.values(), draws, strict=True)))
-    rows: dict[int, tuple[int, int]] = {}
-    blocks: list[np.ndarray | None] = []
-    at = 0
-    for members, n in zip(groups.values(), draws, strict=True):
-        if not n:
-            blocks.append(None)
-            continue
-        blocks.append(normals[at : at + len(members) * n].reshape(len(members), n))
-        rows.update((i, (at + j * n, n)) for j, i in enumerate(members))
-        at += len(members) * n
-    done: dict[int, TrialOutcome] = {}
-    draw = None
-    if any(key is None for key in keys):
-        # a trial that runs alone draws as it runs: keep every draw in request order
-        for i, (r, key) in enumerate(zip(requests, keys, strict=True)):
-            if key is None:
-                done[i] = r.run()
-            elif i in rows:
-                assert r.rng is not None
-                start, size = rows[i]
-                standard_normals(r.rng, normals[start : start + size])
-    elif rows:
-        draw = functools.partial(_draw_noise, requests, rows, normals)
-    calls = []
-    for members, block in zip(groups.values(), blocks, strict=True):
-        group = [requests[i] for i in members]
-        critic = None if group[0].online is None else _critics(group)
-        calls.append(KernelCall(members, batch_args(group, block), critic))
-    return Calls(requests, engine, calls, done, draw)
+    total = sum(len(m) * n for m, n in zip(groups.values(), draws, strict=True))
+    normals = np.empty(total) if noise is None else noise.take(total)
+    try:
+        rows: dict[int, tuple[int, int]] = {}
+        blocks: list[np.ndarray | None] = []
+        at = 0
+        for members, n in zip(groups.values(), draws, strict=True):
+            if not n:
+                blocks.append(None)
+                continue
+            blocks.append(normals[at : at + len(members) * n].reshape(len(members), n))
+            rows.update((i, (at + j * n, n)) for j, i in enumerate(members))
+            at += len(members) * n
+        done: dict[int, TrialOutcome] = {}
+        draw = None
+        if any(key is None for key in keys):
+            # a trial that runs alone draws as it runs: keep every draw in request order
+            for i, (r, key) in enumerate(zip(requests, keys, strict=True)):
+                if key is None:
+                    done[i] = r.run()
+                elif i in rows:
+                    assert r.rng is not None
+                    start, size = rows[i]
+                    standard_normals(r.rng, normals[start : start + size])
+        elif rows:
+            draw = functools.partial(_draw_noise, requests, rows, normals)
+        calls = []
+        for members, block in zip(groups.values(), blocks, strict=True):
+            group = [requests[i] for i in members]
+            critic = None if group[0].online is None else _critics(group)
+            calls.append(KernelCall(members, batch_args(group, block), critic))
+    except BaseException:
+        if noise is not None:  # the round never ran: the lane's next may take its buffer
+            noise.give_back(normals)
+        raise
+    return Calls(requests, engine, calls, done, draw, noise, normals)
 
 
 def _groups(
@@ -358,6 +413,11 @@ class Lockstep:
     always in the same group, so its trials, and the order in which its generator draws
     their noise, are what they would be alone.
 
+    Each lane keeps one :class:`NoiseBuffer` for its rounds' normals: a round takes it
+    when prepared and gives it back when its outcomes are read, and the lane's next
+    round is prepared only then (each lane has one round under way at a time), so the
+    buffer is written and read by one round at a time and faulted in once.
+
     While it runs, Python's switch interval is :data:`SWITCH_INTERVAL` (restored after),
     so that a worker waiting for the GIL behind the main thread's Python gets it within
     0.1 ms rather than 5.
@@ -392,16 +452,18 @@ class Lockstep:
         finally:
             self.seconds[i] += time.perf_counter() - t0
 
-    def _prepare(self, pending: dict[int, list[TrialRequest]]) -> _Lane:
-        """The kernel calls of ``pending``'s requests (:func:`prepare`), on this thread."""
+    def _prepare(self, pending: dict[int, list[TrialRequest]], noise: NoiseBuffer) -> _Round:
+        """The kernel calls of ``pending``'s requests (:func:`prepare`), on this thread,
+        their blocks in the lane's ``noise`` buffer."""
         order = list(pending)
         t0 = time.perf_counter()
-        calls = prepare([r for i in order for r in pending[i]], self.engine)
+        calls = prepare([r for i in order for r in pending[i]], self.engine, noise)
         return order, [len(pending[i]) for i in order], calls, time.perf_counter() - t0
 
-    def _outcomes(self, lane: _Lane, seconds: float) -> dict[int, list[TrialOutcome]]:
+    def _outcomes(self, lane: _Round, seconds: float) -> dict[int, list[TrialOutcome]]:
         """The outcomes of a lane's calls by generator, each generator's share of their
-        time (``seconds`` and this thread's preparing and reading) added."""
+        time (``seconds`` and this thread's preparing and reading) added; the lane's
+        noise buffer given back (:meth:`Calls.outcomes`)."""
         order, counts, calls, prepared = lane
         t0 = time.perf_counter()
         outcomes = calls.outcomes()
@@ -423,47 +485,54 @@ class Lockstep:
             sys.setswitchinterval(switch)
 
     def _run(self) -> Generator[tuple[int, Any], None, None]:
-        lanes: list[dict[int, list[TrialRequest]]] = [{} for _ in range(self.lanes)]
+        first: list[dict[int, list[TrialRequest]]] = [{} for _ in range(self.lanes)]
         for i in range(len(self.steps)):
             try:
-                lanes[i % self.lanes][i] = self._advance(i, None)
+                first[i % self.lanes][i] = self._advance(i, None)
             except StopIteration as stop:
                 yield i, stop.value
         workers, each = lane_threads()
         every = numba.get_num_threads()
         worker = ThreadPoolExecutor(workers, thread_name_prefix="lockstep")
-        calls: list[tuple[_Lane, Future[float]] | None] = [None] * self.lanes
+        lanes = [_Lane() for _ in range(self.lanes)]
         # the lanes whose runs are not all finished
-        live = {g for g, lane in enumerate(lanes) if lane}
+        live = {g for g, requests in enumerate(first) if requests}
 
-        def submit(g: int, prepared: _Lane) -> None:
+        def submit(g: int, pending: dict[int, list[TrialRequest]]) -> None:
+            lane = lanes[g]
+            # a lane's round takes its noise buffer: only once its last round was read
+            lane.round = self._prepare(pending, lane.noise)
             # a lane alone (the others finished) takes every thread
             threads = every if live == {g} else each
-            calls[g] = prepared, worker.submit(_timed, prepared[2], threads)
+            lane.future = worker.submit(_timed, lane.round[2], threads)
 
         try:
-            for g, lane in enumerate(lanes):
-                if lane:
-                    submit(g, self._prepare(lane))
-            while any(call is not None for call in calls):
+            for g, requests in enumerate(first):
+                if requests:
+                    submit(g, requests)
+            while any(lane.future is not None for lane in lanes):
                 # the lanes whose calls are done, as they finish (the others' run meanwhile)
-                running = {call[1]: g for g, call in enumerate(calls) if call is not None}
+                running = {
+                    lane.future: g for g, lane in enumerate(lanes) if lane.future is not None
+                }
                 finished, _ = wait(running, return_when=FIRST_COMPLETED)
                 for g in sorted(running[f] for f in finished):
-                    call = calls[g]
-                    assert call is not None
-                    prepared, future = call
+                    lane = lanes[g]
+                    assert lane.round is not None and lane.future is not None
+                    # read (the lane's noise buffer given back) before its next round
+                    outcomes = self._outcomes(lane.round, lane.future.result())
+                    lane.round = lane.future = None
                     pending: dict[int, list[TrialRequest]] = {}
-                    for i, mine in self._outcomes(prepared, future.result()).items():
+                    for i, mine in outcomes.items():
                         try:
                             pending[i] = self._advance(i, mine)
                         except StopIteration as stop:
                             yield i, stop.value
-                    calls[g] = None
                     if pending:
-                        submit(g, self._prepare(pending))
+                        submit(g, pending)
                     else:
                         live.discard(g)
+                        lane.noise = NoiseBuffer()  # its memory back while others run
         finally:
             worker.shutdown(wait=True, cancel_futures=True)
 
@@ -505,4 +574,14 @@ def _thread_settings(threads: int) -> None:
 
 #: A lane's prepared round: its generators in order, their request counts, the kernel
 #: calls, and the seconds spent preparing them.
-_Lane = tuple[list[int], list[int], Calls, float]
+_Round = tuple[list[int], list[int], Calls, float]
+
+
+@dataclass
+class _Lane:
+    """A group of :class:`Lockstep`'s generators: its noise buffer, which its rounds
+    take in turn, and its round under way on a worker (None: none)."""
+
+    noise: NoiseBuffer = field(default_factory=NoiseBuffer)
+    round: _Round | None = None
+    future: Future[float] | None = None

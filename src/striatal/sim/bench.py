@@ -13,11 +13,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from striatal.params import CHAPTER_FINAL_THETA_C, CHAPTER_FINAL_W, Controller, Plant, Simulation
 from striatal.sim import kernel, rollout
-from striatal.sim.noise import row_parts, run_parts
+from striatal.sim.noise import standard_normal_rows
 from striatal.sim.rollout import Protocol
 
 __all__ = [
@@ -110,23 +111,26 @@ def run_batch_trials(
 
 
 def batch_normals(rng: np.random.Generator, rows: int, n: int) -> np.ndarray:
-    """(rows, n) standard normals for a batch of trials, drawn on Numba's thread count.
+    """(rows, n) standard normals for a batch of trials, drawn on Numba's threads.
 
-    The rows are split into one contiguous part per thread, each part drawn from its own
-    child of ``rng`` (``rng.spawn``), so the numbers do not depend on the threads' timing
-    (:func:`striatal.sim.noise.run_parts`).
+    The rows are split into one contiguous part per thread (fewer when the rows are
+    few), part k drawn from child k of ``rng`` (``rng.spawn``), all in one compiled call
+    (:func:`striatal.sim.noise.standard_normal_rows`), the parts on Numba's threads:
+    part k holds what ``children[k].standard_normal`` gives it, whatever the threads'
+    timing.
     """
     out = np.empty((rows, n))
-    parts = row_parts(rows)
-    children = rng.spawn(len(parts))
-
-    def part(i: int) -> Callable[[], None]:
-        def fill() -> None:
-            children[i].standard_normal(out=out[parts[i].start : parts[i].stop])
-
-        return fill
-
-    run_parts([part(i) for i in range(len(parts))])
+    threads = numba.get_num_threads()
+    step = -(-rows // max(1, min(threads, rows)))
+    starts = range(0, rows, max(step, 1))
+    children = rng.spawn(len(starts))
+    standard_normal_rows(
+        children,
+        out.reshape(-1),
+        [start * n for start in starts],
+        [(min(start + step, rows) - start) * n for start in starts],
+        threads,
+    )
     return out
 
 

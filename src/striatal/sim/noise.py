@@ -1,4 +1,4 @@
-"""Standard normals for trials, drawn compiled, and for batches of trials, on several threads.
+"""Standard normals for trials and for batches of trials, drawn compiled.
 
 A chapter trial needs 6000 standard normals (eq 5), a batch of B trials B x 6000.
 NumPy's ``Generator.standard_normal`` draws them at about 10 ns each on one core: as
@@ -6,20 +6,14 @@ long as the SIMD kernel takes to run the trials on two. :func:`standard_normals`
 the same numbers (NumPy's ziggurat on the generator's own bits, as Numba compiles
 it for a ``Generator``: the same numbers and the same state after) in about half the
 time, with the GIL released; :func:`standard_normal_rows` draws the rows of many
-trials, from many generators, in one such call. Parts drawn from
-different generators can be filled by threads at once, each part the same numbers
-as drawn alone. That pays only while Numba's own threads sleep between kernel calls:
-under libgomp's default wait policy they spin after each parallel region and take
-the cores back (``striatal`` sets OMP_WAIT_POLICY=PASSIVE unless it is set).
+trials, from many generators, in one such call, different generators on Numba's
+threads, each row the same numbers as drawn alone.
 """
 
 from __future__ import annotations
 
 import ctypes
-import os
-import threading
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numba
@@ -29,15 +23,10 @@ from numba.extending import intrinsic
 from numba.np.random.distributions import random_standard_normal
 
 __all__ = [
-    "idle_kernel_threads",
-    "row_parts",
-    "run_parts",
     "standard_normal_rows",
     "standard_normals",
 ]
 
-_POOL: ThreadPoolExecutor | None = None
-_POOL_LOCK = threading.Lock()
 #: Numba's model of a NumPy bit generator: its C state and its functions' addresses.
 _BITS = types.NumPyRandomBitGeneratorType("bit_generator")
 #: The addresses of a NumPy bit generator class's next_uint64, next_uint32 and
@@ -194,52 +183,3 @@ def standard_normals(rng: np.random.Generator, out: np.ndarray) -> None:
     lock, so no other thread may draw from ``rng`` meanwhile (a run's generator is
     used by one thread at a time)."""
     _fill_one(*_addresses(rng), out.reshape(-1))
-
-
-def idle_kernel_threads() -> bool:
-    """Whether Numba's threads sleep between kernel calls, so other threads can use the
-    cores: not under libgomp's default wait policy, whose threads spin after each
-    parallel region."""
-    if os.environ.get("OMP_WAIT_POLICY", "").upper() == "PASSIVE":
-        return True
-    try:
-        return numba.threading_layer() != "omp"
-    except ValueError:  # no parallel region has run yet: the layer is not chosen
-        return False
-
-
-def row_parts(rows: int, threads: int | None = None) -> list[range]:
-    """``range(rows)`` cut into one contiguous part per thread (fewer if rows are few);
-    ``threads`` default: Numba's thread count."""
-    threads = numba.get_num_threads() if threads is None else threads
-    step = max(1, -(-rows // max(1, min(threads, rows))))
-    return [range(lo, min(lo + step, rows)) for lo in range(0, rows, step)]
-
-
-def _pool() -> ThreadPoolExecutor:
-    global _POOL
-    with _POOL_LOCK:
-        if _POOL is None:
-            _POOL = ThreadPoolExecutor(numba.get_num_threads(), thread_name_prefix="normals")
-        return _POOL
-
-
-def run_parts(parts: Sequence[Callable[[], None]], threads: int | None = None) -> None:
-    """Call every part, on a shared pool of Numba's thread count when
-    :func:`idle_kernel_threads`, else one after another; the first exception is raised.
-    ``threads``: Numba's thread count when the caller has it (each asking releases the GIL).
-
-    Parts must not share a generator or an output row: each is then the same whatever
-    runs beside it.
-    """
-    if len(parts) < 2:
-        for part in parts:
-            part()
-        return
-    threads = numba.get_num_threads() if threads is None else threads
-    if threads < 2 or not idle_kernel_threads():
-        for part in parts:
-            part()
-        return
-    for future in [_pool().submit(part) for part in parts]:
-        future.result()
