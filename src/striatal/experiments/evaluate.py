@@ -39,8 +39,12 @@ __all__ = [
     "pass_probability_steps",
 ]
 
-#: Noisy trials requested at once (their noise is drawn when a driver runs them).
-DRAWS_AT_ONCE = 256
+#: Noisy trials requested at once (their noise is drawn when a driver runs them). The
+#: runs of a sweep that reach their budget together evaluate their final gains in the
+#: same rounds of the lockstep engines: in chunks this size, a round's noise stays tens
+#: of MB rather than hundreds, and its calls short enough for both workers to share
+#: them (docs/performance.md, round 9). The draws and their order do not depend on it.
+DRAWS_AT_ONCE = 32
 #: Most noise draws one estimate may take: at ~2 ms a 60-s trial, about half an hour.
 MAX_DRAWS = 1_000_000
 
