@@ -1,12 +1,12 @@
-"""How long a lockstep worker's GIL-releasing calls take while the main thread runs Python,
+"""How long a lockstep lane's GIL-releasing calls take while another thread runs Python,
 at Python's default switch interval and at ``sim.batch.SWITCH_INTERVAL``.
 
     python benchmarks/gil_wait.py [--calls 300]
 
 A lane's worker (:class:`striatal.sim.batch.Lockstep`) makes calls that release the GIL
 (each request's draw of 6 000 normals, Numba's thread settings, the kernel) and must
-take it back after each; meanwhile the main thread runs the runs' Python. This times
-such calls on one thread while another runs a pure-Python loop (the main thread's
+take it back after each; meanwhile the other lane runs its runs' Python. This times
+such calls on one thread while another runs a pure-Python loop (the other lane's
 stand-in) and, as the reference in the same run, while nothing else runs. Prints the
 median and mean wall time of each call [us], per switch interval, the intervals
 alternated ``--repeats`` times. A mean far above the median is the wait for the GIL.

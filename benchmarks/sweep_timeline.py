@@ -12,7 +12,9 @@ their noise since it moved there); what the main thread does meanwhile (``advanc
 the runs' generators; ``prepare``: grouping and arguments of a lane's calls, with the
 noise before; ``outcomes``) overlaps them. Also runs on a tree without
 ``prepare`` (the functions it lacks are left out), so two trees can be compared with
-``PYTHONPATH=OLD/src``.
+``PYTHONPATH=OLD/src``. Since round 9 each lane's thread does all of this itself
+(``advance``, ``prepare`` and ``outcomes`` labelled "lane", and counted among its spans
+below); on an older tree the main thread did them.
 
 ``--every SECONDS`` (Linux) also prints a utilisation timeline: every SECONDS of wall
 time, the cores' worth of CPU the process used, by thread (``main``, the lanes'
@@ -203,10 +205,10 @@ def main() -> None:
     timed(batch, "_draw_noise", "noise (prepare, or worker after)")
     timed(batch, "run_requests", "run_requests (worker, before)")
     timed(batch, "_timed", "kernel calls (worker)", worker_threads)
-    timed(batch, "prepare", "prepare (main)", one)
-    timed(batch.Lockstep, "_advance", "advance (main)", one)
+    timed(batch, "prepare", "prepare (lane)", one)
+    timed(batch.Lockstep, "_advance", "advance (lane)", one)
     if hasattr(batch, "Calls"):
-        timed(batch.Calls, "outcomes", "outcomes (main)", one)
+        timed(batch.Calls, "outcomes", "outcomes (lane)", one)
     shutil.rmtree(args.out, ignore_errors=True)
     command = ["sweep", "--seeds", str(args.seeds), "--init", "chapter", "--max-trials", "1000"]
     command += ["--no-progress", "--engine", args.engine, "--out", str(args.out)]

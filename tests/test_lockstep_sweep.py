@@ -27,7 +27,7 @@ from striatal.params import (
     Simulation,
 )
 from striatal.sim import kernel
-from striatal.sim.batch import LANES, WORKERS, Lockstep, Steps, drive
+from striatal.sim.batch import Lockstep, Steps, drive, lane_threads
 
 SHORT = Simulation(duration=20.0)
 SEEDS = spawn_seeds(0, 4)
@@ -113,9 +113,9 @@ def test_rows_come_as_runs_finish_and_share_the_wall_time() -> None:
     assert [r["trials"] for r in rows[1:]] == [15] * (len(rows) - 1)
     wall = sum(r["wall_seconds"] for r in rows)
     assert all(r["wall_seconds"] > 0 for r in rows)
-    # the runs' Python and the workers' kernel calls overlap: each is counted once, so the
-    # sum lies between half the wall time and 1 + WORKERS times it
-    assert 0.5 * elapsed < wall <= (1 + WORKERS) * elapsed
+    # the lanes overlap, each round counted once, so the sum lies between half the wall
+    # time and the lanes times it
+    assert 0.5 * elapsed < wall <= Lockstep([], "batch").lanes * elapsed
 
 
 def test_the_batch_sweep_resumes_a_cut_sweep_of_either_engine(tmp_path: Path) -> None:
@@ -182,7 +182,7 @@ def test_trials_of_different_runs_share_kernel_calls(monkeypatch: pytest.MonkeyP
     shared = len({(r["init"], r["seed"]) for r in rows}) * (1 + 3)
     assert sum(sizes) == trials - shared
     # trial k of every run of a lane in one call
-    assert max(sizes) >= len(specs) // LANES["batch"]
+    assert max(sizes) >= len(specs) // Lockstep([], "batch").lanes
     assert len(sizes) < trials / 4
 
 
@@ -418,8 +418,8 @@ def _rounds(n: int, seed: int) -> Steps[tuple[float, ...]]:
 
 @pytest.mark.parametrize("lanes", [1, 2, 3, 5])
 def test_any_number_of_lanes_gives_each_run_its_values_alone(lanes: int) -> None:
-    """More lanes than workers (their calls wait in the workers' queue) or fewer: every
-    run's values are what it gives alone on the scalar kernel, bit for bit."""
+    """One lane, more lanes than cores (their threads share them) or fewer than runs:
+    every run's values are what it gives alone on the scalar kernel, bit for bit."""
     alone = [drive(_rounds(n, seed)) for seed, n in enumerate((1, 4, 2, 6, 3, 5))]
     steps = [_rounds(n, seed) for seed, n in enumerate((1, 4, 2, 6, 3, 5))]
     together = dict(Lockstep(steps, "batch", lanes=lanes).run())
@@ -494,48 +494,56 @@ def test_lanes_reusing_their_noise_buffers_give_each_run_its_values(
 
 
 def test_the_engines_lanes_and_a_bad_lane_count() -> None:
-    assert Lockstep([], "batch").lanes == LANES["batch"] > WORKERS  # calls queue for workers
-    assert Lockstep([], "simd").lanes == LANES["simd"]
+    # a lane a worker of lane_threads: two on two cores, as the process engine's workers
+    assert Lockstep([], "batch").lanes == Lockstep([], "simd").lanes == lane_threads()[0]
     with pytest.raises(ParameterError, match="lanes must be at least 1"):
         Lockstep([], "batch", lanes=0)
 
 
 def test_a_lane_takes_every_thread_only_when_it_is_alone(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Each call gets its worker's share of Numba's threads while another lane still has
-    runs (also in the first round, before the other lanes' calls are submitted), and
-    every thread once its lane is the only one left."""
+    """Each call gets its share of Numba's threads among the lanes still driving runs
+    (three here: the first call of the long run, while the two short runs wait for it),
+    and every thread once its lane is the only one left (its last round waits for the
+    other lanes' threads to end)."""
+    import threading
+
     import numba
 
     from striatal.sim import batch
 
-    live = [3]  # the runs not finished (one a lane)
-    asked: list[tuple[object, int]] = []  # each request, and the runs live when it was asked
-    given: list[tuple[int, int]] = []  # (runs live, threads) of each call
+    long_started = threading.Event()
+    given: list[tuple[int, int]] = []  # (rounds of the long run so far, threads) of its calls
 
-    def run(n: int, seed: int) -> Steps[tuple[float, ...]]:
-        steps = _rounds(n, seed)
-        outcomes = None
+    def short(seed: int) -> Steps[tuple[float, ...]]:
+        value = yield from _rounds(1, seed)
+        assert long_started.wait(timeout=60)  # the long run's first call made with 3 lanes
+        return value
+
+    def long(n: int) -> Steps[tuple[float, ...]]:
+        steps, outcomes, k = _rounds(n, 2), None, 0
         try:
             while True:
                 requests = next(steps) if outcomes is None else steps.send(outcomes)
-                asked.append((requests[0], live[0]))
-                outcomes = yield requests
+                if k == n - 1:  # the last round: after the other lanes' threads ended
+                    for t in threading.enumerate():
+                        if t.name in ("lockstep_0", "lockstep_1"):
+                            t.join(timeout=60)
+                outcomes, k = (yield requests), k + 1
         except StopIteration as stop:
-            live[0] -= 1
             return stop.value  # type: ignore[no-any-return]
 
     real = batch._timed
 
     def timed(calls: batch.Calls, threads: int) -> float:
-        (alive,) = [n for r, n in asked if r is calls.requests[0]]
-        given.append((alive, threads))
+        if threading.current_thread().name == "lockstep_2":
+            given.append((len(given), threads))
+            long_started.set()
         return real(calls, threads)
 
     monkeypatch.setattr(batch, "_timed", timed)
-    _, each = batch.lane_threads()
     every = numba.get_num_threads()
-    dict(Lockstep([run(n, seed) for seed, n in enumerate((1, 1, 8))], lanes=3).run())
-    assert len(given) == 1 + 1 + 8
-    assert all(threads == (every if alive == 1 else each) for alive, threads in given)
-    assert given[:3] == [(3, each)] * 3  # the first round: every lane live
-    assert given[-1] == (1, every)  # the long run's last round: its lane alone
+    values = dict(Lockstep([short(0), short(1), long(8)], lanes=3).run())
+    assert values[2] == drive(_rounds(8, 2)) and values[0] == drive(_rounds(1, 0))
+    assert len(given) == 8
+    assert given[0] == (0, max(1, every // 3))  # three lanes live
+    assert given[-1] == (7, every)  # the long run's last round: its lane alone

@@ -30,7 +30,7 @@ from striatal.params import (
     Simulation,
 )
 from striatal.sim import kernel
-from striatal.sim.batch import LANES, WORKERS, Steps
+from striatal.sim.batch import WORKERS, Lockstep, Steps
 
 SHORT = Simulation(duration=20.0)
 SEEDS = spawn_seeds(0, 3)
@@ -182,7 +182,9 @@ def test_rules_with_their_own_simulations_give_the_process_rows_under_batch(
     assert any(r["W1"] != r["W0_1"] for r in batch if r["arm"] == "learner")
     if config.learner == "ac":
         # the online trials of several runs in one call
-        assert max(calls.sizes["run_online_trials_batch"]) >= len(specs) // (2 * LANES["batch"])
+        assert max(calls.sizes["run_online_trials_batch"]) >= len(specs) // (
+            2 * Lockstep([], "batch").lanes
+        )
     elif config.forward_model == "generic":
         # imagined trials on learned plants, counted apart: the rows (their simulations
         # included) are the process engine's, and the physical batch kernel ran no more
@@ -212,8 +214,9 @@ def test_a_rule_that_yields_its_own_simulations_runs_on_every_engine(
     assert all(r["imagined_simulations"] == 2 * (r["trials"] - r["success"]) for r in learner)
     assert any(r["W2"] != r["W0_2"] for r in learner)
     # the look-ahead pairs of the runs of a lane went to the kernels together
-    assert max(calls.sizes["run_trials_batch"]) >= len(specs) // LANES["batch"]
-    assert max(calls.sizes["run_trials_lockstep"]) >= len(specs) // LANES["simd"]
+    lanes = Lockstep([], "batch").lanes
+    assert max(calls.sizes["run_trials_batch"]) >= len(specs) // lanes
+    assert max(calls.sizes["run_trials_lockstep"]) >= len(specs) // lanes
     # simd: the same experiment, each run's trials counted the same way
     assert len(simd) == len(serial)
     for a, s in zip(serial, simd, strict=True):

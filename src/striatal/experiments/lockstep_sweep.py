@@ -36,8 +36,8 @@ makes its own should it get there first) and its row counts the trials as before
 ``wall_seconds`` of a row is its share of the engine's time: its run's own Python plus
 an even share of each batched call it was in (preparing it, the kernel, reading the
 outcomes), and an even share of a shared W(0) evaluation's time. The runs' Python and
-the lanes' kernel calls overlap (:class:`striatal.sim.batch.Lockstep`'s two workers), so
-the rows of a sweep sum to between its wall time and three times it.
+the lanes' kernel calls overlap (:class:`striatal.sim.batch.Lockstep`'s two lanes, each
+on a thread of its own), so the rows of a sweep sum to between its wall time and twice it.
 """
 
 from __future__ import annotations

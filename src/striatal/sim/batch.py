@@ -26,12 +26,13 @@ driver runs them.
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import queue
 import sys
 import threading
 import time
 from collections.abc import Callable, Generator, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from typing import Any, Literal, ParamSpec, TypeVar
 
@@ -52,7 +53,6 @@ from striatal.sim.rollout import (
 
 __all__ = [
     "BATCH_ENGINES",
-    "LANES",
     "SWITCH_INTERVAL",
     "WORKERS",
     "Calls",
@@ -80,21 +80,16 @@ BATCH_ENGINES: tuple[str, ...] = ("batch", "simd")
 CHUNK = 2
 #: From this many normals in one round, generators fill their rows on threads.
 PARALLEL_NORMALS = 50_000
-#: Python's switch interval while :class:`Lockstep` runs [s] (its default is 5 ms): a lane's
-#: worker takes the GIL back after each call that releases it (each request's draw, the
-#: kernel, Numba's thread settings), and while the main thread runs the runs' Python it
-#: waited up to the interval for it each time (benchmarks/gil_wait.py).
+#: Python's switch interval while :class:`Lockstep` runs [s] (its default is 5 ms): a lane
+#: takes the GIL back after each call that releases it (the draws, the kernels), and while
+#: the other lane runs its Python it waited up to the interval for it each time
+#: (benchmarks/gil_wait.py).
 SWITCH_INTERVAL = 1e-4
-#: The worker threads :class:`Lockstep` runs its lanes' calls on, at most, each with its
-#: share of Numba's threads (:func:`lane_threads`).
+#: The lanes :class:`Lockstep` drives side by side, at most, each on a thread of its own
+#: with its share of Numba's threads (:func:`lane_threads`): one a core on two cores, as
+#: the process engine's ``--workers 2``. Each further lane's thread would take a core
+#: from the others: the lanes' Python overlaps the other lanes' kernels already.
 WORKERS = 2
-#: The groups of generators :class:`Lockstep` runs side by side, by engine: more lanes than
-#: workers, so that a worker whose call ends takes up another lane's call, prepared while
-#: it ran, instead of waiting for the main thread to read its outcomes, advance its runs
-#: and prepare their next calls (one more lane than workers: each further lane's calls
-#: cost more CPU than they saved in waits, docs/performance.md). The same for the SIMD
-#: kernel, whose calls are shorter, so its workers waited longer for the main thread.
-LANES: dict[str, int] = {"batch": 3, "simd": 3}
 
 
 def driven(steps: Callable[P, Steps[T]]) -> Callable[P, T]:
@@ -141,7 +136,7 @@ class NoiseBuffer:
     round after round, grown when a round needs more.
 
     A round's blocks (:func:`prepare`) are views of the buffer's first values; the
-    lane's worker draws into them and its kernels read them (:meth:`Calls.run`);
+    lane draws into them and its kernels read them (:meth:`Calls.run`);
     :meth:`Calls.outcomes` copies out what the round returns (the summary rows' values,
     the traces) and gives the buffer back. The next round takes it only then:
     :meth:`take` refuses a buffer whose last round has not been read, and
@@ -205,10 +200,10 @@ class Calls:
         the kernels release the GIL, so this can run on a thread of its own while
         Python runs elsewhere.
 
-        ``threads``: run on that many of Numba's threads, on a thread that runs only such
-        calls (:class:`Lockstep`'s workers): Numba's thread count and chunk size are then
+        ``threads``: run on that many of Numba's threads, on a thread that runs only
+        :class:`Lockstep`'s calls (a lane's): Numba's thread count and chunk size are then
         set for the thread only when they change (each setting is a call through ctypes
-        that hands the GIL back, and taking it back can wait for the main thread's
+        that hands the GIL back, and taking it back can wait for another thread's
         Python), and left set. None: the calling thread's thread count, its chunk size
         restored after."""
         if threads is not None:
@@ -399,36 +394,39 @@ class Lockstep:
     """Many :data:`Steps` advanced together: each round, the requests of every unfinished
     one run in batched kernel calls (:func:`run_requests`).
 
-    The generators are split into ``lanes`` groups (:data:`LANES` of the engine): while a
-    group's noise and kernel calls run on a worker thread (:meth:`Calls.run`, NumPy's
-    draws and the kernels releasing the GIL), the main thread advances another group's
-    generators with the outcomes of its last calls (their Python: the rules' plans and
-    updates, the success tests) and prepares their next calls (:func:`prepare`: grouping,
-    arguments). There are :data:`WORKERS` workers, each with its share of Numba's threads
-    (:func:`lane_threads`), so the lanes' calls also overlap each other: when few runs are
-    left, each lane's few trials still have a core. With more lanes than workers, a
-    lane's prepared calls wait in the workers' queue, and a worker whose call ends takes
-    them up at once, while the main thread reads the ended call's outcomes. The kernels,
-    the noise and the runs' Python then overlap instead of taking turns. A generator is
-    always in the same group, so its trials, and the order in which its generator draws
-    their noise, are what they would be alone.
+    The generators are split into ``lanes`` groups (default: one per worker of
+    :func:`lane_threads`, two on two cores), and each lane is driven by a thread of its
+    own, as a worker process drives its runs in the process engine: it advances its
+    generators with the outcomes of their last calls (their Python: the rules' plans and
+    updates, the success tests), prepares their next calls (:func:`prepare`: grouping,
+    arguments), runs them (:meth:`Calls.run`: the noise and the kernels, with the GIL
+    released) and reads their outcomes, round after round. While one lane's kernels run,
+    the other's Python runs: two threads on two cores, which take turns only for the
+    GIL, and only when both are in Python at once. A lane's calls take Numba's threads
+    shared among the lanes whose runs are not all finished (a lane left alone takes
+    every thread); under Numba's workqueue layer, which takes one parallel call at a
+    time, the lanes' calls take turns. A generator is always in the same lane, so its
+    trials, and the order in which its generator draws their noise, are what they would
+    be alone.
 
     Each lane keeps one :class:`NoiseBuffer` for its rounds' normals: a round takes it
     when prepared and gives it back when its outcomes are read, and the lane's next
-    round is prepared only then (each lane has one round under way at a time), so the
-    buffer is written and read by one round at a time and faulted in once.
+    round is prepared only then, so the buffer is written and read by one round at a
+    time and faulted in once.
 
     While it runs, Python's switch interval is :data:`SWITCH_INTERVAL` (restored after),
-    so that a worker waiting for the GIL behind the main thread's Python gets it within
-    0.1 ms rather than 5.
+    so that a lane waiting for the GIL behind the other's Python gets it within 0.1 ms
+    rather than 5.
 
-    :meth:`run` yields ``(index, value)`` as each finishes, ``value`` its return value
-    (the lanes are served as their calls finish, so the order of two lanes' values can
-    vary from run to run, as the process engine's rows do; the values cannot).
-    ``seconds[i]``: the wall time spent on generator i, its own Python plus an even
-    share of each kernel call it was in, from the call's start on its worker (the Python
-    and the workers' calls overlap, so the sum over the generators can exceed the wall
-    time of :meth:`run`, at most 1 + :data:`WORKERS` times).
+    :meth:`run`, on the calling thread, yields ``(index, value)`` as each finishes,
+    ``value`` its return value (the lanes finish their runs in their own time, so the
+    order of two lanes' values can vary from run to run, as the process engine's rows
+    do; the values cannot). An exception in a lane reaches the caller there, and the
+    other lanes stop after their round under way; so do they when the caller stops
+    (an interrupt, or closing the generator). ``seconds[i]``: the wall time spent on
+    generator i, its own Python plus an even share of each round it was in (the
+    lanes overlap, so the sum over the generators can exceed the wall time of
+    :meth:`run`, about ``lanes`` times at most).
     """
 
     def __init__(
@@ -439,7 +437,7 @@ class Lockstep:
     ) -> None:
         self.steps = list(steps)
         self.engine = engine
-        self.lanes = LANES[engine] if lanes is None else lanes
+        self.lanes = lane_threads()[0] if lanes is None else lanes
         if self.lanes < 1:
             raise ParameterError(f"lanes must be at least 1, got {self.lanes}")
         self.seconds = np.zeros(len(self.steps))
@@ -485,64 +483,75 @@ class Lockstep:
             sys.setswitchinterval(switch)
 
     def _run(self) -> Generator[tuple[int, Any], None, None]:
-        first: list[dict[int, list[TrialRequest]]] = [{} for _ in range(self.lanes)]
-        for i in range(len(self.steps)):
-            try:
-                first[i % self.lanes][i] = self._advance(i, None)
-            except StopIteration as stop:
-                yield i, stop.value
-        workers, each = lane_threads()
+        workers, _ = lane_threads()
         every = numba.get_num_threads()
-        worker = ThreadPoolExecutor(workers, thread_name_prefix="lockstep")
-        lanes = [_Lane() for _ in range(self.lanes)]
-        # the lanes whose runs are not all finished
-        live = {g for g, requests in enumerate(first) if requests}
+        values: queue.SimpleQueue[tuple[int, Any] | BaseException | None] = queue.SimpleQueue()
+        stop = threading.Event()
+        # the lanes whose runs are not all finished, and a lock for their calls when
+        # Numba's layer takes one call at a time
+        live = [self.lanes]
+        lock = threading.Lock()
+        turns = threading.Lock() if workers == 1 else contextlib.nullcontext()
 
-        def submit(g: int, pending: dict[int, list[TrialRequest]]) -> None:
-            lane = lanes[g]
-            # a lane's round takes its noise buffer: only once its last round was read
-            lane.round = self._prepare(pending, lane.noise)
-            # a lane alone (the others finished) takes every thread
-            threads = every if live == {g} else each
-            lane.future = worker.submit(_timed, lane.round[2], threads)
-
-        try:
-            for g, requests in enumerate(first):
-                if requests:
-                    submit(g, requests)
-            while any(lane.future is not None for lane in lanes):
-                # the lanes whose calls are done, as they finish (the others' run meanwhile)
-                running = {
-                    lane.future: g for g, lane in enumerate(lanes) if lane.future is not None
-                }
-                finished, _ = wait(running, return_when=FIRST_COMPLETED)
-                for g in sorted(running[f] for f in finished):
-                    lane = lanes[g]
-                    assert lane.round is not None and lane.future is not None
-                    # read (the lane's noise buffer given back) before its next round
-                    outcomes = self._outcomes(lane.round, lane.future.result())
-                    lane.round = lane.future = None
-                    pending: dict[int, list[TrialRequest]] = {}
+        def drive(g: int) -> None:
+            """Lane g's generators (i = g mod lanes), round after round, to their end."""
+            noise = NoiseBuffer()
+            pending: dict[int, list[TrialRequest]] = {}
+            try:
+                for i in range(g, len(self.steps), self.lanes):
+                    try:
+                        pending[i] = self._advance(i, None)
+                    except StopIteration as done:
+                        values.put((i, done.value))
+                while pending and not stop.is_set():
+                    # a round takes the lane's noise buffer, given back when its outcomes
+                    # are read, before the next round is prepared
+                    prepared = self._prepare(pending, noise)
+                    with turns:
+                        seconds = _timed(prepared[2], max(1, every // live[0]))
+                    outcomes = self._outcomes(prepared, seconds)
+                    pending = {}
                     for i, mine in outcomes.items():
                         try:
                             pending[i] = self._advance(i, mine)
-                        except StopIteration as stop:
-                            yield i, stop.value
-                    if pending:
-                        submit(g, pending)
-                    else:
-                        live.discard(g)
-                        lane.noise = NoiseBuffer()  # its memory back while others run
+                        except StopIteration as done:
+                            values.put((i, done.value))
+            except BaseException as exc:  # to the caller, in run()
+                values.put(exc)
+            finally:
+                with lock:
+                    live[0] -= 1
+                values.put(None)
+
+        lanes = [
+            threading.Thread(target=drive, args=(g,), name=f"lockstep_{g}", daemon=True)
+            for g in range(min(self.lanes, max(len(self.steps), 1)))
+        ]
+        live[0] = len(lanes)
+        for lane in lanes:
+            lane.start()
+        try:
+            ended = 0
+            while ended < len(lanes):
+                value = values.get()
+                if value is None:
+                    ended += 1
+                elif isinstance(value, BaseException):
+                    raise value
+                else:
+                    yield value
         finally:
-            worker.shutdown(wait=True, cancel_futures=True)
+            stop.set()
+            for lane in lanes:
+                lane.join()
 
 
 def lane_threads() -> tuple[int, int]:
-    """(worker threads of :class:`Lockstep`, Numba threads each): :data:`WORKERS` workers,
-    each with its share of Numba's threads, so that two lanes' kernel calls run at once
-    and a lane with few trials left does not hold a core it cannot use (a lane left
-    alone takes every thread); one worker with all of Numba's threads under the
-    workqueue layer (it takes no concurrent calls) or with fewer threads than workers."""
+    """(the lanes :class:`Lockstep` drives by default, Numba threads each): :data:`WORKERS`
+    lanes, each with its share of Numba's threads, so that two lanes' kernel calls run at
+    once and a lane with few trials left does not hold a core it cannot use (a lane left
+    alone takes every thread); one lane with all of Numba's threads under the workqueue
+    layer (it takes no concurrent calls) or with fewer threads than lanes."""
     threads = numba.get_num_threads()  # launches Numba's threading layer
     if threads < WORKERS or numba.threading_layer() == "workqueue":
         return 1, threads
@@ -550,7 +559,7 @@ def lane_threads() -> tuple[int, int]:
 
 
 def _timed(calls: Calls, threads: int) -> float:
-    """Run ``calls``' noise and kernels on the worker thread with ``threads`` of Numba's
+    """Run ``calls``' noise and kernels on the lane's thread with ``threads`` of Numba's
     threads: the wall time they took [s]."""
     t0 = time.perf_counter()
     calls.run(threads)
@@ -575,13 +584,3 @@ def _thread_settings(threads: int) -> None:
 #: A lane's prepared round: its generators in order, their request counts, the kernel
 #: calls, and the seconds spent preparing them.
 _Round = tuple[list[int], list[int], Calls, float]
-
-
-@dataclass
-class _Lane:
-    """A group of :class:`Lockstep`'s generators: its noise buffer, which its rounds
-    take in turn, and its round under way on a worker (None: none)."""
-
-    noise: NoiseBuffer = field(default_factory=NoiseBuffer)
-    round: _Round | None = None
-    future: Future[float] | None = None
