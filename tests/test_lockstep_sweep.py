@@ -547,3 +547,31 @@ def test_a_lane_takes_every_thread_only_when_it_is_alone(monkeypatch: pytest.Mon
     assert len(given) == 8
     assert given[0] == (0, max(1, every // 3))  # three lanes live
     assert given[-1] == (7, every)  # the long run's last round: its lane alone
+
+
+@pytest.mark.parametrize("engine", ["batch", "simd"])
+def test_a_lane_that_raises_stops_the_others_and_reaches_the_caller(engine: str) -> None:
+    """A run that raises in one lane: the caller gets its exception, and the other lane
+    stops after its round under way instead of running its long run to the end."""
+    import threading
+
+    rounds = [0]
+
+    def failing() -> Steps[tuple[float, ...]]:
+        yield from _rounds(2, 0)
+        raise RuntimeError("a run failed")
+
+    def long() -> Steps[tuple[float, ...]]:
+        steps, outcomes = _rounds(400, 1), None
+        try:
+            while True:
+                requests = next(steps) if outcomes is None else steps.send(outcomes)
+                rounds[0] += 1
+                outcomes = yield requests
+        except StopIteration as stop:
+            return stop.value  # type: ignore[no-any-return]
+
+    with pytest.raises(RuntimeError, match="a run failed"):
+        list(Lockstep([failing(), long()], engine, lanes=2).run())  # type: ignore[arg-type]
+    assert 0 < rounds[0] < 400
+    assert not [t for t in threading.enumerate() if t.name.startswith("lockstep_")]
