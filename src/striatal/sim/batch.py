@@ -487,9 +487,10 @@ class Lockstep:
         every = numba.get_num_threads()
         values: queue.SimpleQueue[tuple[int, Any] | BaseException | None] = queue.SimpleQueue()
         stop = threading.Event()
-        # the lanes whose runs are not all finished, and a lock for their calls when
-        # Numba's layer takes one call at a time
-        live = [self.lanes]
+        count = min(self.lanes, max(len(self.steps), 1))
+        # the lanes whose runs are not all finished (changed under ``lock``), and the
+        # lanes' calls taking turns when Numba's layer takes one call at a time
+        live = [count]
         lock = threading.Lock()
         turns = threading.Lock() if workers == 1 else contextlib.nullcontext()
 
@@ -525,9 +526,8 @@ class Lockstep:
 
         lanes = [
             threading.Thread(target=drive, args=(g,), name=f"lockstep_{g}", daemon=True)
-            for g in range(min(self.lanes, max(len(self.steps), 1)))
+            for g in range(count)
         ]
-        live[0] = len(lanes)
         for lane in lanes:
             lane.start()
         try:
