@@ -575,3 +575,37 @@ def test_a_lane_that_raises_stops_the_others_and_reaches_the_caller(engine: str)
         list(Lockstep([failing(), long()], engine, lanes=2).run())  # type: ignore[arg-type]
     assert 0 < rounds[0] < 400
     assert not [t for t in threading.enumerate() if t.name.startswith("lockstep_")]
+
+
+def test_lanes_take_turns_when_numbas_layer_takes_one_call_at_a_time(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Under a layer that takes one parallel call at a time (workqueue; lane_threads says
+    one worker), two lanes still drive their runs side by side, their calls one after
+    the other: every run's values are its own, bit for bit."""
+    import threading
+
+    import numba
+
+    from striatal.sim import batch
+
+    running, most = [0], [0]
+    guard = threading.Lock()
+    real = batch._timed
+
+    def timed(calls: batch.Calls, threads: int) -> float:
+        with guard:
+            running[0] += 1
+            most[0] = max(most[0], running[0])
+        try:
+            return real(calls, threads)
+        finally:
+            with guard:
+                running[0] -= 1
+
+    monkeypatch.setattr(batch, "lane_threads", lambda: (1, numba.get_num_threads()))
+    monkeypatch.setattr(batch, "_timed", timed)
+    alone = [drive(_rounds(n, seed)) for seed, n in enumerate((3, 5, 2, 4))]
+    together = dict(Lockstep([_rounds(n, s) for s, n in enumerate((3, 5, 2, 4))], lanes=2).run())
+    assert [together[i] for i in range(4)] == alone
+    assert most[0] == 1
